@@ -1,0 +1,71 @@
+"""Send one order to a vessel from the terminal (ros2cli's `topic pub` is not available here).
+
+    ros2 run scenario_runner send_command tug --engine 0.5 --steering-deg 10
+    ros2 run scenario_runner send_command s175 --anchor let_go
+
+Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
+exits. Exit status 1 if no vessel node listens within --wait seconds.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+import rclpy
+from rclpy.duration import Duration
+from rclpy.node import Node
+from tug_msgs.msg import VesselCommand
+
+from tug_dynamics import ros_common as rc
+
+ANCHOR_ORDERS = {"none": VesselCommand.ANCHOR_NO_CHANGE, "let_go": VesselCommand.ANCHOR_LET_GO,
+                 "heave_up": VesselCommand.ANCHOR_HEAVE_UP}
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(prog="send_command", description=__doc__.split("\n\n")[0])
+    p.add_argument("vessel", help="vessel name (its ROS namespace), e.g. tug")
+    p.add_argument("--engine", type=float, default=0.0,
+                   help="engine order, fraction of rated rpm: -1 full astern .. 1 full ahead (default 0)")
+    p.add_argument("--steering-deg", type=float, default=0.0,
+                   help="rudder or bucket angle in degrees, positive turns to port (default 0)")
+    p.add_argument("--anchor", choices=sorted(ANCHOR_ORDERS), default="none", help="anchor order")
+    p.add_argument("--wait", type=float, default=10.0, help="seconds to wait for the vessel node (default 10)")
+    return p.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    args = parse_args(rclpy.utilities.remove_ros_args(argv))
+    rclpy.init(args=argv)
+    node = Node("send_command")
+    try:
+        topic = f"/{args.vessel.strip('/')}/command"
+        pub = node.create_publisher(VesselCommand, topic, rc.COMMAND_QOS)
+        deadline = time.monotonic() + args.wait
+        while pub.get_subscription_count() == 0:
+            if time.monotonic() > deadline:
+                sys.stderr.write(f"send_command: no subscriber on {topic} after {args.wait:g} s "
+                                 f"(is the vessel node for '{args.vessel}' running, same ROS_DOMAIN_ID?)\n")
+                return 1
+            rclpy.spin_once(node, timeout_sec=0.05)
+        msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
+                            anchor=ANCHOR_ORDERS[args.anchor])
+        msg.header.stamp = node.get_clock().now().to_msg()
+        pub.publish(msg)
+        # Reliable delivery: wait for the subscribers' acknowledgement before the process ends.
+        if not pub.wait_for_all_acked(Duration(seconds=2.0)):
+            sys.stderr.write(f"send_command: {topic} did not acknowledge the command within 2 s\n")
+            return 1
+        print(f"sent to {topic}: engine {args.engine:+.2f}, steering {args.steering_deg:+.1f} deg, "
+              f"anchor {args.anchor}")
+        return 0
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

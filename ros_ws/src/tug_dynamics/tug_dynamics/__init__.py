@@ -1,0 +1,1 @@
+"""Vessel models of the towing simulator (ROS-free physics) and the vessel node."""

@@ -1,0 +1,92 @@
+"""Pieces every simulator node shares: frames, QoS, step <-> time, quaternions, parameters.
+
+Time: step k of a run with exchange period T (integer nanoseconds) is stamped k*T exactly, so
+a stamp names its step without rounding doubt.
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Sequence
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Quaternion
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+WORLD_FRAME = "map"  # REP-105 world-fixed frame, ENU (REP-103), still-water surface at z = 0
+EVENTS_TOPIC = "/scenario/events"
+
+# State and wrench topics: reliable so a lockstep participant never misses a step.
+STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
+                       reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+# Commands: reliable, a few deep; late joiners do not get stale orders.
+COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                         reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+EVENTS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                        reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+
+
+def period_ns(rate_hz: float) -> int:
+    ns = round(1e9 / rate_hz)
+    if ns <= 0:
+        raise ValueError(f"exchange rate {rate_hz} Hz gives no usable period")
+    return ns
+
+
+def step_time(step: int, period: int) -> Time:
+    total = step * period
+    return Time(sec=total // 1_000_000_000, nanosec=total % 1_000_000_000)
+
+
+def time_to_ns(t: Time) -> int:
+    return t.sec * 1_000_000_000 + t.nanosec
+
+
+def quaternion_from_rpy(rpy: Sequence[float]) -> Quaternion:
+    """Quaternion of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103 convention)."""
+    r, p, y = (0.5 * a for a in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return Quaternion(w=cr * cp * cy + sr * sp * sy, x=sr * cp * cy - cr * sp * sy,
+                      y=cr * sp * cy + sr * cp * sy, z=cr * cp * sy - sr * sp * cy)
+
+
+def rotation_from_quaternion(q: Quaternion) -> np.ndarray:
+    """3x3 rotation matrix (frame -> world) of a unit quaternion."""
+    w, x, y, z = q.w, q.x, q.y, q.z
+    n = w * w + x * x + y * y + z * z
+    if not (math.isfinite(n) and n > 1e-12):
+        raise ValueError(f"quaternion ({x}, {y}, {z}, {w}) is not a rotation")
+    s = 2.0 / n
+    return np.array([
+        [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
+        [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)],
+        [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)],
+    ])
+
+
+def float_param(description: str, lo: float, hi: float, unit: str = "") -> ParameterDescriptor:
+    text = f"{description} [{unit}]" if unit else description
+    return ParameterDescriptor(description=text, floating_point_range=[
+        FloatingPointRange(from_value=float(lo), to_value=float(hi), step=0.0)])
+
+
+def int_param(description: str, lo: int, hi: int) -> ParameterDescriptor:
+    return ParameterDescriptor(description=description, integer_range=[
+        IntegerRange(from_value=int(lo), to_value=int(hi), step=1)])
+
+
+def text_param(description: str) -> ParameterDescriptor:
+    return ParameterDescriptor(description=description)
+
+
+def resolve_data_file(package: str, subdir: str, name: str) -> str:
+    """A path as given, or a bare file name looked up in share/<package>/<subdir>/."""
+    if os.sep in name or os.path.exists(name):
+        return name
+    from ament_index_python.packages import get_package_share_directory
+    candidate = os.path.join(get_package_share_directory(package), subdir, name)
+    if not candidate.endswith((".yaml", ".yml")) and not os.path.exists(candidate):
+        candidate += ".yaml"
+    return candidate

@@ -1,0 +1,130 @@
+"""The interface every vessel model offers, whatever its physics.
+
+One vessel node runs every ship file; it only talks to this interface. Conventions
+(REP-103), used by every model here:
+
+- world frame: ENU, x east, y north, z up; water surface at z = 0.
+- body frame: origin at the reference point named in the ship file (midship on the
+  waterline unless the file says otherwise), x forward, y port, z up.
+- orientation: roll, pitch, yaw (rad) as the intrinsic z-y'-x'' sequence, i.e.
+  R = Rz(yaw) Ry(pitch) Rx(roll); yaw 0 points the bow east, positive yaw turns to port.
+  A paper using NED / starboard-positive conventions is converted inside its model.
+- command: ``engine_order`` is the fraction of rated engine (or impeller) rpm, -1 full
+  astern .. +1 full ahead; ``steering_angle`` (rad) is rudder or waterjet-bucket angle,
+  positive turns the vessel to port (gives a positive yaw rate at forward speed).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from abc import ABC, abstractmethod
+from typing import Dict, List, Sequence, Tuple
+
+import numpy as np
+
+ANCHOR_NO_CHANGE = 0
+ANCHOR_LET_GO = 1
+ANCHOR_HEAVE_UP = 2
+
+
+class CommandRejected(ValueError):
+    """A command that cannot be applied at all (NaN, infinite, unknown anchor order)."""
+
+
+@dataclasses.dataclass
+class Command:
+    engine_order: float = 0.0
+    steering_angle: float = 0.0
+    anchor: int = ANCHOR_NO_CHANGE
+
+
+@dataclasses.dataclass
+class ExternalWrench:
+    """A force acting on the vessel, e.g. a towline at a bollard.
+
+    force_world: (3,) N in the world frame (ENU).
+    point_body: (3,) m, where it acts, in the body frame.
+    moment_world: (3,) N m extra pure moment in the world frame (usually zero).
+    """
+    force_world: np.ndarray
+    point_body: np.ndarray
+    moment_world: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+
+
+@dataclasses.dataclass
+class VesselState:
+    """Kinematic state, SI units.
+
+    position: (3,) world ENU of the body origin, m.
+    rpy: (3,) roll, pitch, yaw, rad (z-y'-x'' intrinsic).
+    linear_velocity_body: (3,) u, v, w in m/s (body x forward, y port, z up).
+    angular_velocity_body: (3,) p, q, r in rad/s.
+    """
+    position: np.ndarray
+    rpy: np.ndarray
+    linear_velocity_body: np.ndarray
+    angular_velocity_body: np.ndarray
+
+    @staticmethod
+    def at_rest(x: float = 0.0, y: float = 0.0, yaw: float = 0.0, z: float = 0.0) -> "VesselState":
+        return VesselState(np.array([x, y, z], float), np.array([0.0, 0.0, yaw]),
+                           np.zeros(3), np.zeros(3))
+
+
+def rotation_body_to_world(rpy: Sequence[float]) -> np.ndarray:
+    """R such that v_world = R @ v_body, R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    phi, theta, psi = rpy
+    cf, sf = math.cos(phi), math.sin(phi)
+    ct, st = math.cos(theta), math.sin(theta)
+    cp, sp = math.cos(psi), math.sin(psi)
+    return np.array([
+        [cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
+        [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
+        [-st, ct * sf, ct * cf],
+    ])
+
+
+def check_command(cmd: Command) -> None:
+    """Reject commands that cannot be applied; raise CommandRejected naming the field."""
+    for field in ("engine_order", "steering_angle"):
+        value = getattr(cmd, field)
+        if not math.isfinite(value):
+            raise CommandRejected(f"{field}={value!r} is not a finite number")
+    if cmd.anchor not in (ANCHOR_NO_CHANGE, ANCHOR_LET_GO, ANCHOR_HEAVE_UP):
+        raise CommandRejected(f"anchor={cmd.anchor!r} is not one of 0 (no change), 1 (let go), 2 (heave up)")
+
+
+class Vessel(ABC):
+    """A vessel model: holds its state and steps it in time."""
+
+    name: str
+    state: VesselState
+    attachments: Dict[str, np.ndarray]  # name -> (3,) point in body frame, m
+
+    @abstractmethod
+    def set_command(self, cmd: Command) -> List[str]:
+        """Apply a command; clamp out-of-range values and return one message per clamp.
+
+        Raises CommandRejected (and keeps the previous command) for NaN/inf/unknown values.
+        """
+
+    @abstractmethod
+    def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
+        """Advance the state by dt seconds with the given external wrenches held constant."""
+
+    @abstractmethod
+    def status(self) -> Dict[str, float]:
+        """Actuator and safety status (engine rpm, rudder angle, thrust, heel, ...), SI units."""
+
+    def attachment_kinematics(self, name: str) -> Tuple[np.ndarray, np.ndarray]:
+        """World position (m) and world velocity (m/s) of a named attachment point."""
+        try:
+            r_body = self.attachments[name]
+        except KeyError:
+            raise KeyError(f"vessel {self.name!r} has no attachment {name!r}; "
+                           f"it has {sorted(self.attachments)}") from None
+        s = self.state
+        rot = rotation_body_to_world(s.rpy)
+        pos = s.position + rot @ r_body
+        vel_body = s.linear_velocity_body + np.cross(s.angular_velocity_body, r_body)
+        return pos, rot @ vel_body

@@ -1,0 +1,210 @@
+"""The vessel node: one executable for every ship file.
+
+    ros2 run tug_dynamics vessel_node --ros-args -r __ns:=/tug -p ship_file:=harbour_tug.yaml
+
+Subscribes ``command`` (tug_msgs/VesselCommand) and every topic named in ``wrench_topics``
+(geometry_msgs/WrenchStamped; frame_id "<vessel>/<attachment>" or "<vessel>/base_link").
+Publishes ``odom`` (nav_msgs/Odometry), ``attachments`` (tug_msgs/AttachmentArray) and
+``status`` (tug_msgs/VesselStatus) once per exchange step. The physics lives in the ship
+model (tug_dynamics.ship_file.load_ship); this node only converts messages.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+from typing import Dict, List, Optional
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from tug_msgs.msg import AttachmentArray, AttachmentPoint, ScenarioEvent, VesselCommand, VesselStatus
+
+from tug_dynamics import ros_common as rc
+from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState,
+                                 rotation_body_to_world)
+
+_ANCHOR_STATES = {"none": 0, "stowed": 1, "letting_go": 2, "dredging": 3, "heaving_up": 4}
+
+
+class VesselNode(Node):
+    def __init__(self, node_name: str = "vessel", **kwargs):
+        super().__init__(node_name, **kwargs)
+        self.declare_parameter("ship_file", "", rc.text_param(
+            "Ship file: a path, or a file name in share/tug_dynamics/ships (e.g. harbour_tug.yaml)"))
+        self.declare_parameter("vessel_name", "", rc.text_param(
+            "Vessel name used in frames and messages; default: the node's namespace"))
+        self.declare_parameter("initial_x", 0.0, rc.float_param("Initial east position", -1e7, 1e7, "m"))
+        self.declare_parameter("initial_y", 0.0, rc.float_param("Initial north position", -1e7, 1e7, "m"))
+        self.declare_parameter("initial_yaw", 0.0, rc.float_param(
+            "Initial heading, 0 = bow east, positive counter-clockwise (REP-103)", -2 * math.pi, 2 * math.pi, "rad"))
+        self.declare_parameter("initial_speed", 0.0, rc.float_param("Initial surge speed", -30.0, 40.0, "m/s"))
+        self.declare_parameter("exchange_rate", 50.0, rc.float_param("Steps per simulated second", 1.0, 1000.0, "Hz"))
+        self.declare_parameter("wrench_topics", [""], rc.text_param(
+            "geometry_msgs/WrenchStamped topics of external forces (rope ends) acting on this vessel"))
+        self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
+        self.declare_parameter("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
+
+        ship_file = self.get_parameter("ship_file").value
+        if not ship_file:
+            raise ValueError("parameter 'ship_file' is required (a path or a file in share/tug_dynamics/ships)")
+        path = rc.resolve_data_file("tug_dynamics", "ships", ship_file)
+        if not os.path.isfile(path):
+            raise FileNotFoundError(f"ship file '{path}' not found (parameter ship_file:={ship_file})")
+        ns_name = self.get_namespace().strip("/").split("/")[-1]
+        self.vessel_name = self.get_parameter("vessel_name").value or ns_name or "vessel"
+        initial = VesselState.at_rest(self.get_parameter("initial_x").value, self.get_parameter("initial_y").value,
+                                      self.get_parameter("initial_yaw").value)
+        initial.linear_velocity_body[0] = self.get_parameter("initial_speed").value
+
+        from tug_dynamics.ship_file import load_ship
+        self.model: Vessel = load_ship(path, name=self.vessel_name, initial_state=initial)
+        current = np.array([self.get_parameter("current_east").value, self.get_parameter("current_north").value, 0.0])
+        if np.any(current) and hasattr(self.model, "set_current"):
+            self.model.set_current(current)
+
+        self.period_ns = rc.period_ns(self.get_parameter("exchange_rate").value)
+        self.dt = self.period_ns * 1e-9
+        self.step_index = 0
+        self.command = Command()
+        self.rejected = 0
+        self.clamped = 0
+        self.body_frame = f"{self.vessel_name}/base_link"
+        self.wrenches: Dict[str, ExternalWrench] = {}
+
+        self.odom_pub = self.create_publisher(Odometry, "odom", rc.STATE_QOS)
+        self.attach_pub = self.create_publisher(AttachmentArray, "attachments", rc.STATE_QOS)
+        self.status_pub = self.create_publisher(VesselStatus, "status", rc.STATE_QOS)
+        self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
+        self.create_subscription(VesselCommand, "command", self.on_command, rc.COMMAND_QOS)
+        for topic in [t for t in self.get_parameter("wrench_topics").value if t]:
+            self.create_subscription(WrenchStamped, topic, lambda msg, t=topic: self.on_wrench(t, msg), rc.STATE_QOS)
+
+        self.publish_state()
+        self.timer = self.create_timer(self.dt, self.on_timer)
+        self.get_logger().info(
+            f"vessel '{self.vessel_name}' from {path}: {type(self.model).__name__}, "
+            f"attachments {sorted(self.model.attachments)}, {1e9 / self.period_ns:g} Hz")
+
+    # -- inputs --------------------------------------------------------------------------
+    def on_command(self, msg: VesselCommand) -> None:
+        cmd = Command(engine_order=msg.engine_order, steering_angle=msg.steering_angle, anchor=msg.anchor)
+        try:
+            notes = self.model.set_command(cmd)
+        except CommandRejected as exc:
+            self.rejected += 1
+            self.get_logger().error(f"command rejected, keeping the last valid one: {exc}")
+            self.emit_event("command_rejected", str(exc))
+            return
+        self.command = cmd
+        for note in notes:
+            self.clamped += 1
+            self.get_logger().warning(f"command clamped: {note}")
+
+    def on_wrench(self, topic: str, msg: WrenchStamped) -> None:
+        f, m = msg.wrench.force, msg.wrench.torque
+        values = (f.x, f.y, f.z, m.x, m.y, m.z)
+        if not all(math.isfinite(v) for v in values):
+            self.get_logger().error(f"wrench on {topic} rejected: non-finite value {values}")
+            return
+        frame = msg.header.frame_id
+        prefix = self.vessel_name + "/"
+        if not frame.startswith(prefix):
+            self.get_logger().error(f"wrench on {topic} rejected: frame '{frame}' is not a frame of "
+                                    f"vessel '{self.vessel_name}' ('{prefix}<attachment>' or '{self.body_frame}')")
+            return
+        point_name = frame[len(prefix):]
+        if point_name == "base_link":
+            point = np.zeros(3)
+        elif point_name in self.model.attachments:
+            point = np.asarray(self.model.attachments[point_name], float)
+        else:
+            self.get_logger().error(f"wrench on {topic} rejected: vessel '{self.vessel_name}' has no attachment "
+                                    f"'{point_name}' (it has {sorted(self.model.attachments)})")
+            return
+        # Frame axes are parallel to the body's: rotate to world for the model.
+        rot = rotation_body_to_world(self.model.state.rpy)
+        self.wrenches[topic] = ExternalWrench(force_world=rot @ np.array(values[:3]), point_body=point,
+                                              moment_world=rot @ np.array(values[3:]))
+
+    # -- stepping -------------------------------------------------------------------------
+    def on_timer(self) -> None:
+        self.model.step(self.dt, list(self.wrenches.values()))
+        self.step_index += 1
+        self.publish_state()
+
+    def publish_state(self) -> None:
+        stamp = rc.step_time(self.step_index, self.period_ns)
+        s = self.model.state
+        q = rc.quaternion_from_rpy(s.rpy)
+
+        odom = Odometry()
+        odom.header.stamp = stamp
+        odom.header.frame_id = rc.WORLD_FRAME
+        odom.child_frame_id = self.body_frame
+        odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = map(float, s.position)
+        odom.pose.pose.orientation = q
+        v, w = s.linear_velocity_body, s.angular_velocity_body
+        odom.twist.twist.linear.x, odom.twist.twist.linear.y, odom.twist.twist.linear.z = map(float, v)
+        odom.twist.twist.angular.x, odom.twist.twist.angular.y, odom.twist.twist.angular.z = map(float, w)
+        self.odom_pub.publish(odom)
+
+        arr = AttachmentArray()
+        arr.header.stamp = stamp
+        arr.header.frame_id = rc.WORLD_FRAME
+        arr.step = self.step_index
+        arr.vessel = self.vessel_name
+        for name in sorted(self.model.attachments):
+            pos, vel = self.model.attachment_kinematics(name)
+            p = AttachmentPoint(name=name, orientation=q)
+            p.position.x, p.position.y, p.position.z = map(float, pos)
+            p.velocity.x, p.velocity.y, p.velocity.z = map(float, vel)
+            arr.points.append(p)
+        self.attach_pub.publish(arr)
+
+        st = self.model.status()
+        msg = VesselStatus()
+        msg.header.stamp = stamp
+        msg.header.frame_id = self.body_frame
+        msg.step = self.step_index
+        msg.vessel = self.vessel_name
+        msg.engine_order = float(self.command.engine_order)
+        msg.steering_angle_ordered = float(st.get("steering_angle_ordered", self.command.steering_angle))
+        for key in ("steering_angle", "shaft_speed", "thrust", "speed_through_water", "heel", "trim", "rise",
+                    "girting_ratio", "girting_threshold"):
+            setattr(msg, key, float(st.get(key, 0.0)))
+        msg.anchor_state = _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0)
+        msg.girting_warning = bool(st.get("girting_warning", False))
+        msg.commands_rejected = self.rejected
+        msg.commands_clamped = self.clamped
+        self.status_pub.publish(msg)
+
+    def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
+        ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
+                           target=self.vessel_name, detail=detail, value=value)
+        ev.header.stamp = rc.step_time(self.step_index, self.period_ns)
+        self.event_pub.publish(ev)
+
+
+def main(args: Optional[List[str]] = None) -> int:
+    rclpy.init(args=args)
+    try:
+        node = VesselNode()
+    except (ValueError, KeyError, FileNotFoundError) as exc:
+        sys.stderr.write(f"vessel_node: {exc}\n")
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,123 @@
+"""Fixtures for tests that start real node processes.
+
+Isolation: every test gets a ROS_DOMAIN_ID reserved with domain_coordinator (a port lock, so
+concurrent test runs on one machine never share a domain) and discovery limited to localhost
+(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST). Node processes are started through their installed
+executables (ros_ws/install/<pkg>/lib/<pkg>/<exe>, where `ros2 run` looks), their output goes
+to a log file that is printed when the test fails, and they are killed at teardown.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from typing import Callable, List
+
+import pytest
+
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.pop("ROS_STATIC_PEERS", None)
+os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; the range above replaces it
+
+
+def executable_path(package: str, executable: str) -> str:
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        path = os.path.join(prefix, "lib", package, executable)
+        if prefix and os.access(path, os.X_OK):
+            return path
+    raise FileNotFoundError(f"executable {package}/{executable} not found on AMENT_PREFIX_PATH")
+
+
+class NodeProcess:
+    def __init__(self, args: List[str], env: dict, log_path: str):
+        self.args = args
+        self.log_path = log_path
+        self._log = open(log_path, "wb")
+        # Own process group, so teardown also reaches anything the node started.
+        self.proc = subprocess.Popen(args, env=env, stdout=self._log, stderr=subprocess.STDOUT,
+                                     start_new_session=True)
+
+    def log(self) -> str:
+        self._log.flush()
+        with open(self.log_path, "rb") as f:
+            return f.read().decode(errors="replace")
+
+    def stop(self, timeout: float = 5.0) -> int:
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGINT)
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+                self.proc.wait(timeout)
+        self._log.close()
+        return self.proc.returncode
+
+
+@pytest.fixture
+def ros_domain():
+    """A reserved ROS_DOMAIN_ID, exported for this test's node processes."""
+    from domain_coordinator import domain_id
+    old = os.environ.get("ROS_DOMAIN_ID")
+    with domain_id() as did:
+        os.environ["ROS_DOMAIN_ID"] = str(did)
+        yield did
+    if old is None:
+        os.environ.pop("ROS_DOMAIN_ID", None)
+    else:
+        os.environ["ROS_DOMAIN_ID"] = old
+
+
+@pytest.fixture
+def start_node(ros_domain, tmp_path, request) -> Callable[..., NodeProcess]:
+    """start_node(package, executable, *args) -> NodeProcess in this test's domain."""
+    started: List[NodeProcess] = []
+
+    def _start(package: str, executable: str, *args: str, domain: int | None = None) -> NodeProcess:
+        env = dict(os.environ, ROS_DOMAIN_ID=str(ros_domain if domain is None else domain),
+                   PYTHONUNBUFFERED="1")
+        log = tmp_path / f"{executable}-{len(started)}.log"
+        node = NodeProcess([executable_path(package, executable), *args], env, str(log))
+        started.append(node)
+        return node
+
+    yield _start
+    failed = getattr(request.node, "rep_call", None) is not None and request.node.rep_call.failed
+    for node in started:
+        node.stop()
+        if failed:
+            print(f"----- log of {' '.join(node.args)} -----\n{node.log()}")
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    rep = outcome.get_result()
+    setattr(item, "rep_" + rep.when, rep)
+
+
+@pytest.fixture
+def rclpy_context(ros_domain):
+    """An rclpy context of this test's domain, for an in-test observer node."""
+    import rclpy
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=ros_domain)
+    yield ctx
+    rclpy.try_shutdown(context=ctx)
+
+
+def spin_until(node, predicate: Callable[[], bool], timeout: float) -> bool:
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    deadline = time.monotonic() + timeout
+    try:
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            executor.spin_once(timeout_sec=0.05)
+        return predicate()
+    finally:
+        executor.remove_node(node)
