@@ -22,6 +22,7 @@ setup(
     entry_points={
         "console_scripts": [
             "send_command = scenario_runner.send_command:main",
+            "run_scenario = scenario_runner.run_scenario:main",
         ],
     },
 )

@@ -56,8 +56,10 @@ def main(argv=None) -> int:
         msg.header.stamp = node.get_clock().now().to_msg()
         pub.publish(msg)
         # Reliable delivery: wait for the subscribers' acknowledgement before the process ends.
-        if not pub.wait_for_all_acked(Duration(seconds=2.0)):
-            sys.stderr.write(f"send_command: {topic} did not acknowledge the command within 2 s\n")
+        # A reader that has not yet matched us asks for the sample at the writer's next
+        # heartbeat (Fast DDS: every 3 s), hence the generous limit.
+        if not pub.wait_for_all_acked(Duration(seconds=10.0)):
+            sys.stderr.write(f"send_command: {topic} did not acknowledge the command within 10 s\n")
             return 1
         print(f"sent to {topic}: engine {args.engine:+.2f}, steering {args.steering_deg:+.1f} deg, "
               f"anchor {args.anchor}")

@@ -90,3 +90,17 @@ def resolve_data_file(package: str, subdir: str, name: str) -> str:
     if not candidate.endswith((".yaml", ".yml")) and not os.path.exists(candidate):
         candidate += ".yaml"
     return candidate
+
+
+# ---------------------------------------------------------------------------------------
+# Stepping: lockstep participant or free-running node.
+# ---------------------------------------------------------------------------------------
+SIM_STEP_TOPIC = "/sim/step"
+STEP_DONE_TOPIC = "/sim/step_done"
+# Outputs of a step must reach late joiners (e.g. a node that matched after step 0 was sent).
+LATCHED_STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
+                               reliability=ReliabilityPolicy.RELIABLE,
+                               durability=DurabilityPolicy.TRANSIENT_LOCAL)
+PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+

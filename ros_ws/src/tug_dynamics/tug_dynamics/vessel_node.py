@@ -13,23 +13,23 @@ from __future__ import annotations
 import math
 import os
 import sys
-from typing import Dict, List, Optional
+from typing import List, Optional
 
 import numpy as np
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
-from rclpy.node import Node
 from tug_msgs.msg import AttachmentArray, AttachmentPoint, ScenarioEvent, VesselCommand, VesselStatus
 
 from tug_dynamics import ros_common as rc
-from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState,
+from tug_dynamics.stepping import SteppedNode, StepInput
+from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
                                  rotation_body_to_world)
 
 _ANCHOR_STATES = {"none": 0, "stowed": 1, "letting_go": 2, "dredging": 3, "heaving_up": 4}
 
 
-class VesselNode(Node):
+class VesselNode(SteppedNode):
     def __init__(self, node_name: str = "vessel", **kwargs):
         super().__init__(node_name, **kwargs)
         self.declare_parameter("ship_file", "", rc.text_param(
@@ -41,7 +41,6 @@ class VesselNode(Node):
         self.declare_parameter("initial_yaw", 0.0, rc.float_param(
             "Initial heading, 0 = bow east, positive counter-clockwise (REP-103)", -2 * math.pi, 2 * math.pi, "rad"))
         self.declare_parameter("initial_speed", 0.0, rc.float_param("Initial surge speed", -30.0, 40.0, "m/s"))
-        self.declare_parameter("exchange_rate", 50.0, rc.float_param("Steps per simulated second", 1.0, 1000.0, "Hz"))
         self.declare_parameter("wrench_topics", [""], rc.text_param(
             "geometry_msgs/WrenchStamped topics of external forces (rope ends) acting on this vessel"))
         self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
@@ -65,78 +64,85 @@ class VesselNode(Node):
         if np.any(current) and hasattr(self.model, "set_current"):
             self.model.set_current(current)
 
-        self.period_ns = rc.period_ns(self.get_parameter("exchange_rate").value)
-        self.dt = self.period_ns * 1e-9
-        self.step_index = 0
         self.command = Command()
         self.rejected = 0
         self.clamped = 0
         self.body_frame = f"{self.vessel_name}/base_link"
-        self.wrenches: Dict[str, ExternalWrench] = {}
+        self.wrench_topics = [t for t in self.get_parameter("wrench_topics").value if t]
 
-        self.odom_pub = self.create_publisher(Odometry, "odom", rc.STATE_QOS)
-        self.attach_pub = self.create_publisher(AttachmentArray, "attachments", rc.STATE_QOS)
-        self.status_pub = self.create_publisher(VesselStatus, "status", rc.STATE_QOS)
+        self.odom_pub = self.create_publisher(Odometry, "odom", rc.LATCHED_STATE_QOS)
+        self.attach_pub = self.create_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
+        self.status_pub = self.create_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
-        self.create_subscription(VesselCommand, "command", self.on_command, rc.COMMAND_QOS)
-        for topic in [t for t in self.get_parameter("wrench_topics").value if t]:
-            self.create_subscription(WrenchStamped, topic, lambda msg, t=topic: self.on_wrench(t, msg), rc.STATE_QOS)
-
-        self.publish_state()
-        self.timer = self.create_timer(self.dt, self.on_timer)
+        self.init_stepping([StepInput("command", VesselCommand, kind="order")] +
+                           [StepInput(t, WrenchStamped) for t in self.wrench_topics])
+        self.publish_outputs()
         self.get_logger().info(
             f"vessel '{self.vessel_name}' from {path}: {type(self.model).__name__}, "
-            f"attachments {sorted(self.model.attachments)}, {1e9 / self.period_ns:g} Hz")
+            f"attachments {sorted(self.model.attachments)}, {1e9 / self.period_ns:g} Hz, "
+            f"{'lockstep' if self.lockstep else 'free-running'}")
 
     # -- inputs --------------------------------------------------------------------------
-    def on_command(self, msg: VesselCommand) -> None:
-        cmd = Command(engine_order=msg.engine_order, steering_angle=msg.steering_angle, anchor=msg.anchor)
-        try:
-            notes = self.model.set_command(cmd)
-        except CommandRejected as exc:
-            self.rejected += 1
-            self.get_logger().error(f"command rejected, keeping the last valid one: {exc}")
-            self.emit_event("command_rejected", str(exc))
-            return
-        self.command = cmd
-        for note in notes:
-            self.clamped += 1
-            self.get_logger().warning(f"command clamped: {note}")
+    def accept_input(self, spec: StepInput, msg) -> bool:
+        if spec.msg_type is VesselCommand:
+            try:
+                check_command(Command(msg.engine_order, msg.steering_angle, msg.anchor))
+            except CommandRejected as exc:
+                self.rejected += 1
+                self.get_logger().error(f"command rejected, keeping the last valid one: {exc}")
+                self.emit_event("command_rejected", str(exc))
+                return False
+            return True
+        return self._wrench_point(spec.topic, msg) is not None
 
-    def on_wrench(self, topic: str, msg: WrenchStamped) -> None:
+    def _wrench_point(self, topic: str, msg: WrenchStamped) -> Optional[np.ndarray]:
         f, m = msg.wrench.force, msg.wrench.torque
         values = (f.x, f.y, f.z, m.x, m.y, m.z)
         if not all(math.isfinite(v) for v in values):
             self.get_logger().error(f"wrench on {topic} rejected: non-finite value {values}")
-            return
+            return None
         frame = msg.header.frame_id
         prefix = self.vessel_name + "/"
-        if not frame.startswith(prefix):
-            self.get_logger().error(f"wrench on {topic} rejected: frame '{frame}' is not a frame of "
-                                    f"vessel '{self.vessel_name}' ('{prefix}<attachment>' or '{self.body_frame}')")
-            return
-        point_name = frame[len(prefix):]
+        point_name = frame[len(prefix):] if frame.startswith(prefix) else None
         if point_name == "base_link":
-            point = np.zeros(3)
-        elif point_name in self.model.attachments:
-            point = np.asarray(self.model.attachments[point_name], float)
-        else:
-            self.get_logger().error(f"wrench on {topic} rejected: vessel '{self.vessel_name}' has no attachment "
-                                    f"'{point_name}' (it has {sorted(self.model.attachments)})")
-            return
-        # Frame axes are parallel to the body's: rotate to world for the model.
-        rot = rotation_body_to_world(self.model.state.rpy)
-        self.wrenches[topic] = ExternalWrench(force_world=rot @ np.array(values[:3]), point_body=point,
-                                              moment_world=rot @ np.array(values[3:]))
+            return np.zeros(3)
+        if point_name in self.model.attachments:
+            return np.asarray(self.model.attachments[point_name], float)
+        self.get_logger().error(f"wrench on {topic} rejected: frame '{frame}' is neither '{self.body_frame}' nor "
+                                f"an attachment frame of this vessel ({sorted(self.model.attachments)})")
+        return None
 
     # -- stepping -------------------------------------------------------------------------
-    def on_timer(self) -> None:
-        self.model.step(self.dt, list(self.wrenches.values()))
-        self.step_index += 1
-        self.publish_state()
+    def compute_step(self, inputs) -> None:
+        order = inputs.get("command")
+        if order is not None:
+            cmd = Command(engine_order=order.engine_order, steering_angle=order.steering_angle, anchor=order.anchor)
+            try:
+                notes = self.model.set_command(cmd)
+                self.command = cmd
+            except CommandRejected as exc:
+                notes = []
+                self.rejected += 1
+                self.get_logger().error(f"command rejected, keeping the last valid one: {exc}")
+                self.emit_event("command_rejected", str(exc))
+            for note in notes:
+                self.clamped += 1
+                self.get_logger().warning(f"command clamped: {note}")
+        # Wrench frames have body-parallel axes: rotate to world with the state of this step.
+        rot = rotation_body_to_world(self.model.state.rpy)
+        wrenches = []
+        for topic in self.wrench_topics:
+            msg = inputs.get(topic)
+            if msg is None:
+                continue
+            f, m = msg.wrench.force, msg.wrench.torque
+            wrenches.append(ExternalWrench(force_world=rot @ np.array([f.x, f.y, f.z]),
+                                           point_body=self._wrench_point(topic, msg),
+                                           moment_world=rot @ np.array([m.x, m.y, m.z])))
+        self.model.step(self.dt, wrenches)
 
-    def publish_state(self) -> None:
-        stamp = rc.step_time(self.step_index, self.period_ns)
+    def publish_outputs(self) -> None:
+        stamp = self.stamp()
         s = self.model.state
         q = rc.quaternion_from_rpy(s.rpy)
 
@@ -170,7 +176,7 @@ class VesselNode(Node):
         msg.header.frame_id = self.body_frame
         msg.step = self.step_index
         msg.vessel = self.vessel_name
-        msg.engine_order = float(self.command.engine_order)
+        msg.engine_order = float(st.get("engine_order", self.command.engine_order))
         msg.steering_angle_ordered = float(st.get("steering_angle_ordered", self.command.steering_angle))
         for key in ("steering_angle", "shaft_speed", "thrust", "speed_through_water", "heel", "trim", "rise",
                     "girting_ratio", "girting_threshold"):
@@ -184,7 +190,7 @@ class VesselNode(Node):
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
                            target=self.vessel_name, detail=detail, value=value)
-        ev.header.stamp = rc.step_time(self.step_index, self.period_ns)
+        ev.header.stamp = self.stamp()
         self.event_pub.publish(ev)
 
 

@@ -1,0 +1,248 @@
+#!/usr/bin/env python3
+"""Benchmark: rope_model vs MoorDyn on the Table 1 rope (issue 3). Not a test.
+
+Same line in both codes: 100 m, d 0.05 m, 1.725 kg/m, EA 1.046e6 N, axial damping ratio
+0.5, Cd 1.2, in air (ends at z = 100 m, water surface z = 0), ends 100 m apart. End a
+fixed, end b moved by the "tug": x_b = 98 + 2 cos(2 pi t / 10) (a 2 m surge, slackening and
+re-tensioning the rope). Exchange period 0.02 s for both (the rope node's period). MoorDyn
+runs RK2 (its default) with the largest step from a ladder that stays finite for the whole
+run; rope_model runs its default sub-step (0.01 s, two per exchange).
+
+Reported per N = 11, 50, 200: static mid-span sag of each (matched accuracy = within 1 %
+of each other), simulated seconds per wall second over 60 s, the RMS difference of the
+mid-span height histories between the two codes and against rope_model with a 10x smaller
+step, the peak end tension, and the warm-start time to the first step
+(fresh interpreter, numba cache present). Prints a markdown table.
+
+Usage: PYTHONPATH=ros_ws/src/rope_model python benchmarks/bench_rope.py [--seconds 60]
+"""
+import argparse
+import contextlib
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "rope_model"))
+
+from rope_model import RopeChain, default_rope_path, load_rope_params  # noqa: E402
+
+P = load_rope_params(default_rope_path())
+Z0 = float(os.environ.get("BENCH_Z0", "-50.0"))  # line depth (z up)
+DT_X = 0.02  # exchange period
+
+
+def tug(t):
+    ph = 2.0 * math.pi * t / 10.0
+    return (98.0 + 2.0 * math.cos(ph), 0.0, Z0), (-2.0 * math.sin(ph) * 2.0 * math.pi / 10.0, 0.0, 0.0)
+
+
+@contextlib.contextmanager
+def quiet():
+    """MoorDyn writes to the C stdout: silence fd 1 and 2."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with open(os.devnull, "w") as dn:
+        os.dup2(dn.fileno(), 1)
+        os.dup2(dn.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stdout.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+
+
+# ------------------------------------------------------------------ MoorDyn
+MD_TEMPLATE = """--------------------- MoorDyn Input File ------------------------------------
+Table 1 towing rope (seed 000), benchmark
+---------------------- LINE TYPES ----------------------------------------------------------------------
+TypeName   Diam    Mass/m     EA     BA/-zeta    EI         Cd     Ca     CdAx    CaAx
+(name)     (m)     (kg/m)     (N)    (N-s/-)     (N-m^2)    (-)    (-)    (-)     (-)
+rope       {d}     {mu}       {ea}   -{zeta}     0          {cd}   1.0    {cf}    0.0
+---------------------- POINTS ---------------------------------------
+ID   Attachment  X       Y     Z      Mass   Volume  CdA    Ca
+(#)   (word/ID) (m)     (m)   (m)    (kg)   (m^3)   (m^2)  (-)
+1     Fixed      0       0     {z}     0      0       0      0
+2     Coupled    100     0     {z}     0      0       0      0
+---------------------- LINES ----------------------------------------
+ID   LineType   AttachA  AttachB  UnstrLen  NumSegs  LineOutputs
+(#)   (name)     (ID)     (ID)      (m)       (-)      (-)
+1     rope       1        2        {L}        {n}       -
+---------------------- OPTIONS -----------------------------------------
+0             writeLog
+{dt}          dtM
+1             disableOutTime
+1             disableOutput
+{g}           g
+{rho}         rho
+500           WtrDpth
+RK2           tScheme
+300           TmaxIC
+1e-6          threshIC
+---------------------- OUTPUTS -----------------------------------------
+------------------------- need this line -------------------------------------
+"""
+
+
+def md_file(n, dt, folder):
+    path = os.path.join(folder, f"rope_{n}_{dt:g}.txt")
+    with open(path, "w") as fh:
+        fh.write(MD_TEMPLATE.format(d=P.diameter, mu=P.mass_per_length, ea=P.ea,
+                                    zeta=P.damping_ratio_axial, cd=P.drag_normal,
+                                    cf=P.drag_tangential, z=Z0, L=P.length, n=n, dt=dt,
+                                    g=P.gravity, rho=P.water_density))
+    return path
+
+
+def md_run(n, dt, seconds, folder):
+    """Returns (ok, sag, rate, tensions, warm_start_s)."""
+    import moordyn
+    t0 = time.perf_counter()
+    with quiet():
+        s = moordyn.Create(md_file(n, dt, folder))
+        x, v = tug(0.0)
+        moordyn.Init(s, list(x), list(v))
+    line = moordyn.GetLine(s, 1)
+    nn = moordyn.GetLineNumberNodes(line)
+    pos = np.array([moordyn.GetLineNodePos(line, i) for i in range(nn)])
+    sag = Z0 - np.interp(50.0, pos[:, 0], pos[:, 2])
+    tens = []
+    mids = []
+    ok = True
+    t = 0.0
+    t_first = None
+    wall0 = time.perf_counter()
+    try:
+        with quiet():
+            for k in range(int(round(seconds / DT_X))):
+                x, v = tug(t)
+                f = moordyn.Step(s, list(x), list(v), t, DT_X)
+                if t_first is None:
+                    t_first = time.perf_counter() - t0
+                t += DT_X
+                tens.append(math.sqrt(f[0] ** 2 + f[1] ** 2 + f[2] ** 2))
+                if n % 2:
+                    zm = 0.5 * (moordyn.GetLineNodePos(line, n // 2)[2]
+                                + moordyn.GetLineNodePos(line, n // 2 + 1)[2])
+                else:
+                    zm = moordyn.GetLineNodePos(line, n // 2)[2]
+                mids.append(zm)
+                if not all(math.isfinite(c) for c in f):
+                    ok = False
+                    break
+    except RuntimeError:
+        ok = False
+    wall = time.perf_counter() - wall0
+    with quiet():
+        moordyn.Close(s)
+    return ok, sag, seconds / wall, np.array(tens), np.array(mids), t_first
+
+
+def md_best(n, seconds, folder):
+    for dt in (0.005, 0.004, 0.0025, 0.002, 0.001, 5e-4, 4e-4, 2.5e-4, 2e-4, 1e-4, 5e-5):
+        ok, *_ = md_run(n, dt, seconds, folder)
+        if ok:
+            return dt, md_run(n, dt, seconds, folder)  # timed again, clean
+    raise RuntimeError(f"MoorDyn: no stable step for N={n}")
+
+
+# ------------------------------------------------------------------ rope_model
+def rope_static(n):
+    rope = RopeChain.straight(P, (0, 0, Z0), (100, 0, Z0), n_elements=n, relaxation=2.0,
+                              max_substep=0.02)
+    for _ in range(1000):  # 20 s of relaxation to the static catenary (not timed)
+        rope.step(DT_X)
+    rope.relaxation = 0.0
+    rope.V[:] = 0.0
+    rope.W[:] = 0.0
+    return rope
+
+
+def rope_run(n, seconds, max_substep=0.01):
+    rope = rope_static(n)
+    rope.max_substep = max_substep
+    pts = np.vstack([rope.joint_points(), rope.positions])
+    pts = pts[np.argsort(pts[:, 0])]
+    sag = Z0 - np.interp(50.0, pts[:, 0], pts[:, 2])
+    tens = []
+    mids = []
+    t = 0.0
+    X, E, L = rope.X, rope.E, rope.L
+    wall0 = time.perf_counter()
+    for k in range(int(round(seconds / DT_X))):
+        x, v = tug(t)
+        rope.set_end_kinematics("b", x, v)
+        rope.step(DT_X)
+        t += DT_X
+        tens.append(np.linalg.norm(rope.end_force("b")))
+        if n % 2:
+            mids.append(X[n // 2, 2])
+        else:  # joint between elements n/2-1 and n/2
+            mids.append(0.5 * (X[n // 2 - 1, 2] - 0.5 * L[n // 2 - 1] * E[n // 2 - 1, 2]
+                               + X[n // 2, 2] + 0.5 * L[n // 2] * E[n // 2, 2]))
+    wall = time.perf_counter() - wall0
+    return sag, seconds / wall, np.array(tens), np.array(mids)
+
+
+WARM = r"""
+import time, sys
+t0 = time.perf_counter()
+sys.path.insert(0, {path!r})
+from rope_model import RopeChain, default_rope_path, load_rope_params
+p = load_rope_params(default_rope_path())
+r = RopeChain.straight(p, (0, 0, 100), (100, 0, 100), n_elements={n})
+r.set_end_kinematics("b", (100, 0, 100), (0, 0, 0))
+r.step(0.02)
+print(time.perf_counter() - t0)
+"""
+
+
+def rope_warm_start(n):
+    path = os.path.join(HERE, "..", "ros_ws", "src", "rope_model")
+    code = WARM.format(path=os.path.abspath(path), n=n)
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)  # fill cache
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--n", type=int, nargs="*", default=[11, 50, 200])
+    a = ap.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for n in a.n:
+            dt_md, (ok, sag_md, rate_md, t_md, z_md, first_md) = md_best(n, a.seconds, folder)
+            sag_r, rate_r, t_r, z_r = rope_run(n, a.seconds)
+            _, _, t_ref, z_ref = rope_run(n, a.seconds, max_substep=0.001)  # own step error
+            warm = rope_warm_start(n)
+            m = min(len(z_md), len(z_r))
+            # mid-span height histories, RMS difference relative to the static sag
+            rms = float(np.sqrt(np.mean((z_md[:m] - z_r[:m]) ** 2)) / sag_md)
+            rms_ref = float(np.sqrt(np.mean((z_ref - z_r) ** 2)) / sag_md)
+            rows.append((n, sag_r, sag_md, rate_r, rate_md, dt_md, rms, rms_ref, warm, first_md,
+                         t_r.max(), t_md.max()))
+            print(f"N={n} done", file=sys.stderr, flush=True)
+    print("| N | sag rope_model (m) | sag MoorDyn (m) | sag diff | rope_model sim-s/wall-s "
+          "(sub-step 0.01 s) | MoorDyn sim-s/wall-s (RK2, dt) | speed ratio | mid-span height "
+          "RMS diff between codes (/sag) | rope_model step error (0.01 vs 0.001 s, /sag) | peak tension "
+          "rope_model / MoorDyn (kN) | warm start to first step: rope_model / MoorDyn (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for (n, sr, sm, rr, rm, dtm, rms, rref, warm, fm, pr, pm) in rows:
+        print(f"| {n} | {sr:.4f} | {sm:.4f} | {100 * (sr - sm) / sm:+.2f} % | {rr:.0f} | "
+              f"{rm:.0f} (dt {dtm:g} s) | {rr / rm:.2f} | {100 * rms:.1f} % | {100 * rref:.1f} % | "
+              f"{pr / 1e3:.1f} / {pm / 1e3:.1f} | {warm:.2f} / {fm:.2f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,78 @@
+"""Time one model step for every ship file in tug_dynamics/ships (any model, via load_ship).
+
+    PYTHONPATH=ros_ws/src/tug_dynamics python benchmarks/bench_vessels.py [--dt 0.05] [--update-readme]
+
+Prints a markdown table (median microseconds per Vessel.step call over 2000 calls after a
+warm-up, without and with one external wrench); --update-readme writes it between the
+<!-- bench:start --> / <!-- bench:end --> markers of ros_ws/src/tug_dynamics/README.md.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "tug_dynamics"))
+
+from tug_dynamics.ship_file import list_ship_files, load_ship  # noqa: E402
+from tug_dynamics.vessel import Command, ExternalWrench  # noqa: E402
+
+README = os.path.join(HERE, "..", "ros_ws", "src", "tug_dynamics", "README.md")
+
+
+def time_steps(vessel, dt, wrenches, n=2000, repeats=5):
+    for _ in range(200):
+        vessel.step(dt, wrenches)
+    best = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            vessel.step(dt, wrenches)
+        best.append((time.perf_counter() - t0) / n * 1e6)
+    return float(np.median(best))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dt", type=float, default=0.05, help="step size, s (default 0.05 = 20 Hz)")
+    ap.add_argument("--update-readme", action="store_true")
+    a = ap.parse_args(argv)
+    rows = []
+    for path in list_ship_files():
+        name = os.path.basename(path)
+        try:
+            v = load_ship(path)
+            v.set_command(Command(0.5, math.radians(10.0)))
+            point = next(iter(v.attachments.values())) if v.attachments else np.zeros(3)
+            w = [ExternalWrench(np.array([1e3, 2e3, 0.0]), np.asarray(point, float))]
+            t0 = time_steps(v, a.dt, ())
+            t1 = time_steps(v, a.dt, w)
+            sub = getattr(v, "hmax", None)
+            nsub = math.ceil(a.dt / sub - 1e-9) if sub else "-"
+            rows.append(f"| {name} | {type(v).__name__} | {nsub} | {t0:.1f} | {t1:.1f} |")
+        except Exception as exc:  # noqa: BLE001 - report, keep timing the others
+            rows.append(f"| {name} | (not loadable: {type(exc).__name__}: {str(exc)[:60]}) | | | |")
+    table = "\n".join([
+        f"Step dt = {a.dt} s; {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+        f"median of 5 x 2000 calls.",
+        "",
+        "| ship file | model | RK4 sub-steps per call | us / step | us / step, 1 wrench |",
+        "|---|---|---|---|---|",
+        *rows])
+    print(table)
+    if a.update_readme:
+        text = open(README, encoding="utf-8").read()
+        start, end = "<!-- bench:start -->", "<!-- bench:end -->"
+        i, j = text.index(start) + len(start), text.index(end)
+        open(README, "w", encoding="utf-8").write(text[:i] + "\n" + table + "\n" + text[j:])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,539 @@
+"""RopeChain: the towing rope as a chain of rigid cylinders (seed 000). No ROS here.
+
+See rope_model/__init__.py for the API summary and README.md for the model.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels as K
+from .layout import (catenary_curve, elements_from_joints, joints_on_curve, polygon_on_catenary,
+                     straight_joints)
+from .params import RopeParams
+
+END_MODES = ("pinned", "fixed", "free")
+
+
+class RopeDivergedError(RuntimeError):
+    """The integration produced NaN/inf or absurd values; the rope keeps its last good state."""
+
+    def __init__(self, message, step, time, element):
+        super().__init__(message)
+        self.step = step
+        self.time = time
+        self.element = element
+
+
+@dataclass(frozen=True)
+class PartingEvent:
+    """A connection exceeded the breaking load and parted.
+
+    connection: index c in 0..N (c joins element c-1 and element c; 0 and N are the
+    attachments a and b) counted in the chain as it was at that time.
+    """
+
+    time: float
+    connection: int
+    tension: float
+
+
+def _vec3(v, what):
+    a = np.asarray(v, dtype=float)
+    if a.shape != (3,):
+        raise ValueError(f"{what}: expected 3 numbers, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what}: must be finite, got {a.tolist()}")
+    return a.copy()
+
+
+def _end_name(end):
+    if end not in ("a", "b"):
+        raise ValueError(f"end must be 'a' or 'b', got {end!r}")
+    return 0 if end == "a" else 1
+
+
+class RopeChain:
+    """N rigid cylindrical elements joined by tension-only spring-dampers (Eq 1-26).
+
+    Element 0 is at end a (the tug in the paper), element N-1 at end b (the barge).
+    Use the factories ``straight``, ``slack`` and ``wound_on_winch``.
+    """
+
+    VMAX = 2000.0  # m/s: beyond this the state is called diverged
+    WMAX = 1.0e5  # rad/s
+    PMAX = 1.0e7  # m from the origin
+
+    def __init__(self, params: RopeParams, X, E, lengths, *, end_a="pinned", end_b="pinned",
+                 p_a=None, p_b=None, winch=False, max_substep=0.01, theta=0.55,
+                 relaxation=0.0, current=(0.0, 0.0, 0.0), nominal_element_length=None):
+        if not isinstance(params, RopeParams):
+            raise TypeError("params must be a RopeParams (see load_rope_params)")
+        X = np.array(X, dtype=float)
+        E = np.array(E, dtype=float)
+        L = np.array(lengths, dtype=float)
+        n = L.shape[0] if L.ndim == 1 else -1
+        if n < 1:
+            raise ValueError(f"n_elements must be >= 1, got {max(n, 0)}")
+        if X.shape != (n, 3) or E.shape != (n, 3):
+            raise ValueError("positions and axes must have shape (N, 3)")
+        if not (np.all(np.isfinite(L)) and np.all(L > 0)):
+            raise ValueError(f"element lengths must be positive and finite, got min {L.min()}")
+        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(E))):
+            raise ValueError("positions and axes must be finite")
+        E /= np.linalg.norm(E, axis=1)[:, None]
+        for nm, m in (("end_a", end_a), ("end_b", end_b)):
+            if m not in END_MODES:
+                raise ValueError(f"{nm}: expected one of {END_MODES}, got {m!r}")
+        if not (math.isfinite(max_substep) and max_substep > 0):
+            raise ValueError(f"max_substep must be positive, got {max_substep}")
+        if not (0.5 <= theta <= 1.0):
+            raise ValueError(f"theta must be in [0.5, 1], got {theta}")
+        if not (math.isfinite(relaxation) and relaxation >= 0):
+            raise ValueError(f"relaxation must be >= 0, got {relaxation}")
+        self.params = params
+        self.X, self.E, self.L = X, E, L
+        self.V = np.zeros((n, 3))
+        self.W = np.zeros((n, 3))
+        self.end_modes = [end_a, end_b]
+        self.att_on = np.array([m != "free" for m in self.end_modes], dtype=np.int64)
+        self.att_pos = np.zeros((2, 3))
+        self.att_vel = np.zeros((2, 3))
+        # default attachment points: the rope ends of the layout
+        front = X[0] + 0.5 * L[0] * E[0]
+        aft = X[-1] - 0.5 * L[-1] * E[-1]
+        self.att_pos[0] = front if p_a is None else _vec3(p_a, "p_a")
+        self.att_pos[1] = aft if p_b is None else _vec3(p_b, "p_b")
+        self.conn_ok = np.ones(n + 1, dtype=np.int64)
+        self.armed = np.ones(n + 1, dtype=np.int64)  # parting re-armed once unloaded
+        self.breaking_load = np.full(n + 1, float(params.breaking_load))
+        self.winch = bool(winch)
+        if self.winch and self.end_modes[0] == "free":
+            raise ValueError("a winch needs end a attached ('pinned' or 'fixed')")
+        self.l_nom = float(nominal_element_length or params.nominal_element_length)
+        self.payout_rate = 0.0
+        self.max_substep = float(max_substep)
+        self.theta = float(theta)
+        self.relaxation = float(relaxation)
+        self.current = _vec3(current, "current")
+        self.time = 0.0
+        self.step_count = 0
+        self.events: list[PartingEvent] = []
+        self.tensions = np.zeros(n + 1)
+        self._end_force = np.zeros((2, 3))
+        self._mean_end_force = np.zeros((2, 3))
+        self._ev_buf = np.zeros((64, 3))
+        self._info = np.zeros(2, dtype=np.int64)
+        self._imp = np.zeros((2, 3))
+        self._nev = np.zeros(1, dtype=np.int64)
+        total = float(L.sum())
+        if total > params.length * (1 + 1e-9):
+            raise ValueError(f"deployed length {total:.3f} m exceeds rope length {params.length} m")
+        self._refresh()
+
+    # ------------------------------------------------------------------ factories
+    @classmethod
+    def _n(cls, params, n_elements):
+        if not isinstance(params, RopeParams):
+            raise TypeError("params must be a RopeParams (see load_rope_params)")
+        n = params.n_elements if n_elements is None else n_elements
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"n_elements must be an integer >= 1, got {n!r}")
+        return int(n)
+
+    @staticmethod
+    def _hang(p_a, p_b, L, sag_direction):
+        joints = polygon_on_catenary(p_a, p_b, L, sag_direction)
+        if joints is None:  # not longer than the span (or one element): along the curve
+            joints = joints_on_curve(catenary_curve(p_a, p_b, float(L.sum()), sag_direction), L)
+        return joints
+
+    @classmethod
+    def straight(cls, params, p_a, p_b, n_elements=None, **kw):
+        """Rope laid straight from p_a to p_b (length = params.length; gaps or overlaps
+        are spread evenly if the span differs)."""
+        n = cls._n(params, n_elements)
+        p_a, p_b = _vec3(p_a, "p_a"), _vec3(p_b, "p_b")
+        if np.linalg.norm(p_b - p_a) == 0:
+            raise ValueError("straight layout: p_a and p_b coincide")
+        L = np.full(n, params.length / n)
+        X, E = elements_from_joints(straight_joints(p_a, p_b, L), L)
+        return cls(params, X, E, L, p_a=p_a, p_b=p_b, **kw)
+
+    @classmethod
+    def slack(cls, params, p_a, p_b, n_elements=None, sag_direction=(0.0, 0.0, -1.0),
+              length=None, **kw):
+        """Rope hanging as an inextensible catenary (longer than the span) in the plane of
+        the chord and sag_direction (tilt it to start a sideways swing)."""
+        n = cls._n(params, n_elements)
+        p_a, p_b = _vec3(p_a, "p_a"), _vec3(p_b, "p_b")
+        length = params.length if length is None else float(length)
+        if not (math.isfinite(length) and length > 0):
+            raise ValueError(f"length must be positive, got {length}")
+        L = np.full(n, length / n)
+        X, E = elements_from_joints(cls._hang(p_a, p_b, L, sag_direction), L)
+        return cls(params, X, E, L, p_a=p_a, p_b=p_b, **kw)
+
+    @classmethod
+    def wound_on_winch(cls, params, p_a, p_b, deployed_length=None, n_elements=None,
+                       sag_direction=(0.0, 0.0, -1.0), **kw):
+        """Rope on a winch at end a with only ``deployed_length`` (default: the minimum)
+        out, hanging slack between a and b (section 4.6). Elements have the nominal length
+        params.length / n_elements except element 0 (at the winch), which grows and
+        shrinks with pay-out and is split / merged to stay within 0.5..1.5 nominal."""
+        n_full = cls._n(params, n_elements)
+        l_nom = params.length / n_full
+        dep = params.min_deployed_length if deployed_length is None else float(deployed_length)
+        if not (math.isfinite(dep) and dep > 0):
+            raise ValueError(f"deployed_length must be positive, got {dep}")
+        if dep > params.length:
+            raise ValueError(f"deployed_length {dep} exceeds rope length {params.length}")
+        p_a, p_b = _vec3(p_a, "p_a"), _vec3(p_b, "p_b")
+        n0 = max(1, int(math.floor(dep / l_nom + 0.5)))
+        L = np.full(n0, l_nom)
+        L[0] = dep - (n0 - 1) * l_nom
+        X, E = elements_from_joints(cls._hang(p_a, p_b, L, sag_direction), L)
+        kw.setdefault("end_a", "pinned")
+        return cls(params, X, E, L, p_a=p_a, p_b=p_b, winch=True,
+                   nominal_element_length=l_nom, **kw)
+
+    # ------------------------------------------------------------------ inputs
+    def set_end_kinematics(self, end, position, velocity=(0.0, 0.0, 0.0)):
+        """Pinned end: attachment position (3,) and velocity (3,) at the current time, world
+        frame. Rejects non-finite input without touching the state."""
+        i = _end_name(end)
+        p = _vec3(position, f"end {end} position")
+        v = _vec3(velocity, f"end {end} velocity")
+        if self.end_modes[i] != "pinned":
+            raise ValueError(f"end {end} is '{self.end_modes[i]}', only a pinned end can move")
+        self.att_pos[i] = p
+        self.att_vel[i] = v
+
+    def set_payout_rate(self, rate_m_per_s):
+        """Winch at end a: positive pays out, negative heaves in (m/s). Length stays within
+        [params.min_deployed_length, params.length]."""
+        r = float(rate_m_per_s)
+        if not math.isfinite(r):
+            raise ValueError(f"payout rate must be finite, got {rate_m_per_s!r}")
+        if not self.winch:
+            raise ValueError("this rope has no winch (use RopeChain.wound_on_winch)")
+        self.payout_rate = r
+
+    # ------------------------------------------------------------------ stepping
+    def _kernel(self, h, n_sub, impulse, info):
+        p = self.params
+        return K.run_substeps(
+            self.X, self.E, self.V, self.W, self.L, self.conn_ok, self.breaking_load,
+            self.armed, self.att_on, self.att_pos, self.att_vel,
+            p.mass_per_length, p.radius, p.ea, p.drag_normal, p.drag_tangential,
+            p.tangential_area_factor, p.added_mass_coefficient, p.water_density,
+            p.air_density, p.gravity, p.damping_ratio_axial, p.damping_ratio_transverse,
+            p.damping_ratio_rotational, p.breaking_load, self.current, self.relaxation,
+            h, self.theta, n_sub, self.VMAX, self.WMAX, self.PMAX,
+            self.tensions, self._end_force, impulse, self._ev_buf, self._nev, info)
+
+    def _refresh(self):
+        """Recompute tensions and end forces for the current state (no time advance)."""
+        imp = np.zeros((2, 3))
+        info = np.zeros(2, dtype=np.int64)
+        self._kernel(0.0, 0, imp, info)
+        self._collect_events(0.0)
+
+    def _collect_events(self, t0):
+        ne = int(self._nev[0])
+        for k in range(min(ne, self._ev_buf.shape[0])):
+            t, c, T = self._ev_buf[k]
+            self.events.append(PartingEvent(t0 + float(t), int(c), float(T)))
+        self._nev[0] = 0
+
+    def _snapshot(self):
+        return (self.X.copy(), self.E.copy(), self.V.copy(), self.W.copy(), self.L.copy(),
+                self.conn_ok.copy(), self.armed.copy(), self.breaking_load.copy(),
+                self.att_pos.copy(),
+                self.tensions.copy(), self._end_force.copy(), len(self.events))
+
+    def _restore(self, s):
+        (self.X, self.E, self.V, self.W, self.L, self.conn_ok, self.armed,
+         self.breaking_load, self.att_pos, self.tensions, self._end_force, nev) = s
+        del self.events[nev:]
+        self._nev[0] = 0
+
+    def step(self, dt):
+        """Advance dt seconds with sub-steps <= max_substep. Attachments move linearly with
+        the velocity last given. Deterministic. Raises RopeDivergedError (state unchanged)."""
+        dt = float(dt)
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be positive and finite, got {dt}")
+        n_sub = max(1, int(math.ceil(dt / self.max_substep - 1e-9)))
+        h = dt / n_sub
+        info = self._info
+        imp = self._imp
+        if self.winch and self.payout_rate != 0.0:
+            snap = self._snapshot()  # the winch changes arrays between sub-steps
+            imp_total = np.zeros((2, 3))
+            pos0 = self.att_pos.copy()
+            st = K.OK
+            for k in range(n_sub):
+                self.att_pos = pos0 + self.att_vel * (k * h)
+                st = self._kernel(h, 1, imp, info)
+                self._collect_events(self.time + k * h)
+                if st != K.OK:
+                    info[0] = k
+                    self._restore(snap)
+                    break
+                imp_total += imp
+                self._winch(self.payout_rate * h)
+            self.att_pos = pos0
+            if st == K.OK:
+                self._refresh()
+        else:  # the kernel restores the last good state itself on divergence
+            n_ev = len(self.events)
+            st = self._kernel(h, n_sub, imp, info)
+            if st == K.OK:
+                self._collect_events(self.time)
+            else:
+                del self.events[n_ev:]
+                self._nev[0] = 0
+            imp_total = imp
+        if st != K.OK:
+            k, j = int(info[0]), int(info[1])
+            t_fail = self.time + (k + 1) * h
+            raise RopeDivergedError(
+                f"rope diverged at exchange step {self.step_count + 1}, sub-step {k + 1}/{n_sub} "
+                f"(t = {t_fail:.6f} s), element {j}: non-finite or absurd state; "
+                f"state left at t = {self.time:.6f} s", self.step_count + 1, t_fail, j)
+        self.att_pos = self.att_pos + self.att_vel * dt
+        self.time += dt
+        self.step_count += 1
+        self._mean_end_force = imp_total * (1.0 / dt)
+
+    # ------------------------------------------------------------------ winch
+    def _winch(self, dl):
+        p = self.params
+        dep = float(self.L.sum())
+        tgt = min(max(dep + dl, p.min_deployed_length), p.length)
+        dl = tgt - dep
+        if dl == 0.0:
+            return
+        l0 = self.L[0]
+        l_new = l0 + dl
+        if l_new <= 1e-6 * self.l_nom:  # only possible with a single tiny element
+            return
+        e = self.E[0]
+        aft = self.X[0] - 0.5 * l0 * e  # the far end stays, rope leaves/enters at the winch
+        m0 = p.mass_per_length * l0
+        if dl > 0:  # new rope leaves the drum with the attachment velocity
+            self.V[0] = (m0 * self.V[0] + p.mass_per_length * dl * self.att_vel[0]) / (
+                p.mass_per_length * l_new)
+        self.X[0] = aft + 0.5 * l_new * e
+        self.L[0] = l_new
+        while self.L[0] > 1.5 * self.l_nom:
+            self._split0()
+        while self.L[0] < 0.5 * self.l_nom and self.n_elements >= 2 and self.conn_ok[1]:
+            self._merge01()
+
+    def _split0(self):
+        l0, ln = self.L[0], self.l_nom
+        e, x0, v0, w0 = self.E[0].copy(), self.X[0].copy(), self.V[0].copy(), self.W[0].copy()
+        front = x0 + 0.5 * l0 * e
+        c_near = front - 0.5 * (l0 - ln) * e
+        c_far = front - (l0 - ln) * e - 0.5 * ln * e
+        v_near = v0 + np.cross(w0, c_near - x0)
+        v_far = v0 + np.cross(w0, c_far - x0)
+        self.X = np.vstack([c_near, c_far, self.X[1:]])
+        self.E = np.vstack([e, e, self.E[1:]])
+        self.V = np.vstack([v_near, v_far, self.V[1:]])
+        self.W = np.vstack([w0, w0, self.W[1:]])
+        self.L = np.concatenate([[l0 - ln, ln], self.L[1:]])
+        self.conn_ok = np.insert(self.conn_ok, 1, 1)
+        self.armed = np.insert(self.armed, 1, 1)
+        self.breaking_load = np.insert(self.breaking_load, 1, self.params.breaking_load)
+        self.tensions = np.insert(self.tensions, 1, self.tensions[0])
+
+    def _merge01(self):
+        mu = self.params.mass_per_length
+        L0, L1 = self.L[0], self.L[1]
+        front = self.X[0] + 0.5 * L0 * self.E[0]
+        aft = self.X[1] - 0.5 * L1 * self.E[1]
+        ln = L0 + L1
+        d = front - aft
+        nd = np.linalg.norm(d)
+        e = d / nd if nd > 1e-9 else self.E[1].copy()
+        m0, m1 = mu * L0, mu * L1
+        v = (m0 * self.V[0] + m1 * self.V[1]) / (m0 + m1)
+        i0, i1 = m0 * L0 * L0, m1 * L1 * L1
+        w = (i0 * self.W[0] + i1 * self.W[1]) / (i0 + i1)
+        w -= (w @ e) * e
+        x = front - 0.5 * ln * e
+        self.X = np.vstack([x, self.X[2:]])
+        self.E = np.vstack([e, self.E[2:]])
+        self.V = np.vstack([v, self.V[2:]])
+        self.W = np.vstack([w, self.W[2:]])
+        self.L = np.concatenate([[ln], self.L[2:]])
+        self.conn_ok = np.delete(self.conn_ok, 1)
+        self.armed = np.delete(self.armed, 1)
+        self.breaking_load = np.delete(self.breaking_load, 1)
+        self.tensions = np.delete(self.tensions, 1)
+
+    # ------------------------------------------------------------------ outputs
+    @property
+    def n_elements(self):
+        return int(self.L.shape[0])
+
+    @property
+    def positions(self):
+        return self.X.copy()
+
+    @property
+    def axes(self):
+        """Unit body x axes (N,3), pointing towards end a."""
+        return self.E.copy()
+
+    @property
+    def velocities(self):
+        return self.V.copy()
+
+    @property
+    def angular_velocities(self):
+        return self.W.copy()
+
+    @property
+    def lengths(self):
+        return self.L.copy()
+
+    @property
+    def pitch_yaw(self):
+        """(N,2) pitch theta and yaw psi of Eq (7) (body x = (c psi c theta, s psi c theta, -s theta)),
+        radians; positive pitch = x axis (towards end a) pointing down."""
+        E = self.E
+        th = np.arctan2(-E[:, 2], np.hypot(E[:, 0], E[:, 1]))
+        ps = np.arctan2(E[:, 1], E[:, 0])
+        return np.stack([th, ps], axis=1)
+
+    def body_velocities(self):
+        """(N,5) the paper's V = (u, v, w, q, r) of Eq (2) in the yaw-pitch body frame."""
+        th, ps = self.pitch_yaw.T
+        cth, sth, cps, sps = np.cos(th), np.sin(th), np.cos(ps), np.sin(ps)
+        xb = np.stack([cps * cth, sps * cth, -sth], 1)
+        yb = np.stack([-sps, cps, np.zeros_like(th)], 1)
+        zb = np.stack([cps * sth, sps * sth, cth], 1)
+        V, W = self.V, self.W
+        return np.stack([(V * xb).sum(1), (V * yb).sum(1), (V * zb).sum(1),
+                         (W * yb).sum(1), (W * zb).sum(1)], 1)
+
+    @property
+    def unstretched_length(self):
+        """Deployed (unstretched) rope length, m."""
+        return float(self.L.sum())
+
+    @property
+    def total_mass(self):
+        """Mass of the deployed rope, kg (= unstretched_length * mass_per_length)."""
+        return float(self.params.mass_per_length * self.L.sum())
+
+    @property
+    def pieces(self):
+        """List of (first, last+1) element ranges separated by parted connections."""
+        out, start = [], 0
+        for c in range(1, self.n_elements):
+            if not self.conn_ok[c]:
+                out.append((start, c))
+                start = c
+        out.append((start, self.n_elements))
+        return out
+
+    def end_force(self, end):
+        """Force (3,) the rope exerts ON attachment a or b at the current state, N, world."""
+        i = _end_name(end)
+        return self._end_force[i].copy()
+
+    def mean_end_force(self, end):
+        """Force on the attachment averaged over the last step(dt) (impulse / dt): apply
+        this to the vessel for momentum-consistent coupling."""
+        i = _end_name(end)
+        return self._mean_end_force[i].copy()
+
+    def attachment_position(self, end):
+        return self.att_pos[_end_name(end)].copy()
+
+    def front_points(self):
+        return self.X + 0.5 * self.L[:, None] * self.E
+
+    def aft_points(self):
+        return self.X - 0.5 * self.L[:, None] * self.E
+
+    def joint_points(self):
+        """(N+1,3) rope points: end a, the mid-points of the inner connections, end b.
+        Attached ends give the attachment, free or parted ends the element end point."""
+        fr, af = self.front_points(), self.aft_points()
+        pts = np.empty((self.n_elements + 1, 3))
+        pts[1:-1] = 0.5 * (af[:-1] + fr[1:])
+        pts[0] = self.att_pos[0] if (self.att_on[0] and self.conn_ok[0]) else fr[0]
+        pts[-1] = self.att_pos[1] if (self.att_on[1] and self.conn_ok[-1]) else af[-1]
+        return pts
+
+    def _mass_arrays(self):
+        p = self.params
+        n = self.n_elements
+        m = p.mass_per_length * self.L
+        ma = np.empty(n)
+        ip = np.empty(n)
+        for j in range(n):
+            fr, _ = K.immersion(self.X[j, 2], self.E[j, 2], 0.5 * self.L[j], p.radius)
+            vol = math.pi * p.radius ** 2 * self.L[j]
+            rot = (self.L[j] ** 2 + 3 * p.radius ** 2) / 12.0
+            ma[j] = p.added_mass_coefficient * p.water_density * vol * fr
+            ip[j] = m[j] * rot + ma[j] * rot
+        return m, ma, ip
+
+    def momentum(self, elements=None):
+        """Linear momentum (3,) incl. added mass, of all or of a slice of elements."""
+        m, ma, _ = self._mass_arrays()
+        V, E = self.V, self.E
+        ue = (V * E).sum(1)
+        P = m[:, None] * V + ma[:, None] * (V - ue[:, None] * E)
+        if elements is not None:
+            P = P[slice(*elements)]
+        return P.sum(0)
+
+    def kinetic_energy(self):
+        m, ma, ip = self._mass_arrays()
+        V, E = self.V, self.E
+        ue = (V * E).sum(1)
+        vn2 = (V * V).sum(1) - ue ** 2
+        return float(0.5 * (m * (V * V).sum(1) + ma * vn2 + ip * (self.W * self.W).sum(1)).sum())
+
+    def potential_energy(self):
+        """Gravity (z = 0 datum) + elastic energy of the active connections, J.
+        Buoyancy potential is not included (use in air)."""
+        p = self.params
+        m = p.mass_per_length * self.L
+        pe = float((m * p.gravity * self.X[:, 2]).sum())
+        return pe + self.elastic_energy()
+
+    def elastic_energy(self):
+        p = self.params
+        n = self.n_elements
+        fr, af = self.front_points(), self.aft_points()
+        e_tot = 0.0
+        for c in range(n + 1):
+            if not self.conn_ok[c]:
+                continue
+            hp, hn = c > 0, c < n
+            if (not hp and not self.att_on[0]) or (not hn and not self.att_on[1]):
+                continue
+            Pp = af[c - 1] if hp else self.att_pos[0]
+            Pn = fr[c] if hn else self.att_pos[1]
+            if hp and np.linalg.norm(Pn - self.X[c - 1]) <= 0.5 * self.L[c - 1]:
+                continue
+            if hn and np.linalg.norm(Pp - self.X[c]) <= 0.5 * self.L[c]:
+                continue
+            lrep = (0.5 * self.L[c - 1] if hp else 0.0) + (0.5 * self.L[c] if hn else 0.0)
+            d = Pp - Pn
+            e_tot += 0.5 * p.ea / lrep * float(d @ d)
+        return e_tot
+
+    def total_energy(self):
+        return self.kinetic_energy() + self.potential_energy()

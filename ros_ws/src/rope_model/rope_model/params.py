@@ -1,0 +1,173 @@
+"""Rope parameters (seed 000, Table 1) and their YAML loader.
+
+All values are SI. Paper units are converted in the YAML comments / here, once.
+Errors name the file and the key, e.g.
+``table1.yaml: key 'diameter': expected a positive number, got -1``.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass, field
+
+import yaml
+
+G0 = 9.80665  # m/s^2, standard gravity: kgf -> N and tf -> N (Table 1)
+TONNE_FORCE = 1000.0 * G0  # N per tf (Table 1 "16 ton" breaking strength)
+KNOT = 1852.0 / 3600.0  # m/s per knot (section 4.4-4.6 speeds)
+
+
+class RopeParamsError(ValueError):
+    """Bad rope parameter; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class RopeParams:
+    """Physical rope description (Table 1 defaults) plus environment constants.
+
+    ``axial_stiffness`` (EA, N) defaults to breaking_load / elongation_at_break:
+    Table 1 gives 16 tf at 15 % elongation, a linear rope then has EA = 1.046e6 N.
+    """
+
+    length: float = 100.0  # m, total rope (deployed + on the winch)
+    diameter: float = 0.05  # m
+    mass_per_length: float = 1.725  # kg/m (Table 1: weight 1.725 kgf/m)
+    breaking_load: float = 16.0 * TONNE_FORCE  # N (Table 1: 16 tf)
+    elongation_at_break: float = 0.15  # - (Table 1: 15 %)
+    axial_stiffness: float | None = None  # N (EA); None -> breaking_load/elongation
+    drag_normal: float = 1.2  # C_D, Eq (11)
+    drag_tangential: float = 0.015  # C_f, Eq (11)
+    # Eq (10) uses the diameter as reference width for both drags; MoorDyn and
+    # Berteaux use the circumference (pi*D) for the tangential one -> factor pi.
+    tangential_area_factor: float = 1.0
+    added_mass_coefficient: float = 1.0  # Eq (9): m_y = m_z = rho*Vol
+    # Eq (17) is ambiguous: the equation says transverse = axial/10 with
+    # axial 0.5; the prose says transverse 0.5 and axial ten times larger.
+    # Default = the equation (axial 0.5 matches Table 1's single "0.5").
+    damping_ratio_axial: float = 0.5
+    damping_ratio_transverse: float = 0.05
+    damping_ratio_rotational: float = 0.5  # zeta_m, Eq (19)
+    n_elements: int = 11  # Table 1
+    min_length: float | None = None  # m, winch heave-in limit; None -> half an element
+    water_density: float = 1025.0  # kg/m^3
+    air_density: float = 1.225  # kg/m^3 (drag of the emerged part)
+    gravity: float = G0  # m/s^2
+    name: str = "rope"
+    source: str = field(default="<defaults>", compare=False)
+
+    @property
+    def ea(self) -> float:
+        if self.axial_stiffness is not None:
+            return float(self.axial_stiffness)
+        return self.breaking_load / self.elongation_at_break
+
+    @property
+    def radius(self) -> float:
+        return 0.5 * self.diameter
+
+    @property
+    def nominal_element_length(self) -> float:
+        return self.length / self.n_elements
+
+    @property
+    def min_deployed_length(self) -> float:
+        if self.min_length is not None:
+            return float(self.min_length)
+        return 0.5 * self.nominal_element_length
+
+    def replace(self, **changes) -> "RopeParams":
+        """Copy with changes, validated like a file."""
+        new = dataclasses.replace(self, **changes)
+        _validate(new, new.source)
+        return new
+
+
+_POSITIVE = (
+    "length", "diameter", "mass_per_length", "breaking_load", "elongation_at_break",
+    "water_density",
+)
+_NONNEG = (
+    "drag_normal", "drag_tangential", "tangential_area_factor", "added_mass_coefficient",
+    "damping_ratio_axial", "damping_ratio_transverse", "damping_ratio_rotational",
+    "air_density", "gravity",
+)
+_OPTIONAL_POSITIVE = ("axial_stiffness", "min_length")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _validate(p: RopeParams, src: str) -> None:
+    def bad(key, what, got):
+        raise RopeParamsError(f"{src}: key '{key}': expected {what}, got {got!r}")
+
+    for k in _POSITIVE:
+        v = getattr(p, k)
+        if not _is_number(v) or v <= 0:
+            bad(k, "a positive number", v)
+    for k in _NONNEG:
+        v = getattr(p, k)
+        if not _is_number(v) or v < 0:
+            bad(k, "a non-negative number", v)
+    for k in _OPTIONAL_POSITIVE:
+        v = getattr(p, k)
+        if v is not None and (not _is_number(v) or v <= 0):
+            bad(k, "a positive number or null", v)
+    if not isinstance(p.n_elements, int) or isinstance(p.n_elements, bool) or p.n_elements < 1:
+        bad("n_elements", "an integer >= 1", p.n_elements)
+    if p.elongation_at_break >= 1.0 and p.axial_stiffness is None:
+        bad("elongation_at_break", "a strain below 1 (0.15 means 15 %)", p.elongation_at_break)
+    if p.min_length is not None and p.min_length > p.length:
+        bad("min_length", f"at most length ({p.length})", p.min_length)
+    if not isinstance(p.name, str):
+        bad("name", "a string", p.name)
+
+
+_FIELDS = {f.name for f in dataclasses.fields(RopeParams)} - {"source"}
+
+
+def load_rope_params(path: str | os.PathLike) -> RopeParams:
+    """Read a rope YAML file (flat mapping of the RopeParams field names).
+
+    Raises FileNotFoundError (with the path) or RopeParamsError (file + key).
+    """
+    path = os.fspath(path)
+    src = os.path.basename(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"rope parameter file not found: {path}")
+    with open(path, encoding="utf-8") as fh:
+        try:
+            data = yaml.safe_load(fh)
+        except yaml.YAMLError as exc:
+            raise RopeParamsError(f"{src}: not valid YAML: {exc}") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise RopeParamsError(f"{src}: expected a mapping of keys, got {type(data).__name__}")
+    for k in data:
+        if k not in _FIELDS:
+            raise RopeParamsError(
+                f"{src}: key '{k}': unknown key (known: {', '.join(sorted(_FIELDS))})")
+    kw = {}
+    for k, v in data.items():
+        if k in ("n_elements",):
+            if _is_number(v) and float(v).is_integer() and not isinstance(v, bool):
+                v = int(v)
+        elif k != "name" and _is_number(v):
+            v = float(v)
+        kw[k] = v
+    p = RopeParams(**kw, source=src)
+    _validate(p, src)
+    return p
+
+
+def default_rope_path() -> str:
+    """Path of the shipped Table 1 rope (ropes/table1.yaml)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    for cand in (os.path.join(here, "..", "ropes", "table1.yaml"),
+                 os.path.join(here, "ropes", "table1.yaml")):
+        if os.path.isfile(cand):
+            return os.path.normpath(cand)
+    return os.path.normpath(os.path.join(here, "..", "ropes", "table1.yaml"))

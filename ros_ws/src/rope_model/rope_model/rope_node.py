@@ -1,0 +1,298 @@
+"""The rope node: one executable for every rope file.
+
+    ros2 run rope_model rope_node --ros-args -r __ns:=/towline -p rope_file:=table1.yaml \
+        -p end_a:=tug/towing_hook -p end_b:=barge/bow_bollard
+
+Each end is "<vessel>/<attachment>" (pinned to that attachment point, taken from
+/<vessel>/attachments each step), "fixed" (held at end_X_position) or "free". The chain is
+laid out between the ends' step-0 positions (straight, slack or wound on end a's winch).
+
+Publishes ``state`` (tug_msgs/RopeState), ``end_a/wrench`` and ``end_b/wrench``
+(geometry_msgs/WrenchStamped for ends pinned to a vessel: the force the rope exerts on the
+attachment, in frame "<vessel>/<attachment>", i.e. acting at the attachment point with the
+vessel's body axes) and ``markers`` (visualization_msgs/MarkerArray, a line strip coloured
+by tension). Subscribes ``winch`` (tug_msgs/WinchCommand) for a rope wound on a winch.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+from typing import Dict, List, Optional
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import Point, Pose, Twist, WrenchStamped
+from std_msgs.msg import ColorRGBA
+from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
+from visualization_msgs.msg import Marker, MarkerArray
+
+from rope_model import RopeChain, RopeDivergedError, load_rope_params
+from tug_dynamics import ros_common as rc
+from tug_dynamics.stepping import SteppedNode, StepInput
+
+LAYOUTS = ("straight", "slack", "winch")
+
+
+class RopeEnd:
+    def __init__(self, label: str, spec: str, position: List[float]):
+        self.label = label  # "a" or "b"
+        self.spec = spec
+        if spec in ("fixed", "free"):
+            self.mode, self.vessel, self.attachment = spec, "", ""
+        elif spec.count("/") == 1 and all(spec.split("/")):
+            self.mode = "pinned"
+            self.vessel, self.attachment = spec.split("/")
+        else:
+            raise ValueError(f"parameter end_{label}:={spec!r}: expected '<vessel>/<attachment>', 'fixed' or 'free'")
+        self.position = np.array(position, float) if len(position) == 3 else None
+        if self.mode != "pinned" and self.position is None:
+            raise ValueError(f"parameter end_{label}_position: end {label} is '{spec}', give its position [x, y, z] m")
+        self.velocity = np.zeros(3)
+        self.orientation = None  # attachment frame orientation (quaternion msg)
+
+    @property
+    def frame(self) -> str:
+        return f"{self.vessel}/{self.attachment}"
+
+
+class RopeNode(SteppedNode):
+    def __init__(self, node_name: str = "rope", **kwargs):
+        super().__init__(node_name, **kwargs)
+        p = self.declare_parameter
+        p("rope_file", "table1.yaml", rc.text_param(
+            "Rope file: a path, or a file name in share/rope_model/ropes (default: the seed 000 Table 1 rope)"))
+        p("end_a", "fixed", rc.text_param("End a (tug end, winch end): '<vessel>/<attachment>', 'fixed' or 'free'"))
+        p("end_b", "fixed", rc.text_param("End b (tow end): '<vessel>/<attachment>', 'fixed' or 'free'"))
+        p("end_a_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end a, m, world (map)"))
+        p("end_b_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end b, m, world (map)"))
+        p("layout", "straight", rc.text_param("Initial layout: straight, slack (sagging) or winch (wound on end a)"))
+        p("deployed_length", 0.0, rc.float_param(
+            "Initial deployed length (slack or winch layouts); 0 = the rope file's length", 0.0, 1e5, "m"))
+        p("n_elements", 0, rc.int_param("Number of elements; 0 = the rope file's", 0, 2000))
+        p("max_substep", 0.0, rc.float_param("Largest internal sub-step; 0 = the library default", 0.0, 1.0, "s"))
+        p("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
+        p("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
+        gp = self.get_parameter
+
+        rope_file = gp("rope_file").value
+        path = rc.resolve_data_file("rope_model", "ropes", rope_file)
+        if not os.path.isfile(path):
+            raise FileNotFoundError(f"rope file '{path}' not found (parameter rope_file:={rope_file})")
+        self.params = load_rope_params(path)
+        self.rope_path = path
+        self.ends = [RopeEnd("a", gp("end_a").value, list(gp("end_a_position").value)),
+                     RopeEnd("b", gp("end_b").value, list(gp("end_b_position").value))]
+        self.layout = gp("layout").value
+        if self.layout not in LAYOUTS:
+            raise ValueError(f"parameter layout:={self.layout!r}: expected one of {LAYOUTS}")
+        if self.layout == "winch" and self.ends[0].mode == "free":
+            raise ValueError("parameter layout:=winch needs end a on a vessel or fixed (the winch is at end a)")
+        self.deployed_length = gp("deployed_length").value or None
+        self.n_elements = gp("n_elements").value or None
+        self.max_substep = gp("max_substep").value
+        self.current = (gp("current_east").value, gp("current_north").value, 0.0)
+        self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
+        self.rope: Optional[RopeChain] = None
+        self.reported_events = 0
+
+        self.state_pub = self.create_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
+        self.marker_pub = self.create_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
+        self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
+        self.wrench_pubs: Dict[str, object] = {}
+        for end in self.ends:
+            if end.mode == "pinned":
+                self.wrench_pubs[end.label] = self.create_publisher(
+                    WrenchStamped, f"end_{end.label}/wrench", rc.LATCHED_STATE_QOS)
+        self.vessel_topics = {}
+        for end in self.ends:
+            if end.mode == "pinned":
+                self.vessel_topics.setdefault(f"/{end.vessel}/attachments", end.vessel)
+        inputs = [StepInput(t, AttachmentArray) for t in self.vessel_topics]
+        if self.layout == "winch":
+            inputs.append(StepInput("winch", WinchCommand, kind="order"))
+        self.init_stepping(inputs, ready=False)
+        if not self.vessel_topics:
+            self._build()
+        self.get_logger().info(
+            f"rope '{self.rope_name}' from {path}: ends {self.ends[0].spec} - {self.ends[1].spec}, "
+            f"layout {self.layout}, {'lockstep' if self.lockstep else 'free-running'}"
+            + ("" if self.rope else "; waiting for the vessels' attachments"))
+
+    # -- inputs --------------------------------------------------------------------------
+    def step_of(self, spec, msg) -> int:
+        if spec.msg_type is AttachmentArray:
+            return int(msg.step)
+        return super().step_of(spec, msg)
+
+    def accept_input(self, spec: StepInput, msg) -> bool:
+        if spec.msg_type is WinchCommand:
+            if not math.isfinite(msg.payout_rate):
+                self.get_logger().error(f"winch command rejected: payout_rate={msg.payout_rate!r} is not finite")
+                return False
+            return True
+        for end in self.ends:
+            if end.mode == "pinned" and f"/{end.vessel}/attachments" == spec.topic:
+                point = next((p for p in msg.points if p.name == end.attachment), None)
+                if point is None:
+                    self.get_logger().error(
+                        f"{spec.topic} has no attachment '{end.attachment}' for end {end.label} "
+                        f"(it has {[p.name for p in msg.points]})")
+                    return False
+                values = [point.position.x, point.position.y, point.position.z,
+                          point.velocity.x, point.velocity.y, point.velocity.z]
+                if not all(math.isfinite(v) for v in values):
+                    self.get_logger().error(f"{spec.topic}: non-finite kinematics for '{end.attachment}' rejected")
+                    return False
+        if self.rope is None and int(msg.step) == 0:
+            self._take_attachments(msg)
+            if all(e.position is not None for e in self.ends):
+                self._build()
+        return True
+
+    def _take_attachments(self, msg: AttachmentArray) -> None:
+        for end in self.ends:
+            if end.mode == "pinned" and end.vessel == msg.vessel:
+                point = next(p for p in msg.points if p.name == end.attachment)
+                end.position = np.array([point.position.x, point.position.y, point.position.z])
+                end.velocity = np.array([point.velocity.x, point.velocity.y, point.velocity.z])
+                end.orientation = point.orientation
+
+    def _build(self) -> None:
+        kw = dict(end_a=self.ends[0].mode, end_b=self.ends[1].mode, current=self.current)
+        if self.max_substep > 0:
+            kw["max_substep"] = self.max_substep
+        p_a, p_b = self.ends[0].position, self.ends[1].position
+        if self.layout == "straight":
+            self.rope = RopeChain.straight(self.params, p_a, p_b, n_elements=self.n_elements, **kw)
+        elif self.layout == "slack":
+            self.rope = RopeChain.slack(self.params, p_a, p_b, n_elements=self.n_elements,
+                                        length=self.deployed_length, **kw)
+        else:
+            self.rope = RopeChain.wound_on_winch(self.params, p_a, p_b, deployed_length=self.deployed_length,
+                                                 n_elements=self.n_elements, **kw)
+        for end in self.ends:
+            if end.mode == "pinned":
+                self.rope.set_end_kinematics(end.label, end.position, end.velocity)
+        self.ready_to_step = True
+        self.publish_outputs()
+        self.get_logger().info(f"rope laid out: {self.rope.n_elements} elements, "
+                               f"{self.rope.unstretched_length:.2f} m deployed")
+
+    # -- stepping -------------------------------------------------------------------------
+    def compute_step(self, inputs) -> None:
+        for topic, vessel in self.vessel_topics.items():
+            msg = inputs.get(topic)
+            if msg is None:
+                continue
+            self._take_attachments(msg)
+        for end in self.ends:
+            if end.mode == "pinned":
+                self.rope.set_end_kinematics(end.label, end.position, end.velocity)
+        order = inputs.get("winch")
+        if order is not None:
+            self.rope.set_payout_rate(order.payout_rate)
+        try:
+            self.rope.step(self.dt)
+        except RopeDivergedError as exc:
+            self.emit_event("rope_diverged", str(exc))
+            raise
+        for ev in self.rope.events[self.reported_events:]:
+            self.emit_event("rope_parted", f"rope parted at connection {ev.connection} (t = {ev.time:.3f} s) "
+                            f"with tension {ev.tension / 1e3:.1f} kN", ev.tension)
+        self.reported_events = len(self.rope.events)
+
+    def publish_outputs(self) -> None:
+        rope = self.rope
+        if rope is None:
+            return
+        stamp = self.stamp()
+        st = RopeState(step=self.step_index, rope=self.rope_name, model="element_chain")
+        st.header.stamp = stamp
+        st.header.frame_id = rc.WORLD_FRAME
+        X, E, V, W = rope.positions, rope.axes, rope.velocities, rope.angular_velocities
+        for i in range(rope.n_elements):
+            pose = Pose()
+            pose.position.x, pose.position.y, pose.position.z = map(float, X[i])
+            yaw = math.atan2(E[i, 1], E[i, 0])
+            pitch = math.atan2(-E[i, 2], math.hypot(E[i, 0], E[i, 1]))
+            pose.orientation = rc.quaternion_from_rpy((0.0, pitch, yaw))
+            st.element_poses.append(pose)
+            tw = Twist()
+            tw.linear.x, tw.linear.y, tw.linear.z = map(float, V[i])
+            tw.angular.x, tw.angular.y, tw.angular.z = map(float, W[i])
+            st.element_velocities.append(tw)
+        st.element_lengths = [float(v) for v in rope.lengths]
+        st.connection_tensions = [float(v) for v in rope.tensions]
+        st.piece_starts = [int(a) for a, _ in rope.pieces]
+        st.unstretched_length = rope.unstretched_length
+        joints = rope.joint_points()
+        st.stretched_length = float(np.linalg.norm(np.diff(joints, axis=0), axis=1).sum())
+        st.mass = rope.total_mass
+        forces = {}
+        for end, vec in (("a", st.end_a_force), ("b", st.end_b_force)):
+            f = rope.mean_end_force(end) if self.step_index > 0 else rope.end_force(end)
+            forces[end] = f
+            vec.x, vec.y, vec.z = map(float, f)
+        st.broken = bool(rope.events)
+        self.state_pub.publish(st)
+
+        for end in self.ends:
+            if end.mode != "pinned":
+                continue
+            # Attachment frame axes are the vessel's body axes: rotate the world force into them.
+            rot = rc.rotation_from_quaternion(end.orientation)
+            f_body = rot.T @ forces[end.label]
+            w = WrenchStamped()
+            w.header.stamp = stamp
+            w.header.frame_id = end.frame
+            w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = map(float, f_body)
+            self.wrench_pubs[end.label].publish(w)
+
+        self.marker_pub.publish(self._markers(joints, rope.tensions, stamp))
+
+    def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp) -> MarkerArray:
+        m = Marker(ns=self.rope_name, id=0, type=Marker.LINE_STRIP, action=Marker.ADD)
+        m.header.stamp = stamp
+        m.header.frame_id = rc.WORLD_FRAME
+        m.pose.orientation.w = 1.0
+        m.scale.x = max(0.1, 2.0 * self.params.radius)
+        breaking = self.params.breaking_load
+        for p, t in zip(joints, tensions):
+            m.points.append(Point(x=float(p[0]), y=float(p[1]), z=float(p[2])))
+            # green (slack) -> yellow (half the breaking load) -> red (breaking load)
+            s = min(max(float(t) / breaking, 0.0), 1.0)
+            m.colors.append(ColorRGBA(r=min(1.0, 2 * s), g=min(1.0, 2 * (1 - s)), b=0.0, a=1.0))
+        return MarkerArray(markers=[m])
+
+    def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
+        ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
+                           target=self.rope_name, detail=detail, value=float(value))
+        ev.header.stamp = self.stamp()
+        self.event_pub.publish(ev)
+        self.get_logger().warning(detail)
+
+
+def main(args: Optional[List[str]] = None) -> int:
+    rclpy.init(args=args)
+    try:
+        node = RopeNode()
+    except (ValueError, KeyError, FileNotFoundError) as exc:
+        sys.stderr.write(f"rope_node: {exc}\n")
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+    except RopeDivergedError as exc:
+        sys.stderr.write(f"rope_node: {exc}\n")
+        return 3
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

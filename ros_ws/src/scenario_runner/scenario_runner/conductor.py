@@ -1,0 +1,340 @@
+"""Runs a validated scenario: starts the nodes, owns /clock and the step protocol, sends the
+timed orders, watches the nodes and stops everything cleanly.
+
+Step protocol (see tug_dynamics/stepping.py and the README): for k = 0, 1, ...
+  1. orders due at step k go out stamped k on /<vessel>/command and /<rope>/winch;
+  2. /clock is set to k*T and tug_msgs/SimStep(k, ordered=[namespaces with an order]) is sent;
+  3. each node computes k -> k+1 from inputs stamped k and answers StepDone(k+1);
+  4. once every node has answered, step k+1 starts (lockstep) or waits for its wall-clock
+     time (realtime; lateness is measured and reported).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+import rclpy
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
+
+from scenario_runner.scenario import Scenario, heading_rad, resolve
+from tug_dynamics import ros_common as rc
+
+# Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
+CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE)
+
+
+class RunError(RuntimeError):
+    """The run could not go on (a node died, stopped answering or reported a failure)."""
+
+
+@dataclasses.dataclass
+class NodeSpec:
+    name: str  # fully qualified node name, e.g. /tug/vessel
+    package: str
+    executable: str
+    ros_args: List[str]
+
+
+def _executable(package: str, executable: str) -> str:
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        path = os.path.join(prefix, "lib", package, executable)
+        if prefix and os.access(path, os.X_OK):
+            return path
+    raise RunError(f"executable {package}/{executable} not found on AMENT_PREFIX_PATH (is the workspace sourced?)")
+
+
+def _yaml_list(items: List[str]) -> str:
+    return "[" + ",".join(f"'{i}'" for i in items) + "]"
+
+
+def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
+    """The node processes a scenario needs, with their parameters."""
+    common = ["-p", f"exchange_rate:={sc.exchange_rate}", "-p", "lockstep:=true", "-p", "use_sim_time:=true",
+              "-p", f"current_east:={sc.environment.current[0]}", "-p", f"current_north:={sc.environment.current[1]}"]
+    specs = []
+    for v in sc.vessels:
+        wrenches = [f"/{r.name}/end_{end}/wrench" for r in sc.ropes for end in ("a", "b")
+                    if getattr(r, f"end_{end}").split("/")[0] == v.name]
+        args = ["-r", f"__ns:=/{v.name}", "-r", "__node:=vessel",
+                "-p", f"ship_file:={resolve('tug_dynamics', 'ships', v.ship_file, scenario_path)}",
+                "-p", f"initial_x:={float(v.initial.x)}", "-p", f"initial_y:={float(v.initial.y)}",
+                "-p", f"initial_yaw:={heading_rad(v)}", "-p", f"initial_speed:={float(v.initial.speed)}"]
+        if wrenches:
+            args += ["-p", f"wrench_topics:={_yaml_list(wrenches)}"]
+        specs.append(NodeSpec(f"/{v.name}/vessel", "tug_dynamics", "vessel_node", args + common))
+    for r in sc.ropes:
+        args = ["-r", f"__ns:=/{r.name}", "-r", "__node:=rope",
+                "-p", f"rope_file:={resolve('rope_model', 'ropes', r.rope_file, scenario_path)}",
+                "-p", f"end_a:={r.end_a}", "-p", f"end_b:={r.end_b}", "-p", f"layout:={r.layout}"]
+        for end in ("a", "b"):
+            pos = getattr(r, f"end_{end}_position")
+            if pos is not None:
+                args += ["-p", f"end_{end}_position:=[{','.join(str(float(c)) for c in pos)}]"]
+        if r.deployed_length:
+            args += ["-p", f"deployed_length:={float(r.deployed_length)}"]
+        if r.n_elements:
+            args += ["-p", f"n_elements:={int(r.n_elements)}"]
+        specs.append(NodeSpec(f"/{r.name}/rope", "rope_model", "rope_node", args + common))
+    return specs
+
+
+class NodeProcesses:
+    """The node processes of a run, each in its own process group, output to a log file."""
+
+    def __init__(self, specs: List[NodeSpec], log_dir: str):
+        self.specs = specs
+        self.log_dir = log_dir
+        self.procs: Dict[str, subprocess.Popen] = {}
+        self.logs: Dict[str, str] = {}
+
+    def start(self) -> None:
+        os.makedirs(self.log_dir, exist_ok=True)
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        for spec in self.specs:
+            log = os.path.join(self.log_dir, spec.name.strip("/").replace("/", "_") + ".log")
+            self.logs[spec.name] = log
+            with open(log, "wb") as out:
+                self.procs[spec.name] = subprocess.Popen(
+                    [_executable(spec.package, spec.executable), "--ros-args", *spec.ros_args],
+                    stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+
+    def dead(self) -> Optional[str]:
+        for name, p in self.procs.items():
+            if p.poll() is not None:
+                return name
+        return None
+
+    def tail(self, name: str, lines: int = 15) -> str:
+        try:
+            with open(self.logs[name], "rb") as f:
+                return "\n".join(f.read().decode(errors="replace").splitlines()[-lines:])
+        except OSError:
+            return ""
+
+    def stop(self, timeout: float = 5.0) -> None:
+        for p in self.procs.values():
+            if p.poll() is None:
+                try:
+                    os.killpg(p.pid, signal.SIGINT)
+                except ProcessLookupError:
+                    pass
+        deadline = time.monotonic() + timeout
+        for p in self.procs.values():
+            try:
+                p.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+
+
+@dataclasses.dataclass
+class RunStats:
+    steps_done: int = 0
+    wall_time: float = 0.0
+    overruns: int = 0  # realtime: steps finished after their wall-clock deadline
+    lateness: List[float] = dataclasses.field(default_factory=list)  # realtime: s behind schedule per step
+    round_trips: List[float] = dataclasses.field(default_factory=list)  # s from SimStep to last StepDone
+
+
+class Conductor(Node):
+    """The runner's own node: /clock, /sim/step, orders and events out; StepDone in."""
+
+    def __init__(self, sc: Scenario, node_names: List[str], recorder=None):
+        super().__init__("scenario_runner")
+        self.recorder = recorder
+        self.sc = sc
+        self.period_ns = rc.period_ns(sc.exchange_rate)
+        self.expected = set(node_names)
+        self.done: Dict[int, set] = {}
+        self.failures: List[str] = []
+        self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS)
+        self.step_pub = self.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
+        self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
+        self.cmd_pubs = {v.name: self.create_publisher(VesselCommand, f"/{v.name}/command", rc.COMMAND_QOS)
+                         for v in sc.vessels}
+        self.winch_pubs = {r.name: self.create_publisher(WinchCommand, f"/{r.name}/winch", rc.COMMAND_QOS)
+                           for r in sc.ropes if r.layout == "winch"}
+        self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done, rc.PROTOCOL_QOS)
+        self.orders = self._orders_by_step()
+
+    def _on_done(self, msg: StepDone) -> None:
+        if msg.node not in self.expected:
+            return
+        if not msg.ok:
+            self.failures.append(f"{msg.node} failed at step {msg.step}: {msg.error}")
+        self.done.setdefault(msg.step, set()).add(msg.node)
+
+    def _orders_by_step(self) -> Dict[int, List]:
+        """Events merged per target and step: one order per namespace per step."""
+        rate = self.sc.exchange_rate
+        held = {v.name: VesselCommand() for v in self.sc.vessels}
+        out: Dict[int, Dict[str, object]] = {}
+        for ev in sorted(self.sc.events, key=lambda e: e.time):
+            k = int(round(ev.time * rate))
+            if ev.vessel is not None:
+                cmd = held[ev.vessel]
+                cmd = VesselCommand(engine_order=cmd.engine_order, steering_angle=cmd.steering_angle,
+                                    anchor=VesselCommand.ANCHOR_NO_CHANGE)
+                if ev.engine_order is not None:
+                    cmd.engine_order = float(ev.engine_order)
+                if ev.steering_deg is not None:
+                    cmd.steering_angle = math.radians(ev.steering_deg)
+                if ev.anchor is not None:
+                    cmd.anchor = {"let_go": VesselCommand.ANCHOR_LET_GO, "heave_up": VesselCommand.ANCHOR_HEAVE_UP}[
+                        ev.anchor]
+                held[ev.vessel] = cmd
+                out.setdefault(k, {})[ev.vessel] = cmd
+            else:
+                out.setdefault(k, {})[ev.rope] = WinchCommand(payout_rate=float(ev.payout_rate))
+        return {k: sorted(v.items()) for k, v in out.items()}
+
+    def order_publishers(self):
+        return list(self.cmd_pubs.values()) + list(self.winch_pubs.values())
+
+    def send_step(self, k: int) -> None:
+        stamp = rc.step_time(k, self.period_ns)
+        if self.recorder:
+            self.recorder.log_time_ns = k * self.period_ns
+        ordered = []
+        for target, order in self.orders.get(k, []):
+            order.header.stamp = stamp
+            if isinstance(order, VesselCommand):
+                self.cmd_pubs[target].publish(order)
+            else:
+                self.winch_pubs[target].publish(order)
+            ordered.append(target)
+            self.event(k, "order", target, self._describe(order))
+        self.clock_pub.publish(Clock(clock=stamp))
+        msg = SimStep(step=k, time=stamp, period=self.period_ns * 1e-9, ordered=ordered)
+        msg.header.stamp = stamp
+        self.step_pub.publish(msg)
+        if self.recorder:
+            self.recorder.log_time_ns = (k + 1) * self.period_ns
+
+    @staticmethod
+    def _describe(order) -> str:
+        if isinstance(order, WinchCommand):
+            return f"winch pay-out {order.payout_rate:+.2f} m/s"
+        anchor = {0: "", 1: ", let go anchor", 2: ", heave up anchor"}[order.anchor]
+        return f"engine {order.engine_order:+.2f}, steering {math.degrees(order.steering_angle):+.1f} deg{anchor}"
+
+    def event(self, k: int, kind: str, target: str, detail: str) -> None:
+        ev = ScenarioEvent(step=k, source=self.get_fully_qualified_name(), kind=kind, target=target,
+                           detail=detail, value=float("nan"))
+        ev.header.stamp = rc.step_time(k, self.period_ns)
+        self.event_pub.publish(ev)
+
+
+def contract_topics(sc: Scenario) -> List[tuple]:
+    """(topic, type, offered QoS) of every topic of the topic contract for this scenario."""
+    from geometry_msgs.msg import WrenchStamped
+    from nav_msgs.msg import Odometry
+    from rosgraph_msgs.msg import Clock as ClockMsg
+    from tug_msgs.msg import AttachmentArray, RopeState, VesselStatus
+    from visualization_msgs.msg import MarkerArray
+    topics = [("/clock", ClockMsg, CLOCK_QOS), (rc.SIM_STEP_TOPIC, SimStep, rc.PROTOCOL_QOS),
+              (rc.STEP_DONE_TOPIC, StepDone, rc.PROTOCOL_QOS), (rc.EVENTS_TOPIC, ScenarioEvent, rc.EVENTS_QOS)]
+    for v in sc.vessels:
+        topics += [(f"/{v.name}/odom", Odometry, rc.LATCHED_STATE_QOS),
+                   (f"/{v.name}/attachments", AttachmentArray, rc.LATCHED_STATE_QOS),
+                   (f"/{v.name}/status", VesselStatus, rc.LATCHED_STATE_QOS),
+                   (f"/{v.name}/command", VesselCommand, rc.COMMAND_QOS)]
+    for r in sc.ropes:
+        topics += [(f"/{r.name}/state", RopeState, rc.LATCHED_STATE_QOS),
+                   (f"/{r.name}/markers", MarkerArray, rc.LATCHED_STATE_QOS)]
+        topics += [(f"/{r.name}/end_{e}/wrench", WrenchStamped, rc.LATCHED_STATE_QOS)
+                   for e in ("a", "b") if "/" in getattr(r, f"end_{e}")]
+        if r.layout == "winch":
+            topics.append((f"/{r.name}/winch", WinchCommand, rc.COMMAND_QOS))
+    return topics
+
+
+def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float = 240.0,
+        stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
+        on_step: Optional[Callable[[int], None]] = None, recorder=None) -> RunStats:
+    """Start the nodes, run the scenario, stop everything. Raises RunError naming the node."""
+    specs = node_specs(sc, scenario_path)
+    procs = NodeProcesses(specs, log_dir)
+    conductor = Conductor(sc, [s.name for s in specs], recorder)
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(conductor)
+    for node in (extra_nodes or []) + ([recorder] if recorder else []):
+        executor.add_node(node)
+    stats = RunStats()
+    n_steps = sc.steps if steps is None else steps
+
+    def wait_for(step: int, timeout: float, what: str) -> None:
+        deadline = time.monotonic() + timeout
+        while conductor.done.get(step, set()) != conductor.expected:
+            executor.spin_once(timeout_sec=0.001)
+            if conductor.failures:
+                raise RunError(conductor.failures[0])
+            dead = procs.dead()
+            if dead:
+                raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
+                               f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
+            if time.monotonic() > deadline:
+                missing = sorted(conductor.expected - conductor.done.get(step, set()))
+                raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
+                               f"{timeout:g} s while {what}")
+
+    try:
+        procs.start()
+        wait_for(0, ready_timeout, "starting up")
+        # Orders are volatile: every order topic must reach its node (and the recorder) first.
+        want = 2 if recorder else 1
+        deadline = time.monotonic() + ready_timeout
+        while any(p.get_subscription_count() < want for p in conductor.order_publishers()):
+            executor.spin_once(timeout_sec=0.01)
+            if time.monotonic() > deadline:
+                late = [p.topic_name for p in conductor.order_publishers() if p.get_subscription_count() < want]
+                raise RunError(f"no subscriber matched order topic(s) {late} within {ready_timeout:g} s")
+        conductor.event(0, "scenario_started", "", f"scenario '{sc.name}': {n_steps} steps at "
+                        f"{sc.exchange_rate:g} Hz, {sc.mode}")
+        t_start = time.monotonic()
+        period = conductor.period_ns * 1e-9
+        for k in range(n_steps):
+            if sc.mode == "realtime":
+                target = t_start + k * period
+                while time.monotonic() < target:
+                    executor.spin_once(timeout_sec=max(0.0, min(0.001, target - time.monotonic())))
+                late = time.monotonic() - target
+                stats.lateness.append(late)
+            t0 = time.monotonic()
+            conductor.send_step(k)
+            wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
+            stats.round_trips.append(time.monotonic() - t0)
+            conductor.done.pop(k, None)
+            stats.steps_done = k + 1
+            if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
+                stats.overruns += 1
+            if on_step:
+                on_step(k + 1)
+        stats.wall_time = time.monotonic() - t_start
+        conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
+        # let the last messages reach subscribers in this process (recorder, summary)
+        end = time.monotonic() + 0.3
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.01)
+        return stats
+    finally:
+        procs.stop()
+        executor.shutdown()
+        conductor.destroy_node()
+
+
+def percentile(values: List[float], q: float) -> float:
+    return float(np.percentile(np.asarray(values), q)) if values else float("nan")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("use run_scenario")

@@ -1,0 +1,132 @@
+"""Run a scenario headless.
+
+    ros2 run scenario_runner run_scenario default_demo.yaml --output output/demo.mcap
+
+The scenario is validated before any node starts (errors name the file and the key); then
+every node is started as its own process, the run is stepped in lockstep (or paced real
+time), progress is shown, everything is shut down, and a summary is printed. Exit status:
+0 done, 2 invalid scenario, 3 a node died / stopped answering / failed.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from typing import Dict, List, Optional
+
+import numpy as np
+import rclpy
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+from tug_msgs.msg import RopeState
+
+from scenario_runner import conductor as cd
+from scenario_runner.recorder import McapRecorder
+from scenario_runner.scenario import ScenarioError, load_scenario
+from tug_dynamics import ros_common as rc
+
+
+def scenario_path(name: str) -> str:
+    """A path as given, or a bare name in share/scenario_runner/scenarios."""
+    return rc.resolve_data_file("scenario_runner", "scenarios", name)
+
+
+class Monitor(Node):
+    """Collects what the summary needs: rope end tensions and final vessel states."""
+
+    def __init__(self, vessels: List[str], ropes: List[str]):
+        super().__init__("scenario_monitor")
+        self.tension: Dict[str, List[float]] = {r: [] for r in ropes}
+        self.broken: Dict[str, bool] = {r: False for r in ropes}
+        self.odom: Dict[str, Odometry] = {}
+        for r in ropes:
+            self.create_subscription(RopeState, f"/{r}/state", lambda m, r=r: self._rope(r, m), rc.LATCHED_STATE_QOS)
+        for v in vessels:
+            self.create_subscription(Odometry, f"/{v}/odom", lambda m, v=v: self.odom.__setitem__(v, m),
+                                     rc.LATCHED_STATE_QOS)
+
+    def _rope(self, name: str, msg: RopeState) -> None:
+        fa = msg.end_a_force
+        self.tension[name].append(math.sqrt(fa.x ** 2 + fa.y ** 2 + fa.z ** 2))
+        self.broken[name] = msg.broken
+
+
+def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
+    sim_time = stats.steps_done / sc.exchange_rate
+    lines = [f"scenario '{sc.name}': {sim_time:.1f} s simulated in {stats.wall_time:.1f} s wall "
+             f"({sim_time / max(stats.wall_time, 1e-9):.1f}x real time, {stats.steps_done} steps at "
+             f"{sc.exchange_rate:g} Hz, {sc.mode})"]
+    if stats.round_trips:
+        lines.append(f"  step round trip: p50 {1e3 * cd.percentile(stats.round_trips, 50):.2f} ms, "
+                     f"p99 {1e3 * cd.percentile(stats.round_trips, 99):.2f} ms")
+    if sc.mode == "realtime":
+        lines.append(f"  realtime: {stats.overruns} overrun step(s); lateness p99 "
+                     f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
+    for rope, values in mon.tension.items():
+        if values:
+            t = np.asarray(values)
+            lines.append(f"  rope {rope}: towline tension at end a peak {t.max() / 1e3:.1f} kN, "
+                         f"mean {t.mean() / 1e3:.1f} kN{', PARTED' if mon.broken[rope] else ''}")
+    for vessel, od in sorted(mon.odom.items()):
+        p = od.pose.pose.position
+        u = od.twist.twist.linear.x
+        lines.append(f"  vessel {vessel}: final position x {p.x:.1f} m, y {p.y:.1f} m, surge speed {u:.2f} m/s")
+    return "\n".join(lines)
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    parser = argparse.ArgumentParser(prog="run_scenario", description=__doc__.split("\n\n")[0])
+    parser.add_argument("scenario", help="scenario file, or a name in share/scenario_runner/scenarios")
+    parser.add_argument("--output", help="MCAP file to write (default: output/<scenario name>.mcap)")
+    parser.add_argument("--duration", type=float, help="simulate only this many seconds (shortened run)")
+    parser.add_argument("--log-dir", help="where node logs go (default: next to the recording)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    args = parser.parse_args(rclpy.utilities.remove_ros_args(argv))
+
+    path = scenario_path(args.scenario)
+    try:
+        sc = load_scenario(path)
+    except ScenarioError as exc:
+        sys.stderr.write(f"run_scenario: invalid scenario:\n{exc}\n")
+        return 2
+    steps = sc.steps if args.duration is None else min(sc.steps, int(round(args.duration * sc.exchange_rate)))
+    output = args.output or sc.recording.path or os.path.join("output", f"{sc.name}.mcap")
+    log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{sc.name}_logs")
+
+    rclpy.init(args=argv)
+    mon = Monitor([v.name for v in sc.vessels], [r.name for r in sc.ropes])
+    recorder = McapRecorder(output, cd.contract_topics(sc)) if sc.recording.enabled else None
+    progress = None
+    if not args.quiet:
+        from tqdm import tqdm
+        progress = tqdm(total=steps, unit="step", desc=sc.name, file=sys.stderr, mininterval=0.5)
+    try:
+        stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder,
+                       on_step=(lambda k: progress.update(1)) if progress else None)
+    except cd.RunError as exc:
+        if progress:
+            progress.close()
+        sys.stderr.write(f"run_scenario: run stopped: {exc}\n")
+        return 3
+    except KeyboardInterrupt:
+        sys.stderr.write("run_scenario: interrupted; nodes stopped\n")
+        return 130
+    finally:
+        if progress:
+            progress.close()
+        if recorder:
+            recorder.close()  # finalised (summary, indexes) also after an error or Ctrl-C
+        mon.destroy_node()
+        rclpy.try_shutdown()
+    print(summary(sc, stats, mon))
+    if recorder:
+        print(f"  recording: {os.path.abspath(output)} ({sum(recorder.counts.values())} messages on "
+              f"{len(recorder.counts)} topics)")
+    print(f"  node logs: {log_dir}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,444 @@
+"""6-DOF planing hull with a waterjet (seed 004: Yoon & Kang, "Modeling and simulation of the
+6 DOF motion of a high speed planing hull running in calm sea"). ROS-free.
+
+The ship file (``model: planing_6dof``) gives the paper's data (Tables 1, 3-6), the hull
+particulars Savitsky's method needs (the calm-water resistance curve is computed from them
+at load, savitsky.py), and the values the paper does not give, each listed under
+``estimated:``. Physics kernels: planing_core.py. Notes and results: PLANING.md.
+
+Sign conventions (REP-103, see vessel.py): pitch is bow-DOWN positive, so the paper's and
+Savitsky's trim tau (bow up positive, Table 2) is -pitch; Eq 9 applies lift when pitch < 0.
+steering_angle > 0 turns to port; Eq 12's bucket angle is its negative.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Dict, List, Optional, Sequence
+
+import numpy as np
+
+from tug_dynamics import planing_core as pc
+from tug_dynamics import savitsky
+from tug_dynamics.vessel import (Command, ExternalWrench, Vessel, VesselState, check_command,
+                                 rotation_body_to_world)
+
+KNOT = 1852.0 / 3600.0
+
+# section -> key -> required?  (unknown keys are errors: a typo must not pass silently)
+_SCHEMA: Dict[str, Dict[str, bool]] = {
+    "": {"model": True, "name": False, "description": False, "sources": False, "estimated": True,
+         "environment": True, "hull": True, "resistance": True, "hydrodynamics": True,
+         "waterjet": True, "integration": False, "attachments": True},
+    "environment": {"water_density": True, "gravity": True, "kinematic_viscosity": True},
+    "hull": {"length_overall": True, "beam": True, "draft": True, "mass": True,
+             "reference_point_from_transom": True, "chine_beam": True, "deadrise_deg": True,
+             "lcg_from_transom": True, "vcg_above_waterline": True, "radii_of_gyration": True,
+             "displacement_exponent": True},
+    "resistance": {"savitsky_speeds_kn": True, "roughness_allowance": True, "astern_factor": True},
+    "hydrodynamics": {"reference_length": True, "lift_reference_beam": True, "lift_fade_draft": True,
+                      "polynomials": True, "Y_vv": True, "N_rr": True, "Y_phi": True, "N_phi": True,
+                      "K_phi": True, "K_v_lift_lever": True, "Z_wdot": True, "K_pdot": True,
+                      "M_qdot": True, "Z_q_per_speed": True, "heave_damping": True,
+                      "pitch_damping": True, "roll_damping": True},
+    "hydrodynamics.polynomials": {k: True for k in (
+        "Y_vdot", "Y_rdot", "Y_v", "Y_r", "N_vdot", "N_rdot", "N_v", "N_r",
+        "K_S", "M_S", "C_L", "C_M", "M_w")},
+    "waterjet": {"nozzle_area": True, "design_speed_kn": True, "astern_efficiency": True,
+                 "position": True, "rated_impeller_rpm": True, "impeller_ramp_time": True,
+                 "bucket_max_deg": True, "bucket_rate_deg_s": True},
+    "integration": {"max_substep": True},
+}
+_POLY_ROWS = {"Y_vdot": pc.C_YVD, "Y_rdot": pc.C_YRD, "Y_v": pc.C_YV, "Y_r": pc.C_YR,
+              "N_vdot": pc.C_NVD, "N_rdot": pc.C_NRD, "N_v": pc.C_NV, "N_r": pc.C_NR,
+              "K_S": pc.C_KS, "M_S": pc.C_MS, "C_L": pc.C_CL, "C_M": pc.C_CM, "M_w": pc.C_MW}
+
+
+class ShipFileError(ValueError):
+    """A ship file value that is missing, unknown or out of range; names file and key."""
+
+
+class _Cfg:
+    """Typed access to the parsed YAML; every error names the file and the key path."""
+
+    def __init__(self, cfg: dict, source: str):
+        if not isinstance(cfg, dict):
+            raise ShipFileError(f"{source}: the ship file must be a mapping, got {type(cfg).__name__}")
+        self.cfg, self.source = cfg, source
+        self._check_keys()
+
+    def _err(self, key: str, msg: str) -> ShipFileError:
+        return ShipFileError(f"{self.source}: key '{key}': {msg}")
+
+    def _section(self, path: str) -> dict:
+        node = self.cfg
+        for part in [p for p in path.split(".") if p]:
+            node = node.get(part) if isinstance(node, dict) else None
+            if not isinstance(node, dict):
+                raise self._err(path, "missing or not a mapping")
+        return node
+
+    def _check_keys(self) -> None:
+        for sec, keys in _SCHEMA.items():
+            if sec and sec.split(".")[0] not in self.cfg and not _SCHEMA[""].get(sec.split(".")[0], False):
+                continue  # optional section absent
+            node = self._section(sec)
+            for k in node:
+                if k not in keys:
+                    where = f"{sec}.{k}" if sec else k
+                    raise self._err(where, f"unknown key (allowed: {sorted(keys)})")
+            for k, req in keys.items():
+                if req and k not in node:
+                    raise self._err(f"{sec}.{k}" if sec else k, "missing")
+        if self.cfg["model"] != "planing_6dof":
+            raise self._err("model", f"is {self.cfg['model']!r}, this loader is for 'planing_6dof'")
+        est = self.cfg["estimated"]
+        if not isinstance(est, dict):
+            raise self._err("estimated", "must map key paths to how each value was estimated")
+        for path in est:
+            if self.lookup(path, must=False) is None:
+                raise self._err(f"estimated.{path}", "names a key that the file does not have")
+
+    def lookup(self, path: str, must: bool = True) -> Any:
+        node: Any = self.cfg
+        for part in path.split("."):
+            if isinstance(node, dict) and part in node:
+                node = node[part]
+            else:
+                if must:
+                    raise self._err(path, "missing")
+                return None
+        return node
+
+    def num(self, path: str, lo: float = -math.inf, hi: float = math.inf, strict_lo: bool = False) -> float:
+        val = self.lookup(path)
+        if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val):
+            raise self._err(path, f"must be a finite number, got {val!r}")
+        if val < lo or val > hi or (strict_lo and val == lo):
+            raise self._err(path, f"{val!r} is outside {'(' if strict_lo else '['}{lo}, {hi}]")
+        return float(val)
+
+    def vec(self, path: str, n: Optional[int] = None, min_n: int = 1, max_n: int = 99) -> np.ndarray:
+        val = self.lookup(path)
+        if not isinstance(val, (list, tuple)) or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in val):
+            raise self._err(path, f"must be a list of finite numbers, got {val!r}")
+        if (n is not None and len(val) != n) or not (min_n <= len(val) <= max_n):
+            want = n if n is not None else f"{min_n}..{max_n}"
+            raise self._err(path, f"must have {want} numbers, got {len(val)}")
+        return np.asarray(val, float)
+
+
+class PlaningHull(Vessel):
+    """The seed-004 planing hull: 6 DOF, lift bow-up only, waterjet with bucket steering."""
+
+    def __init__(self, name: str, P: np.ndarray, C: np.ndarray, rtab: np.ndarray,
+                 hull: savitsky.HullParticulars, attachments: Dict[str, np.ndarray],
+                 limits: Dict[str, float], source: str,
+                 initial_state: Optional[VesselState] = None):
+        self.name = name
+        self.source = source
+        self.P, self.C, self.rtab = P, C, rtab
+        self.hull = hull
+        self.attachments = attachments
+        self.limits = limits
+        self.hmax = float(P[pc.P_MAXSUB])  # RK4 substep bound, s (benchmarks read it)
+        self._act = np.zeros(2)          # impeller speed fraction, bucket angle (interface sign)
+        self._cmd = np.zeros(2)          # held engine order, bucket angle ordered
+        self._command = Command()
+        self._diag = np.zeros(pc.D_ND)
+        self._no_wrench = np.zeros((0, 9))
+        self._current = np.zeros(3)
+        self._x = np.zeros(12)
+        self.state = VesselState.at_rest()
+        if initial_state is not None:
+            self.state = VesselState(np.array(initial_state.position, float), np.array(initial_state.rpy, float),
+                                     np.array(initial_state.linear_velocity_body, float),
+                                     np.array(initial_state.angular_velocity_body, float))
+            u0 = float(self.state.linear_velocity_body[0])
+            flat = (self.state.position[2] == 0.0 and self.state.rpy[0] == 0.0 and self.state.rpy[1] == 0.0
+                    and not np.any(self.state.linear_velocity_body[1:]) and not np.any(self.state.angular_velocity_body))
+            if u0 > 0.0 and flat:
+                # an initial speed alone (vessel node): start in the steady run at that speed
+                self.set_steady_run(u0)
+        self._refresh_diag()
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_config(cls, cfg: dict, source: str, name: Optional[str] = None,
+                    initial_state: Optional[VesselState] = None) -> "PlaningHull":
+        c = _Cfg(cfg, source)
+        rho = c.num("environment.water_density", 900.0, 1100.0)
+        g = c.num("environment.gravity", 9.7, 9.9)
+        nu = c.num("environment.kinematic_viscosity", 1e-7, 1e-5)
+        loa = c.num("hull.length_overall", 0.0, 200.0, strict_lo=True)
+        c.num("hull.beam", 0.0, 50.0, strict_lo=True)
+        d0 = c.num("hull.draft", 0.0, 20.0, strict_lo=True)
+        mass = c.num("hull.mass", 0.0, 1e7, strict_lo=True)
+        x_ref = c.num("hull.reference_point_from_transom", 0.0, loa)
+        b = c.num("hull.chine_beam", 0.0, 50.0, strict_lo=True)
+        beta = c.num("hull.deadrise_deg", 0.0, 45.0)
+        lcg = c.num("hull.lcg_from_transom", 0.0, loa, strict_lo=True)
+        vcg = c.num("hull.vcg_above_waterline", -d0, 20.0)
+        kxx, kyy, kzz = c.vec("hull.radii_of_gyration", 3)
+        if min(kxx, kyy, kzz) <= 0:
+            raise c._err("hull.radii_of_gyration", "must be positive")
+        nexp = c.num("hull.displacement_exponent", 1.0, 4.0)
+        hull = savitsky.HullParticulars(mass, b, beta, lcg, rho, nu,
+                                        c.num("resistance.roughness_allowance", 0.0, 0.01), g)
+        sp = c.vec("resistance.savitsky_speeds_kn", 3)
+        if not (0 < sp[0] < sp[1] and sp[2] > 0):
+            raise c._err("resistance.savitsky_speeds_kn", "must be [first > 0, last > first, step > 0] knots")
+        speeds = np.arange(sp[0], sp[1] + 0.5 * sp[2], sp[2]) * KNOT
+        try:
+            rtab = np.array([savitsky.steady_state(hull, s).resistance for s in speeds])
+        except ValueError as exc:
+            raise c._err("resistance.savitsky_speeds_kn", f"Savitsky's method fails: {exc}") from None
+
+        P = np.zeros(pc.P_NPAR)
+        P[pc.P_RHO], P[pc.P_G], P[pc.P_MASS] = rho, g, mass
+        P[pc.P_XG], P[pc.P_YG], P[pc.P_ZG] = lcg - x_ref, 0.0, vcg
+        P[pc.P_IXX], P[pc.P_IYY], P[pc.P_IZZ] = mass * kxx ** 2, mass * kyy ** 2, mass * kzz ** 2
+        P[pc.P_LREF] = c.num("hydrodynamics.reference_length", 0.0, 200.0, strict_lo=True)
+        P[pc.P_BLIFT] = c.num("hydrodynamics.lift_reference_beam", 0.0, 50.0, strict_lo=True)
+        P[pc.P_D0], P[pc.P_V0], P[pc.P_NEXP] = d0, mass / rho, nexp
+        P[pc.P_LIFT_FADE] = c.num("hydrodynamics.lift_fade_draft", 0.0, d0, strict_lo=True)
+        P[pc.P_UFIT] = speeds[-1]
+        P[pc.P_ZWD] = c.num("hydrodynamics.Z_wdot", -1e8, 0.0)
+        P[pc.P_KPD] = c.num("hydrodynamics.K_pdot", -1e8, 0.0)
+        P[pc.P_MQD] = c.num("hydrodynamics.M_qdot", -1e10, 0.0)
+        P[pc.P_ZQ1] = c.num("hydrodynamics.Z_q_per_speed", -1e9, 1e9)
+        P[pc.P_CZ0], P[pc.P_CZ1] = _nonneg2(c, "hydrodynamics.heave_damping")
+        P[pc.P_CQ0], P[pc.P_CQ1] = _nonneg2(c, "hydrodynamics.pitch_damping")
+        P[pc.P_CP0], P[pc.P_CP1] = _nonneg2(c, "hydrodynamics.roll_damping")
+        P[pc.P_CKV] = c.num("hydrodynamics.K_v_lift_lever", -100.0, 100.0)
+        P[pc.P_YVV] = c.num("hydrodynamics.Y_vv", -1e9, 0.0)
+        P[pc.P_NRR] = c.num("hydrodynamics.N_rr", -1e12, 0.0)
+        P[pc.P_YPHI] = c.num("hydrodynamics.Y_phi", -1e9, 1e9)
+        P[pc.P_NPHI] = c.num("hydrodynamics.N_phi", -1e9, 1e9)
+        P[pc.P_KPHI] = c.num("hydrodynamics.K_phi", -1e9, 1e9)
+        P[pc.P_AJ] = c.num("waterjet.nozzle_area", 0.0, 10.0, strict_lo=True)
+        P[pc.P_UDES] = c.num("waterjet.design_speed_kn", 0.0, 80.0, strict_lo=True) * KNOT
+        if P[pc.P_UDES] > speeds[-1]:
+            raise c._err("waterjet.design_speed_kn", "is beyond the Savitsky resistance table "
+                         "(resistance.savitsky_speeds_kn)")
+        P[pc.P_ETAREV] = c.num("waterjet.astern_efficiency", 0.0, 1.0)
+        P[pc.P_XT], P[pc.P_YT], P[pc.P_ZT] = c.vec("waterjet.position", 3)
+        P[pc.P_RTAB_U0], P[pc.P_RTAB_DU] = speeds[0], sp[2] * KNOT
+        # astern: displacement-mode quadratic through the slowest table point, times a factor
+        P[pc.P_RAST] = c.num("resistance.astern_factor", 0.0, 10.0) * rtab[0] / speeds[0] ** 2
+        P[pc.P_NRAMP] = 1.0 / c.num("waterjet.impeller_ramp_time", 0.0, 120.0, strict_lo=True)
+        P[pc.P_DRATE] = math.radians(c.num("waterjet.bucket_rate_deg_s", 0.0, 360.0, strict_lo=True))
+        P[pc.P_DMAX] = math.radians(c.num("waterjet.bucket_max_deg", 0.0, 60.0, strict_lo=True))
+        P[pc.P_MAXSUB] = (c.num("integration.max_substep", 1e-4, 0.05)
+                          if "integration" in cfg else 0.01)
+
+        C = np.zeros((pc.C_NPOLY, 5))
+        for key, row in _POLY_ROWS.items():
+            n_max = 5 if key in ("C_L", "C_M") else 3   # Eq 13 quadratics, Table 5 quartics
+            coef = c.vec(f"hydrodynamics.polynomials.{key}", min_n=1, max_n=n_max)
+            C[row, :len(coef)] = coef
+
+        att_node = c.lookup("attachments")
+        if not isinstance(att_node, dict) or not att_node:
+            raise c._err("attachments", "must map attachment names to [x, y, z] body points")
+        attachments = {str(k): c.vec(f"attachments.{k}", 3) for k in att_node}
+        limits = {"bucket_max": P[pc.P_DMAX],
+                  "rated_impeller_speed": c.num("waterjet.rated_impeller_rpm", 0.0, 1e5, strict_lo=True)
+                  * 2.0 * math.pi / 60.0}
+        return cls(name or str(cfg.get("name", "planing_hull")), P, C, rtab, hull, attachments,
+                   limits, source, initial_state)
+
+    # ------------------------------------------------------------------ Vessel interface
+    def set_command(self, cmd: Command) -> List[str]:
+        check_command(cmd)  # raises CommandRejected; the held command is untouched
+        notes = []
+        eo = float(cmd.engine_order)
+        if eo > 1.0 or eo < -1.0:
+            notes.append(f"engine_order {eo:g} clamped to [-1, 1]")
+            eo = min(max(eo, -1.0), 1.0)
+        dm = self.limits["bucket_max"]
+        st = float(cmd.steering_angle)
+        if abs(st) > dm:
+            notes.append(f"steering_angle {st:g} rad clamped to +-{dm:.4f} rad (bucket limit)")
+            st = min(max(st, -dm), dm)
+        if cmd.anchor != 0:
+            notes.append(f"anchor order {cmd.anchor} ignored: this boat has no anchor model")
+        self._cmd[0], self._cmd[1] = eo, st
+        self._command = Command(eo, st, 0)
+        return notes
+
+    def set_current(self, current_world: Sequence[float]) -> None:
+        c = np.asarray(current_world, float)
+        if c.shape != (3,) or not np.all(np.isfinite(c)):
+            raise ValueError(f"current must be 3 finite numbers (world ENU, m/s), got {current_world!r}")
+        self._current = c.copy()
+
+    def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
+        if not (dt > 0.0 and math.isfinite(dt)):
+            raise ValueError(f"dt must be positive and finite, got {dt!r}")
+        s = self.state
+        x = self._x
+        x[0:3] = s.position
+        x[3:6] = s.rpy
+        x[6:9] = s.linear_velocity_body
+        x[9:12] = s.angular_velocity_body
+        if wrenches:
+            wr = np.empty((len(wrenches), 9))
+            for i, ew in enumerate(wrenches):
+                wr[i, 0:3] = ew.force_world
+                wr[i, 3:6] = ew.point_body
+                wr[i, 6:9] = ew.moment_world
+        else:
+            wr = self._no_wrench
+        pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, wr, self._current, dt, self._diag)
+        if not np.all(np.isfinite(x)):
+            raise FloatingPointError(f"vessel {self.name!r}: state became non-finite")
+        s.position[:] = x[0:3]
+        s.rpy[:] = x[3:6]
+        s.linear_velocity_body[:] = x[6:9]
+        s.angular_velocity_body[:] = x[9:12]
+
+    def status(self) -> Dict[str, float]:
+        d = self._diag
+        s = self.state
+        cb = self._current_body() if np.any(self._current) else np.zeros(3)
+        u, v = s.linear_velocity_body[0] - cb[0], s.linear_velocity_body[1] - cb[1]
+        impeller = self._act[0] * self.limits["rated_impeller_speed"]
+        return {
+            "steering_angle_ordered": float(self._cmd[1]),
+            "steering_angle": float(self._act[1]),          # bucket, + turns to port
+            "bucket_angle": float(self._act[1]),
+            "throttle": float(self._act[0]),                # impeller speed fraction
+            "shaft_speed": float(impeller),                 # impeller, rad/s
+            "impeller_rpm": float(impeller * 60.0 / (2.0 * math.pi)),
+            "thrust": float(d[pc.D_THRUST]),
+            "jet_speed": float(d[pc.D_UJ]),
+            "lift": float(d[pc.D_LIFT]),
+            "speed_through_water": float(math.hypot(u, v)),
+            "heel": float(s.rpy[0]),                        # REP-103: + starboard down
+            "trim": float(s.rpy[1]),                        # REP-103: + bow down
+            "planing_trim": float(-s.rpy[1]),               # Savitsky tau: + bow up
+            "rise": float(s.position[2]),
+            "draft_at_reference": float(d[pc.D_DRAFT]),
+        }
+
+    # ------------------------------------------------------------------ steady state
+    def _current_body(self) -> np.ndarray:
+        return rotation_body_to_world(self.state.rpy).T @ self._current
+
+    def _refresh_diag(self) -> None:
+        x = np.concatenate([self.state.position, self.state.rpy, self.state.linear_velocity_body,
+                            self.state.angular_velocity_body])
+        pc.rhs(x, self.P, self.C, self.rtab, self._act[0], self._act[1], self._no_wrench,
+               self._current, self._diag)
+
+    @property
+    def full_speed(self) -> float:
+        """Steady straight-run speed at full throttle, m/s (waterjet design speed)."""
+        return float(self.P[pc.P_UDES])
+
+    def throttle_for_speed(self, speed: float) -> float:
+        """Engine order whose steady straight-run speed is `speed` (m/s): U0(n) linear (2.5)."""
+        return speed / self.P[pc.P_UDES]
+
+    def accelerations(self, x: np.ndarray, throttle: float, bucket: float = 0.0) -> np.ndarray:
+        """Body accelerations (6,) at state x (12) with the impeller at `throttle`."""
+        return pc.rhs(np.asarray(x, float), self.P, self.C, self.rtab, throttle, bucket,
+                      self._no_wrench, self._current, np.zeros(pc.D_ND))[6:]
+
+    def steady_state(self, speed: float) -> Dict[str, float]:
+        """Steady straight run at body speed `speed` (m/s): rise and pitch where heave and pitch
+        balance (the algebraic equilibrium of the same force model)."""
+        from scipy.optimize import root
+        n = self.throttle_for_speed(speed)
+        if not 0.0 <= n <= 1.0:
+            raise ValueError(f"speed {speed} m/s is beyond the full-throttle speed "
+                             f"{self.P[pc.P_UDES]:.2f} m/s")
+
+        def res(z_th):
+            z, th = z_th
+            x = np.zeros(12)
+            x[2], x[4], x[6], x[8] = z, th, speed, speed * math.tan(th)
+            a = self.accelerations(x, n)
+            return [a[2], a[4]]
+
+        try:
+            tau0 = savitsky.steady_state(self.hull, speed).trim if speed > self.P[pc.P_RTAB_U0] else 0.01
+        except ValueError:
+            tau0 = 0.05
+        best = None
+        for th0 in (-tau0, -0.01, -0.1):
+            sol = root(res, [0.3 * self.P[pc.P_D0], th0], method="hybr", options={"xtol": 1e-12})
+            if sol.success and np.max(np.abs(sol.fun)) < 1e-8:
+                best = sol
+                break
+        if best is None:
+            raise RuntimeError(f"no steady state found at {speed} m/s")
+        z, th = best.x
+        x = np.zeros(12)
+        x[2], x[4], x[6], x[8] = z, th, speed, speed * math.tan(th)
+        diag = np.zeros(pc.D_ND)
+        acc = pc.rhs(x, self.P, self.C, self.rtab, n, 0.0, self._no_wrench, self._current, diag)[6:]
+        return {"speed": speed, "throttle": n, "rise": float(z), "pitch": float(th),
+                "trim_deg": float(-math.degrees(th)), "w": float(x[8]), "lift": float(diag[pc.D_LIFT]),
+                "thrust": float(diag[pc.D_THRUST]), "surge_residual": float(acc[0])}
+
+    def set_steady_run(self, speed: float, heading: Optional[float] = None) -> None:
+        """Put the boat in its steady straight run at `speed` with the matching throttle held."""
+        ss = self.steady_state(speed)
+        s = self.state
+        s.position[2] = ss["rise"]
+        s.rpy[0], s.rpy[1] = 0.0, ss["pitch"]
+        if heading is not None:
+            s.rpy[2] = heading
+        s.linear_velocity_body[:] = (speed, 0.0, ss["w"])
+        s.angular_velocity_body[:] = 0.0
+        self._act[:] = (ss["throttle"], 0.0)
+        self._cmd[:] = (ss["throttle"], 0.0)
+        self._command = Command(ss["throttle"], 0.0, 0)
+        self._refresh_diag()
+
+    @property
+    def command(self) -> Command:
+        return self._command
+
+
+def _nonneg2(c: _Cfg, path: str):
+    v = c.vec(path, 2)
+    if np.any(v < 0):
+        raise c._err(path, f"damping [at rest, per m/s] must be >= 0, got {v.tolist()}")
+    return float(v[0]), float(v[1])
+
+
+def load(path: str, name: Optional[str] = None, initial_state: Optional[VesselState] = None) -> PlaningHull:
+    """Load a planing-hull ship file directly (the common loader is ship_file.load_ship)."""
+    import yaml
+    with open(path, "r", encoding="utf-8") as fh:
+        cfg = yaml.safe_load(fh)
+    return PlaningHull.from_config(cfg, path, name=name, initial_state=initial_state)
+
+
+def fit_pitch_coupling(model: PlaningHull, speeds: Sequence[float], degree: int = 2):
+    """The paper's M_w tuning (its 2.4) done systematically: for each speed (m/s) find the
+    prime M_w' = M_w/(0.5 rho L^3 U) that makes the steady trim equal Savitsky's trim, then
+    fit a polynomial in U. Returns (speeds, M_w' values, coefficients a0..a_degree)."""
+    from scipy.optimize import brentq
+    P, C = model.P, model.C.copy()
+    C[pc.C_MW, :] = 0.0
+    b, A, diag = np.zeros(6), np.zeros((6, 6)), np.zeros(pc.D_ND)
+    vals = []
+    for U in speeds:
+        th = -savitsky.steady_state(model.hull, U).trim
+        n = model.throttle_for_speed(U)
+        x = np.zeros(12)
+        x[4], x[6], x[8] = th, U, U * math.tan(th)
+
+        def heave(z):
+            x[2] = z
+            pc.forces(x, P, C, model.rtab, n, 0.0, model._no_wrench, model._current, diag, b, A)
+            return b[2]
+        heave(brentq(heave, -P[pc.P_D0], P[pc.P_D0], xtol=1e-12))
+        # b[4] is the pitch moment without M_w; M_w w must cancel it
+        vals.append(-b[4] / (0.5 * P[pc.P_RHO] * P[pc.P_LREF] ** 3 * U * x[8]))
+    coef = np.polynomial.polynomial.polyfit(np.asarray(speeds), np.asarray(vals), degree)
+    return np.asarray(speeds), np.asarray(vals), coef

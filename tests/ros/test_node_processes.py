@@ -1,0 +1,71 @@
+"""Issue 2 acceptance: a tug_msgs message crosses between two node processes over DDS, and a
+run in another domain does not see it. Issue 4: the vessel node rejects NaN commands."""
+import math
+import subprocess
+
+import pytest
+
+from conftest import executable_path, spin_until
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
+
+TUG = ["--ros-args", "-r", "__ns:=/tug", "-r", "__node:=vessel", "-p", "ship_file:=harbour_tug.yaml",
+       "-p", "exchange_rate:=20.0"]
+
+
+def _status_listener(ctx, topic="/tug/status"):
+    from rclpy.node import Node
+    from tug_msgs.msg import VesselStatus
+    from tug_dynamics import ros_common as rc
+    node = Node("test_listener", context=ctx)
+    received = []
+    node.create_subscription(VesselStatus, topic, received.append, rc.LATCHED_STATE_QOS)
+    return node, received
+
+
+def _send(domain, *args, timeout=60):
+    import os
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    return subprocess.run([executable_path("scenario_runner", "send_command"), "tug", *args],
+                          env=env, capture_output=True, text=True, timeout=timeout)
+
+
+def test_command_crosses_from_one_process_to_another(start_node, rclpy_context, ros_domain):
+    vessel = start_node("tug_dynamics", "vessel_node", *TUG)
+    node, received = _status_listener(rclpy_context)
+    assert spin_until(node, lambda: len(received) > 0, 60), vessel.log()
+    # send_command (a second process) -> /tug/command (tug_msgs/VesselCommand) -> vessel_node
+    sent = _send(ros_domain, "--engine", "0.5", "--steering-deg", "10")
+    assert sent.returncode == 0, sent.stderr
+    assert spin_until(node, lambda: abs(received[-1].engine_order - 0.5) < 1e-12, 20), vessel.log()
+    assert received[-1].steering_angle_ordered == pytest.approx(math.radians(10.0))
+
+    # Another domain: the same command finds no vessel there and is never delivered here.
+    from domain_coordinator import domain_id
+    with domain_id() as other:
+        assert other != ros_domain
+        missed = _send(other, "--engine", "-0.7", "--wait", "3")
+    assert missed.returncode == 1 and "no subscriber" in missed.stderr
+    n = len(received)
+    spin_until(node, lambda: False, 2.0)
+    assert len(received) > n  # the vessel is still publishing ...
+    assert all(abs(m.engine_order - 0.5) < 1e-12 for m in received[n:])  # ... with the old order
+    node.destroy_node()
+
+
+def test_nan_command_is_rejected_and_logged(start_node, rclpy_context, ros_domain):
+    vessel = start_node("tug_dynamics", "vessel_node", *TUG)
+    node, received = _status_listener(rclpy_context)
+    assert spin_until(node, lambda: len(received) > 0, 60), vessel.log()
+    assert _send(ros_domain, "--engine", "0.4").returncode == 0
+    assert spin_until(node, lambda: abs(received[-1].engine_order - 0.4) < 1e-12, 20)
+    assert _send(ros_domain, "--engine", "nan").returncode == 0
+    assert spin_until(node, lambda: received[-1].commands_rejected == 1, 20), vessel.log()
+    assert received[-1].engine_order == pytest.approx(0.4)  # last valid order kept
+    assert _send(ros_domain, "--engine", "3.0").returncode == 0  # out of range: clamped to full ahead
+    assert spin_until(node, lambda: received[-1].commands_clamped >= 1, 20), vessel.log()
+    node.destroy_node()
+    vessel.stop()
+    log = vessel.log()
+    assert "command rejected" in log and "engine_order=nan" in log
+    assert "command clamped" in log
