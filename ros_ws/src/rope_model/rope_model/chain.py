@@ -10,8 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels as K
-from .layout import (catenary_curve, elements_from_joints, joints_on_curve, polygon_on_catenary,
-                     straight_joints)
+from .layout import (catenary_curve, close_with_triangle, elements_from_joints, joints_on_curve,
+                     polygon_on_catenary, straight_joints)
 from .params import RopeParams
 
 END_MODES = ("pinned", "fixed", "free")
@@ -94,6 +94,13 @@ class RopeChain:
         if not (math.isfinite(relaxation) and relaxation >= 0):
             raise ValueError(f"relaxation must be >= 0, got {relaxation}")
         self.params = params
+        p = params  # scalar kernel arguments, fixed for the rope's life (params is frozen)
+        self._pargs = (
+            float(p.mass_per_length), float(p.radius), float(p.ea), float(p.drag_normal),
+            float(p.drag_tangential), float(p.tangential_area_factor),
+            float(p.added_mass_coefficient), float(p.water_density), float(p.air_density),
+            float(p.gravity), float(p.damping_ratio_axial), float(p.damping_ratio_transverse),
+            float(p.damping_ratio_rotational), float(p.breaking_load))
         self.X, self.E, self.L = X, E, L
         self.V = np.zeros((n, 3))
         self.W = np.zeros((n, 3))
@@ -114,6 +121,7 @@ class RopeChain:
             raise ValueError("a winch needs end a attached ('pinned' or 'fixed')")
         self.l_nom = float(nominal_element_length or params.nominal_element_length)
         self.payout_rate = 0.0
+        self._paying = False  # pay-out active in the current sub-step (not at a limit)
         self.max_substep = float(max_substep)
         self.theta = float(theta)
         self.relaxation = float(relaxation)
@@ -126,6 +134,7 @@ class RopeChain:
         self._mean_end_force = np.zeros((2, 3))
         self._ev_buf = np.zeros((64, 3))
         self._info = np.zeros(2, dtype=np.int64)
+        self._ws = None
         self._imp = np.zeros((2, 3))
         self._nev = np.zeros(1, dtype=np.int64)
         total = float(L.sum())
@@ -148,7 +157,9 @@ class RopeChain:
         joints = polygon_on_catenary(p_a, p_b, L, sag_direction)
         if joints is None:  # not longer than the span (or one element): along the curve
             joints = joints_on_curve(catenary_curve(p_a, p_b, float(L.sum()), sag_direction), L)
-        return joints
+        # close exactly on p_b (the catenary of long links can miss it, e.g. ends on one
+        # vertical, the tug and barge of section 4.6 starting side by side)
+        return close_with_triangle(joints, L, p_b, sag_direction)
 
     @classmethod
     def straight(cls, params, p_a, p_b, n_elements=None, **kw):
@@ -178,11 +189,15 @@ class RopeChain:
 
     @classmethod
     def wound_on_winch(cls, params, p_a, p_b, deployed_length=None, n_elements=None,
-                       sag_direction=(0.0, 0.0, -1.0), **kw):
+                       sag_direction=(0.0, 0.0, -1.0), heading=(1.0, 0.0, 0.0), **kw):
         """Rope on a winch at end a with only ``deployed_length`` (default: the minimum)
         out, hanging slack between a and b (section 4.6). Elements have the nominal length
         params.length / n_elements except element 0 (at the winch), which grows and
-        shrinks with pay-out and is split / merged to stay within 0.5..1.5 nominal."""
+        shrinks with pay-out and is split / merged to stay within 0.5..1.5 nominal. A slack
+        deployed part shorter than 1.5 nominal lengths starts as two equal links. When a and
+        b start on one vertical (section 4.6: tug and barge side by side) the hanging loop
+        is laid out behind the horizontal ``heading`` the tug will run to, so that the rope
+        leaves the drum in that direction."""
         n_full = cls._n(params, n_elements)
         l_nom = params.length / n_full
         dep = params.min_deployed_length if deployed_length is None else float(deployed_length)
@@ -192,9 +207,21 @@ class RopeChain:
             raise ValueError(f"deployed_length {dep} exceeds rope length {params.length}")
         p_a, p_b = _vec3(p_a, "p_a"), _vec3(p_b, "p_b")
         n0 = max(1, int(math.floor(dep / l_nom + 0.5)))
-        L = np.full(n0, l_nom)
-        L[0] = dep - (n0 - 1) * l_nom
-        X, E = elements_from_joints(cls._hang(p_a, p_b, L, sag_direction), L)
+        slack = dep > np.linalg.norm(p_b - p_a) * (1.0 + 1e-9)
+        if slack and n0 < 2:  # a slack rope needs two links to hang between the ends
+            L = np.full(2, 0.5 * dep)
+        else:
+            L = np.full(n0, l_nom)
+            L[0] = dep - (n0 - 1) * l_nom
+        g = _vec3(sag_direction, "sag_direction")
+        g = g / np.linalg.norm(g)
+        d_ab = p_b - p_a
+        if np.linalg.norm(d_ab - (d_ab @ g) * g) < 1e-3:  # ends on one vertical
+            hd = _vec3(heading, "heading")
+            hd = hd - (hd @ g) * g
+            if np.linalg.norm(hd) > 0:
+                g = g - 0.5 * hd / np.linalg.norm(hd)  # loop hangs behind the heading
+        X, E = elements_from_joints(cls._hang(p_a, p_b, L, g), L)
         kw.setdefault("end_a", "pinned")
         return cls(params, X, E, L, p_a=p_a, p_b=p_b, winch=True,
                    nominal_element_length=l_nom, **kw)
@@ -203,13 +230,29 @@ class RopeChain:
     def set_end_kinematics(self, end, position, velocity=(0.0, 0.0, 0.0)):
         """Pinned end: attachment position (3,) and velocity (3,) at the current time, world
         frame. Rejects non-finite input without touching the state."""
-        i = _end_name(end)
-        p = _vec3(position, f"end {end} position")
-        v = _vec3(velocity, f"end {end} velocity")
+        if end == "a":
+            i = 0
+        elif end == "b":
+            i = 1
+        else:
+            raise ValueError(f"end must be 'a' or 'b', got {end!r}")
+        try:  # fast path: called every exchange step
+            px, py, pz = position
+            vx, vy, vz = velocity
+            vals = (float(px), float(py), float(pz), float(vx), float(vy), float(vz))
+        except (TypeError, ValueError):
+            _vec3(position, f"end {end} position")
+            _vec3(velocity, f"end {end} velocity")
+            raise
+        for k, v in enumerate(vals):
+            if not math.isfinite(v):
+                what = "position" if k < 3 else "velocity"
+                raise ValueError(f"end {end} {what}: must be finite, got {list(vals[:3] if k < 3 else vals[3:])}")
         if self.end_modes[i] != "pinned":
             raise ValueError(f"end {end} is '{self.end_modes[i]}', only a pinned end can move")
-        self.att_pos[i] = p
-        self.att_vel[i] = v
+        ap, av = self.att_pos[i], self.att_vel[i]
+        ap[0], ap[1], ap[2] = vals[0], vals[1], vals[2]
+        av[0], av[1], av[2] = vals[3], vals[4], vals[5]
 
     def set_payout_rate(self, rate_m_per_s):
         """Winch at end a: positive pays out, negative heaves in (m/s). Length stays within
@@ -223,16 +266,19 @@ class RopeChain:
 
     # ------------------------------------------------------------------ stepping
     def _kernel(self, h, n_sub, impulse, info):
-        p = self.params
         return K.run_substeps(
             self.X, self.E, self.V, self.W, self.L, self.conn_ok, self.breaking_load,
-            self.armed, self.att_on, self.att_pos, self.att_vel,
-            p.mass_per_length, p.radius, p.ea, p.drag_normal, p.drag_tangential,
-            p.tangential_area_factor, p.added_mass_coefficient, p.water_density,
-            p.air_density, p.gravity, p.damping_ratio_axial, p.damping_ratio_transverse,
-            p.damping_ratio_rotational, p.breaking_load, self.current, self.relaxation,
-            h, self.theta, n_sub, self.VMAX, self.WMAX, self.PMAX,
-            self.tensions, self._end_force, impulse, self._ev_buf, self._nev, info)
+            self.armed, self.att_on, self.att_pos, self.att_vel, *self._pargs,
+            self.current, self.relaxation, h, self.theta, n_sub,
+            self.payout_rate if self._paying else 0.0, self.VMAX, self.WMAX,
+            self.PMAX, self.tensions, self._end_force, impulse, self._ev_buf, self._nev, info,
+            self._workspace())
+
+    def _workspace(self):
+        need = K.workspace_size(self.L.shape[0])
+        if self._ws is None or self._ws.shape[0] != need:
+            self._ws = np.zeros(need)
+        return self._ws
 
     def _refresh(self):
         """Recompute tensions and end forces for the current state (no time advance)."""
@@ -277,6 +323,10 @@ class RopeChain:
             st = K.OK
             for k in range(n_sub):
                 self.att_pos = pos0 + self.att_vel * (k * h)
+                dep = float(self.L.sum())
+                self._paying = bool(self.conn_ok[0]) and (
+                    (self.payout_rate > 0 and dep < self.params.length) or
+                    (self.payout_rate < 0 and dep > self.params.min_deployed_length))
                 st = self._kernel(h, 1, imp, info)
                 self._collect_events(self.time + k * h)
                 if st != K.OK:
@@ -284,8 +334,9 @@ class RopeChain:
                     self._restore(snap)
                     break
                 imp_total += imp
-                self._winch(self.payout_rate * h)
+                self._winch(self.payout_rate * h, h)
             self.att_pos = pos0
+            self._paying = False
             if st == K.OK:
                 self._refresh()
         else:  # the kernel restores the last good state itself on divergence
@@ -310,28 +361,45 @@ class RopeChain:
         self._mean_end_force = imp_total * (1.0 / dt)
 
     # ------------------------------------------------------------------ winch
-    def _winch(self, dl):
+    def _winch(self, dl, h):
         p = self.params
+        if not self.conn_ok[0]:  # the rope has parted at the drum: nothing to wind
+            return
         dep = float(self.L.sum())
         tgt = min(max(dep + dl, p.min_deployed_length), p.length)
         dl = tgt - dep
-        if dl == 0.0:
+        if dl < 0.0 and self.n_elements >= 2 and not self.conn_ok[1]:
+            # element 0 is a piece of its own: wind it in down to half an element only
+            dl = max(dl, 0.5 * self.l_nom - self.L[0])
+        if dl == 0.0 or (dl < 0.0 and self.L[0] + dl <= 0.0):
             return
         l0 = self.L[0]
         l_new = l0 + dl
         if l_new <= 1e-6 * self.l_nom:  # only possible with a single tiny element
             return
+        # rope leaves / enters at the winch end of element 0: its far end stays (a material
+        # point) and the element grows / shrinks along its axis at the drum end. The rope
+        # slides out of the drum at the pay-out rate: new rope leaves with the drum velocity
+        # minus rate * e, and the kernel gives the end connection the same sliding velocity,
+        # so the end spring-damper sees no spurious motion.
         e = self.E[0]
-        aft = self.X[0] - 0.5 * l0 * e  # the far end stays, rope leaves/enters at the winch
+        aft = self.X[0] - 0.5 * l0 * e
         m0 = p.mass_per_length * l0
-        if dl > 0:  # new rope leaves the drum with the attachment velocity
-            self.V[0] = (m0 * self.V[0] + p.mass_per_length * dl * self.att_vel[0]) / (
+        if dl > 0:
+            v_new = self.att_vel[0] - (dl / h) * e
+            self.V[0] = (m0 * self.V[0] + p.mass_per_length * dl * v_new) / (
                 p.mass_per_length * l_new)
         self.X[0] = aft + 0.5 * l_new * e
         self.L[0] = l_new
+        # slack rope piles up behind the drum: the drum end may not pass the drum
+        drum = self.att_pos[0] + self.att_vel[0] * h  # attachment at the end of the sub-step
+        over = (self.X[0] + 0.5 * l_new * e - drum) @ e
+        if over > 0.0:
+            self.X[0] -= over * e
         while self.L[0] > 1.5 * self.l_nom:
             self._split0()
-        while self.L[0] < 0.5 * self.l_nom and self.n_elements >= 2 and self.conn_ok[1]:
+        while (dl < 0.0 and self.L[0] < 0.5 * self.l_nom and self.n_elements >= 2
+               and self.conn_ok[1]):
             self._merge01()
 
     def _split0(self):
@@ -481,7 +549,7 @@ class RopeChain:
         ma = np.empty(n)
         ip = np.empty(n)
         for j in range(n):
-            fr, _ = K.immersion(self.X[j, 2], self.E[j, 2], 0.5 * self.L[j], p.radius)
+            fr, _, _ = K.immersion(self.X[j, 2], self.E[j, 2], 0.5 * self.L[j], p.radius)
             vol = math.pi * p.radius ** 2 * self.L[j]
             rot = (self.L[j] ** 2 + 3 * p.radius ** 2) / 12.0
             ma[j] = p.added_mass_coefficient * p.water_density * vol * fr

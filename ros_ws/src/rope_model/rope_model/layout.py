@@ -146,3 +146,31 @@ def polygon_on_catenary(p_a, p_b, lengths, sag_direction=(0.0, 0.0, -1.0)):
             break
     best[-1] = p_b
     return best
+
+
+def close_with_triangle(joints, lengths, p_b, sag_direction=(0.0, 0.0, -1.0)):
+    """Re-place the last free joint so that the chain ends exactly on p_b: the last two links
+    form a triangle with the chord joints[-3] -> p_b, apex towards the sag direction. Keeps
+    the joints unchanged when the triangle does not exist (chord longer than both links)."""
+    joints = np.array(joints, float)
+    if len(lengths) < 2:
+        return joints
+    p0 = joints[-3]
+    p_b = np.asarray(p_b, float)
+    l0, l1 = float(lengths[-2]), float(lengths[-1])
+    dvec = p_b - p0
+    d = float(np.linalg.norm(dvec))
+    if d >= l0 + l1 or d <= abs(l0 - l1) or d == 0.0:
+        return joints
+    u = dvec / d
+    a = (l0 * l0 - l1 * l1 + d * d) / (2.0 * d)
+    hh = math.sqrt(max(l0 * l0 - a * a, 0.0))
+    g = np.asarray(sag_direction, float)
+    w = g - (g @ u) * u
+    if np.linalg.norm(w) < 1e-9:  # chord along the sag direction: any perpendicular
+        trial = np.array([1.0, 0.0, 0.0]) if abs(u[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        w = trial - (trial @ u) * u
+    w /= np.linalg.norm(w)
+    joints[-2] = p0 + a * u + hh * w
+    joints[-1] = p_b
+    return joints

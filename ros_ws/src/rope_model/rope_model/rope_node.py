@@ -281,14 +281,17 @@ def main(args: Optional[List[str]] = None) -> int:
         sys.stderr.write(f"rope_node: {exc}\n")
         rclpy.try_shutdown()
         return 2
+    executor = rc.make_executor()
+    executor.add_node(node)
     try:
-        rclpy.spin(node)
+        rc.spin_forever(executor)
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
     except RopeDivergedError as exc:
         sys.stderr.write(f"rope_node: {exc}\n")
         return 3
     finally:
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

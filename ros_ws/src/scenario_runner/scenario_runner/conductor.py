@@ -11,6 +11,7 @@ Step protocol (see tug_dynamics/stepping.py and the README): for k = 0, 1, ...
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import signal
@@ -38,10 +39,26 @@ class RunError(RuntimeError):
 
 @dataclasses.dataclass
 class NodeSpec:
-    name: str  # fully qualified node name, e.g. /tug/vessel
+    namespace: str  # e.g. /tug
+    node_name: str  # e.g. vessel
     package: str
     executable: str
-    ros_args: List[str]
+    params: Dict[str, object]  # parameter name -> value (bool, int, float, str or list of str/float)
+
+    @property
+    def name(self) -> str:
+        return f"{self.namespace}/{self.node_name}"
+
+    def ros_args(self) -> List[str]:
+        """The same parameters as `--ros-args` for a process started like `ros2 run`."""
+        args = ["-r", f"__ns:={self.namespace}", "-r", f"__node:={self.node_name}"]
+        for key, value in self.params.items():
+            args += ["-p", f"{key}:={_yaml_value(value)}"]
+        return args
+
+    def parameter_overrides(self):
+        from rclpy.parameter import Parameter
+        return [Parameter(k, value=v) for k, v in self.params.items()]
 
 
 def _executable(package: str, executable: str) -> str:
@@ -52,38 +69,51 @@ def _executable(package: str, executable: str) -> str:
     raise RunError(f"executable {package}/{executable} not found on AMENT_PREFIX_PATH (is the workspace sourced?)")
 
 
-def _yaml_list(items: List[str]) -> str:
-    return "[" + ",".join(f"'{i}'" for i in items) + "]"
+def _yaml_value(value) -> str:
+    # rcl parses -p values as YAML: strings are quoted so that none turns into a number or map.
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ",".join(_yaml_value(v) for v in value) + "]"
+    return json.dumps(str(value))
 
 
 def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
-    """The node processes a scenario needs, with their parameters."""
-    common = ["-p", f"exchange_rate:={sc.exchange_rate}", "-p", "lockstep:=true", "-p", "use_sim_time:=true",
-              "-p", f"current_east:={sc.environment.current[0]}", "-p", f"current_north:={sc.environment.current[1]}"]
+    """The nodes a scenario needs, with their parameters."""
+    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
+              "current_east": float(sc.environment.current[0]), "current_north": float(sc.environment.current[1])}
     specs = []
     for v in sc.vessels:
+        params = {"ship_file": resolve("tug_dynamics", "ships", v.ship_file, scenario_path),
+                  "initial_x": float(v.initial.x), "initial_y": float(v.initial.y), "initial_yaw": heading_rad(v),
+                  "initial_speed": float(v.initial.speed), "initial_engine_order": float(v.initial.engine_order),
+                  "initial_steering_angle": math.radians(v.initial.steering_deg)}
         wrenches = [f"/{r.name}/end_{end}/wrench" for r in sc.ropes for end in ("a", "b")
                     if getattr(r, f"end_{end}").split("/")[0] == v.name]
-        args = ["-r", f"__ns:=/{v.name}", "-r", "__node:=vessel",
-                "-p", f"ship_file:={resolve('tug_dynamics', 'ships', v.ship_file, scenario_path)}",
-                "-p", f"initial_x:={float(v.initial.x)}", "-p", f"initial_y:={float(v.initial.y)}",
-                "-p", f"initial_yaw:={heading_rad(v)}", "-p", f"initial_speed:={float(v.initial.speed)}"]
         if wrenches:
-            args += ["-p", f"wrench_topics:={_yaml_list(wrenches)}"]
-        specs.append(NodeSpec(f"/{v.name}/vessel", "tug_dynamics", "vessel_node", args + common))
+            params["wrench_topics"] = wrenches
+        if v.ship_overrides:
+            params["ship_overrides"] = json.dumps(v.ship_overrides)
+        if v.motion is not None:
+            m = v.motion
+            params.update(motion=m.type, motion_speed=float(m.speed), motion_amplitude=float(m.amplitude),
+                          motion_period=float(m.period), motion_acceleration=float(m.acceleration),
+                          motion_heading=m.heading)
+        specs.append(NodeSpec(f"/{v.name}", "vessel", "tug_dynamics", "vessel_node", {**params, **common}))
     for r in sc.ropes:
-        args = ["-r", f"__ns:=/{r.name}", "-r", "__node:=rope",
-                "-p", f"rope_file:={resolve('rope_model', 'ropes', r.rope_file, scenario_path)}",
-                "-p", f"end_a:={r.end_a}", "-p", f"end_b:={r.end_b}", "-p", f"layout:={r.layout}"]
+        params = {"rope_file": resolve("rope_model", "ropes", r.rope_file, scenario_path),
+                  "end_a": r.end_a, "end_b": r.end_b, "layout": r.layout}
         for end in ("a", "b"):
             pos = getattr(r, f"end_{end}_position")
             if pos is not None:
-                args += ["-p", f"end_{end}_position:=[{','.join(str(float(c)) for c in pos)}]"]
+                params[f"end_{end}_position"] = [float(c) for c in pos]
         if r.deployed_length:
-            args += ["-p", f"deployed_length:={float(r.deployed_length)}"]
+            params["deployed_length"] = float(r.deployed_length)
         if r.n_elements:
-            args += ["-p", f"n_elements:={int(r.n_elements)}"]
-        specs.append(NodeSpec(f"/{r.name}/rope", "rope_model", "rope_node", args + common))
+            params["n_elements"] = int(r.n_elements)
+        specs.append(NodeSpec(f"/{r.name}", "rope", "rope_model", "rope_node", {**params, **common}))
     return specs
 
 
@@ -104,7 +134,7 @@ class NodeProcesses:
             self.logs[spec.name] = log
             with open(log, "wb") as out:
                 self.procs[spec.name] = subprocess.Popen(
-                    [_executable(spec.package, spec.executable), "--ros-args", *spec.ros_args],
+                    [_executable(spec.package, spec.executable), "--ros-args", *spec.ros_args()],
                     stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
 
     def dead(self) -> Optional[str]:
@@ -176,7 +206,9 @@ class Conductor(Node):
     def _orders_by_step(self) -> Dict[int, List]:
         """Events merged per target and step: one order per namespace per step."""
         rate = self.sc.exchange_rate
-        held = {v.name: VesselCommand() for v in self.sc.vessels}
+        held = {v.name: VesselCommand(engine_order=float(v.initial.engine_order),
+                                      steering_angle=math.radians(v.initial.steering_deg))
+                for v in self.sc.vessels}
         out: Dict[int, Dict[str, object]] = {}
         for ev in sorted(self.sc.events, key=lambda e: e.time):
             k = int(round(ev.time * rate))
@@ -258,16 +290,32 @@ def contract_topics(sc: Scenario) -> List[tuple]:
     return topics
 
 
+LAYOUTS = ("processes", "one_process")
+
+
+def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
+    """The same nodes as the executables start, constructed in this process."""
+    from rope_model.rope_node import RopeNode
+    from tug_dynamics.vessel_node import VesselNode
+    classes = {("tug_dynamics", "vessel_node"): VesselNode, ("rope_model", "rope_node"): RopeNode}
+    return [classes[(s.package, s.executable)](s.node_name, namespace=s.namespace,
+                                               parameter_overrides=s.parameter_overrides()) for s in specs]
+
+
 def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float = 240.0,
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
-        on_step: Optional[Callable[[int], None]] = None, recorder=None) -> RunStats:
-    """Start the nodes, run the scenario, stop everything. Raises RunError naming the node."""
+        on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes") -> RunStats:
+    """Start the nodes (each its own process, or all in this process on one executor), run the
+    scenario, stop everything. Raises RunError naming the node."""
+    if layout not in LAYOUTS:
+        raise ValueError(f"layout {layout!r}: expected one of {LAYOUTS}")
     specs = node_specs(sc, scenario_path)
-    procs = NodeProcesses(specs, log_dir)
+    procs = NodeProcesses(specs if layout == "processes" else [], log_dir)
     conductor = Conductor(sc, [s.name for s in specs], recorder)
-    executor = rclpy.executors.SingleThreadedExecutor()
+    executor = rc.make_executor()
     executor.add_node(conductor)
-    for node in (extra_nodes or []) + ([recorder] if recorder else []):
+    local_nodes = in_process_nodes(specs) if layout == "one_process" else []
+    for node in (extra_nodes or []) + ([recorder] if recorder else []) + local_nodes:
         executor.add_node(node)
     stats = RunStats()
     n_steps = sc.steps if steps is None else steps
@@ -275,7 +323,10 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     def wait_for(step: int, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout
         while conductor.done.get(step, set()) != conductor.expected:
-            executor.spin_once(timeout_sec=0.001)
+            try:
+                executor.spin_once(timeout_sec=0.001)
+            except Exception as exc:  # an in-process node failed in its callback
+                raise RunError(f"a node failed while {what}: {exc}") from exc
             if conductor.failures:
                 raise RunError(conductor.failures[0])
             dead = procs.dead()
@@ -329,6 +380,8 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     finally:
         procs.stop()
         executor.shutdown()
+        for node in local_nodes:
+            node.destroy_node()
         conductor.destroy_node()
 
 

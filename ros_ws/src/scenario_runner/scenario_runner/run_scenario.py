@@ -82,6 +82,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument("--output", help="MCAP file to write (default: output/<scenario name>.mcap)")
     parser.add_argument("--duration", type=float, help="simulate only this many seconds (shortened run)")
     parser.add_argument("--log-dir", help="where node logs go (default: next to the recording)")
+    parser.add_argument("--layout", choices=cd.LAYOUTS, default="processes",
+                        help="processes: every node its own process (as `ros2 run` starts them); "
+                             "one_process: all nodes in this process on one executor")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(rclpy.utilities.remove_ros_args(argv))
 
@@ -103,7 +106,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         from tqdm import tqdm
         progress = tqdm(total=steps, unit="step", desc=sc.name, file=sys.stderr, mininterval=0.5)
     try:
-        stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder,
+        stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder, layout=args.layout,
                        on_step=(lambda k: progress.update(1)) if progress else None)
     except cd.RunError as exc:
         if progress:

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import os
-from typing import List, Literal, Optional, Tuple
+from typing import Any, Dict, List, Literal, Optional, Tuple
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -50,12 +50,37 @@ class InitialState(_Strict):
     y: float = 0.0  # m north
     heading_deg: float = 0.0  # 0 = bow east, counter-clockwise positive (REP-103)
     speed: float = Field(0.0, ge=-30.0, le=40.0)  # m/s surge
+    # Orders held from the start with the engine and rudder already there (e.g. "turn from
+    # 9 kn at half ahead"); 0 keeps the model's own start.
+    engine_order: float = Field(0.0, ge=-1.0, le=1.0)
+    steering_deg: float = Field(0.0, ge=-90.0, le=90.0)
+
+
+class Motion(_Strict):
+    """Prescribed motion (seed 000 section 4 tug tracks), in the initial frame."""
+    type: Literal["constant_speed", "sinusoidal_sway", "acceleration"]
+    speed: float = Field(ge=0.0, le=40.0)  # m/s, U or U_max
+    amplitude: float = Field(0.0, ge=0.0)  # m
+    period: float = Field(0.0, ge=0.0)  # s
+    acceleration: float = Field(0.0, ge=0.0)  # m/s^2
+    heading: Literal["track", "fixed"] = "track"
+
+    @model_validator(mode="after")
+    def _complete(self):
+        if self.type == "sinusoidal_sway" and self.period <= 0:
+            raise ValueError("sinusoidal_sway needs a positive period")
+        if self.type == "acceleration" and self.acceleration <= 0:
+            raise ValueError("acceleration needs a positive acceleration")
+        return self
 
 
 class VesselSpec(_Strict):
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
     ship_file: str
     initial: InitialState = InitialState()
+    motion: Optional[Motion] = None
+    # Merged over the ship file (e.g. {towline_simple: {enabled: true, gamma_max_deg: 20}}).
+    ship_overrides: Optional[Dict[str, Any]] = None
 
 
 class RopeSpec(_Strict):
@@ -222,7 +247,7 @@ def _check_files(path: str, sc: Scenario) -> None:
             raise ScenarioError(f"{path}: key 'vessels[{i}].ship_file': ship file '{v.ship_file}' not found "
                                 f"(looked for {ship})")
         try:
-            attachments[v.name] = set(load_ship(ship, name=v.name).attachments)
+            attachments[v.name] = set(load_ship(ship, name=v.name, overrides=v.ship_overrides).attachments)
         except (ValueError, KeyError) as exc:
             raise ScenarioError(f"{path}: key 'vessels[{i}].ship_file': {exc}") from None
     for i, r in enumerate(sc.ropes):

@@ -492,6 +492,12 @@ class ManeuveringVessel(Vessel):
         self.ctrl[C_DCMD] = st
         return msgs
 
+    def settle_command(self, cmd: Command) -> List[str]:
+        msgs = self.set_command(cmd)
+        self.s[S_N] = self.ctrl[C_NCMD]      # engine at its ordered rpm (Eq 9 lag already run out)
+        self.s[S_DELTA] = self.ctrl[C_DCMD]  # rudder at its ordered angle (Eq 10)
+        return msgs
+
     def _pick_anchor_side(self, steering: float) -> None:
         side = self.anchor_cfg["side"]
         if side != 0.0:

@@ -249,6 +249,11 @@ class PlaningHull(Vessel):
                    limits, source, initial_state)
 
     # ------------------------------------------------------------------ Vessel interface
+    def settle_command(self, cmd: Command) -> List[str]:
+        msgs = self.set_command(cmd)
+        self._act[:] = self._cmd  # impeller and bucket at their ordered values
+        return msgs
+
     def set_command(self, cmd: Command) -> List[str]:
         check_command(cmd)  # raises CommandRejected; the held command is untouched
         notes = []
@@ -305,6 +310,7 @@ class PlaningHull(Vessel):
         u, v = s.linear_velocity_body[0] - cb[0], s.linear_velocity_body[1] - cb[1]
         impeller = self._act[0] * self.limits["rated_impeller_speed"]
         return {
+            "engine_order": float(self._cmd[0]),
             "steering_angle_ordered": float(self._cmd[1]),
             "steering_angle": float(self._act[1]),          # bucket, + turns to port
             "bucket_angle": float(self._act[1]),

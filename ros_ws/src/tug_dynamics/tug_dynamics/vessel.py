@@ -108,6 +108,12 @@ class Vessel(ABC):
         Raises CommandRejected (and keeps the previous command) for NaN/inf/unknown values.
         """
 
+    def settle_command(self, cmd: Command) -> List[str]:
+        """Apply a command as if it had been held for long: actuators (shaft speed, rudder or
+        bucket) start at their ordered values. For initial conditions such as "turn from 9 kn at
+        half ahead"; models with actuator lags override it."""
+        return self.set_command(cmd)
+
     @abstractmethod
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         """Advance the state by dt seconds with the given external wrenches held constant."""

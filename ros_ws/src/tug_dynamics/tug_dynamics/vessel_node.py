@@ -17,11 +17,13 @@ from typing import List, Optional
 
 import numpy as np
 import rclpy
+import yaml
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from tug_msgs.msg import AttachmentArray, AttachmentPoint, ScenarioEvent, VesselCommand, VesselStatus
 
 from tug_dynamics import ros_common as rc
+from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
 from tug_dynamics.stepping import SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
                                  rotation_body_to_world)
@@ -43,6 +45,22 @@ class VesselNode(SteppedNode):
         self.declare_parameter("initial_speed", 0.0, rc.float_param("Initial surge speed", -30.0, 40.0, "m/s"))
         self.declare_parameter("wrench_topics", [""], rc.text_param(
             "geometry_msgs/WrenchStamped topics of external forces (rope ends) acting on this vessel"))
+        self.declare_parameter("initial_engine_order", 0.0, rc.float_param(
+            "Engine order held from the start, engine already at that rpm (0: the model's own start)", -1.0, 1.0))
+        self.declare_parameter("initial_steering_angle", 0.0, rc.float_param(
+            "Steering angle held from the start, rudder already there (positive to port)", -1.6, 1.6, "rad"))
+        self.declare_parameter("ship_overrides", "", rc.text_param(
+            "YAML mapping merged over the ship file, e.g. \"{towline_simple: {enabled: true}}\""))
+        self.declare_parameter("motion", "", rc.text_param(
+            "Prescribed motion instead of dynamics: '' (none), constant_speed, sinusoidal_sway, acceleration"))
+        self.declare_parameter("motion_speed", 0.0, rc.float_param(
+            "Prescribed speed U (or U_max for acceleration)", 0.0, 40.0, "m/s"))
+        self.declare_parameter("motion_amplitude", 0.0, rc.float_param("Sinusoidal sway amplitude", 0.0, 1e3, "m"))
+        self.declare_parameter("motion_period", 0.0, rc.float_param("Sinusoidal sway period", 0.0, 1e4, "s"))
+        self.declare_parameter("motion_acceleration", 0.0, rc.float_param("Prescribed acceleration", 0.0, 10.0,
+                                                                          "m/s^2"))
+        self.declare_parameter("motion_heading", "track", rc.text_param(
+            "Heading of a prescribed motion: track (follows the track tangent) or fixed"))
         self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
         self.declare_parameter("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
 
@@ -59,12 +77,30 @@ class VesselNode(SteppedNode):
         initial.linear_velocity_body[0] = self.get_parameter("initial_speed").value
 
         from tug_dynamics.ship_file import load_ship
-        self.model: Vessel = load_ship(path, name=self.vessel_name, initial_state=initial)
+        overrides_text = self.get_parameter("ship_overrides").value
+        overrides = yaml.safe_load(overrides_text) if overrides_text else None
+        if overrides is not None and not isinstance(overrides, dict):
+            raise ValueError(f"parameter ship_overrides:={overrides_text!r}: expected a YAML mapping")
+        self.model: Vessel = load_ship(path, name=self.vessel_name, initial_state=initial, overrides=overrides)
+        self.command = Command(self.get_parameter("initial_engine_order").value,
+                               self.get_parameter("initial_steering_angle").value)
+        # 0, 0 keeps the model's own start (at rest: stopped; a planing hull given an initial
+        # speed starts in its steady run at the throttle for that speed).
+        if self.command.engine_order or self.command.steering_angle:
+            for note in self.model.settle_command(self.command):
+                self.get_logger().warning(f"initial command clamped: {note}")
+        motion = self.get_parameter("motion").value
+        if motion:
+            law = MotionLaw(motion, speed=self.get_parameter("motion_speed").value,
+                            amplitude=self.get_parameter("motion_amplitude").value,
+                            period=self.get_parameter("motion_period").value,
+                            acceleration=self.get_parameter("motion_acceleration").value,
+                            heading=self.get_parameter("motion_heading").value)
+            self.model = PrescribedMotion(self.model, law)
         current = np.array([self.get_parameter("current_east").value, self.get_parameter("current_north").value, 0.0])
         if np.any(current) and hasattr(self.model, "set_current"):
             self.model.set_current(current)
 
-        self.command = Command()
         self.rejected = 0
         self.clamped = 0
         self.body_frame = f"{self.vessel_name}/base_link"
@@ -202,11 +238,14 @@ def main(args: Optional[List[str]] = None) -> int:
         sys.stderr.write(f"vessel_node: {exc}\n")
         rclpy.try_shutdown()
         return 2
+    executor = rc.make_executor()
+    executor.add_node(node)
     try:
-        rclpy.spin(node)
+        rc.spin_forever(executor)
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
     finally:
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

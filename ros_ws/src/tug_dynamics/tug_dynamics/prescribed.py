@@ -1,0 +1,105 @@
+"""Prescribed motion: a vessel that follows a given track whatever the forces on it, as the tug
+of seed 000 section 4 does (constant speed 4.4 / 4.6, sinusoidal sway 4.5, acceleration).
+
+The track is written in the vessel's initial frame (x along the initial heading, y to port):
+  constant_speed     x = U t
+  sinusoidal_sway    x = U t,  y = A sin(2 pi t / T)          (seed 000 4.5: 2 kn, 10 m, 50 s)
+  acceleration       x = a t^2 / 2 until U_max is reached, then U_max
+The heading follows the track tangent (heading: track) or keeps its initial value (heading:
+fixed). External wrenches are ignored; the attachment kinematics are exact derivatives.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Dict, List, Sequence
+
+import numpy as np
+
+from tug_dynamics.vessel import Command, ExternalWrench, Vessel, VesselState
+
+MOTION_KINDS = ("constant_speed", "sinusoidal_sway", "acceleration")
+
+
+@dataclasses.dataclass(frozen=True)
+class MotionLaw:
+    kind: str
+    speed: float = 0.0  # m/s: U (constant_speed, sinusoidal_sway) or U_max (acceleration)
+    amplitude: float = 0.0  # m
+    period: float = 0.0  # s
+    acceleration: float = 0.0  # m/s^2
+    heading: str = "track"  # track | fixed
+
+    def __post_init__(self):
+        def bad(key, what):
+            raise ValueError(f"prescribed motion '{self.kind}': {key} {what}")
+        if self.kind not in MOTION_KINDS:
+            raise ValueError(f"prescribed motion: unknown type {self.kind!r}; expected one of {MOTION_KINDS}")
+        for key in ("speed", "amplitude", "period", "acceleration"):
+            if not math.isfinite(getattr(self, key)):
+                bad(key, f"must be finite, got {getattr(self, key)}")
+        if self.heading not in ("track", "fixed"):
+            bad("heading", f"must be 'track' or 'fixed', got {self.heading!r}")
+        if self.kind == "sinusoidal_sway" and self.period <= 0:
+            bad("period", f"must be positive, got {self.period}")
+        if self.kind == "acceleration" and (self.acceleration <= 0 or self.speed <= 0):
+            bad("acceleration/speed", f"must both be positive, got {self.acceleration}, {self.speed}")
+
+    def track(self, t: float):
+        """Position, velocity, acceleration (x, y) in the initial frame at time t."""
+        if self.kind == "acceleration":
+            t_full = self.speed / self.acceleration
+            if t < t_full:
+                return (0.5 * self.acceleration * t * t, 0.0), (self.acceleration * t, 0.0), (self.acceleration, 0.0)
+            x = 0.5 * self.acceleration * t_full ** 2 + self.speed * (t - t_full)
+            return (x, 0.0), (self.speed, 0.0), (0.0, 0.0)
+        x, vx = self.speed * t, self.speed
+        if self.kind == "constant_speed":
+            return (x, 0.0), (vx, 0.0), (0.0, 0.0)
+        w = 2.0 * math.pi / self.period
+        a = self.amplitude
+        return (x, a * math.sin(w * t)), (vx, a * w * math.cos(w * t)), (0.0, -a * w * w * math.sin(w * t))
+
+
+class PrescribedMotion(Vessel):
+    """Wraps a vessel model: same name, attachments and command interface; motion imposed."""
+
+    def __init__(self, base: Vessel, law: MotionLaw):
+        self.base = base
+        self.law = law
+        self.name = base.name
+        self.attachments = base.attachments
+        self.origin = base.state.position.copy()
+        self.yaw0 = float(base.state.rpy[2])
+        self.time = 0.0
+        self.state = VesselState(self.origin.copy(), np.array([0.0, 0.0, self.yaw0]), np.zeros(3), np.zeros(3))
+        self._apply()
+
+    def set_command(self, cmd: Command) -> List[str]:
+        return self.base.set_command(cmd)  # validated and held; it does not move a prescribed vessel
+
+    def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
+        self.time += dt
+        self._apply()
+
+    def _apply(self) -> None:
+        (x, y), (vx, vy), (ax, ay) = self.law.track(self.time)
+        c, s = math.cos(self.yaw0), math.sin(self.yaw0)
+        pos = self.origin + np.array([c * x - s * y, s * x + c * y, 0.0])
+        vel_world = np.array([c * vx - s * vy, s * vx + c * vy, 0.0])
+        if self.law.heading == "track" and math.hypot(vx, vy) > 1e-9:
+            yaw = self.yaw0 + math.atan2(vy, vx)
+            yaw_rate = (vx * ay - vy * ax) / (vx * vx + vy * vy)
+        else:
+            yaw, yaw_rate = self.yaw0, 0.0
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        u = cy * vel_world[0] + sy * vel_world[1]
+        v = -sy * vel_world[0] + cy * vel_world[1]
+        self.state = VesselState(pos, np.array([0.0, 0.0, yaw]), np.array([u, v, 0.0]), np.array([0.0, 0.0, yaw_rate]))
+
+    def status(self) -> Dict[str, float]:
+        st = dict(self.base.status())
+        st["speed_through_water"] = float(math.hypot(*self.state.linear_velocity_body[:2]))
+        st["heel"] = 0.0
+        st["prescribed"] = True
+        return st

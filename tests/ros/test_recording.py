@@ -1,0 +1,135 @@
+"""Issue 6: recordings read back with two third-party readers; identical decoded physics on
+repeated runs and in both process layouts; a killed node stops the run cleanly."""
+import os
+import signal
+import subprocess
+import time
+from collections import defaultdict
+
+import numpy as np
+import pytest
+
+from conftest import executable_path
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
+
+SCENARIO = "seed000_straight_tow_5kn.yaml"
+DURATION = 4.0
+RATE = 50.0
+STEPS = int(DURATION * RATE)
+
+
+def run(out, *extra):
+    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", str(DURATION),
+                           "--output", str(out), "--quiet", *extra], capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc
+
+
+def decoded(path):
+    """topic -> list of decoded messages, with mcap-ros2-support."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    out = defaultdict(list)
+    with open(path, "rb") as f:
+        for _schema, channel, _message, msg in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+            out[channel.topic].append(msg)
+    return out
+
+
+def physics(path):
+    """The decoded vessel and rope states as arrays, keyed by topic and step."""
+    msgs = decoded(path)
+    values = {}
+    for v in ("tug", "barge"):
+        values[v] = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.orientation.z,
+                               m.pose.pose.orientation.w, m.twist.twist.linear.x, m.twist.twist.linear.y,
+                               m.twist.twist.angular.z] for m in msgs[f"/{v}/odom"]])
+    rope = msgs["/towline/state"]
+    values["rope_positions"] = np.array([[(p.position.x, p.position.y, p.position.z) for p in m.element_poses]
+                                         for m in rope])
+    values["rope_tensions"] = np.array([list(m.connection_tensions) for m in rope])
+    values["steps"] = np.array([m.step for m in rope])
+    return values
+
+
+@pytest.fixture(scope="module")
+def recordings(tmp_path_factory):
+    from domain_coordinator import domain_id
+    base = tmp_path_factory.mktemp("rec")
+    paths = {}
+    with domain_id() as did:
+        os.environ["ROS_DOMAIN_ID"] = str(did)
+        for name, extra in (("first", ()), ("second", ()), ("one_process", ("--layout", "one_process"))):
+            paths[name] = base / f"{name}.mcap"
+            run(paths[name], *extra)
+    return paths
+
+
+def test_rosbags_reads_every_topic_with_the_predicted_counts(recordings):
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+    from pathlib import Path
+    with AnyReader([Path(recordings["first"])], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        for per_step in ("/tug/odom", "/tug/attachments", "/tug/status", "/barge/odom", "/barge/attachments",
+                         "/barge/status", "/towline/state", "/towline/markers", "/towline/end_a/wrench",
+                         "/towline/end_b/wrench"):
+            assert counts[per_step] == STEPS + 1, per_step  # steps 0..N
+        assert counts["/sim/step"] == STEPS and counts["/clock"] == STEPS
+        decoded_any = 0
+        for conn, _t, raw in reader.messages():
+            reader.deserialize(raw, conn.msgtype)
+            decoded_any += 1
+        assert decoded_any == sum(counts.values())
+
+
+def test_mcap_ros2_support_decodes_every_message(recordings):
+    msgs = decoded(recordings["first"])
+    assert len(msgs["/towline/state"]) == STEPS + 1
+    done = {(m.node, m.step) for m in msgs["/sim/step_done"]}
+    assert done == {(n, k) for n in ("/tug/vessel", "/barge/vessel", "/towline/rope") for k in range(STEPS + 1)}
+    assert [m.step for m in msgs["/towline/state"]] == list(range(STEPS + 1))
+
+
+def test_repeated_runs_and_both_layouts_give_identical_physics(recordings):
+    first = physics(recordings["first"])
+    assert np.all(first["rope_tensions"][-1] > 0)  # a real tow, not a trivial state
+    for other in ("second", "one_process"):
+        again = physics(recordings[other])
+        for key in first:
+            np.testing.assert_array_equal(first[key], again[key], err_msg=f"{other}: {key}")
+
+
+def _node_pid(pattern, domain):
+    """pid of the node process of this test's domain whose command line matches pattern."""
+    for pid in subprocess.run(["pgrep", "-f", pattern], capture_output=True, text=True).stdout.split():
+        try:
+            env = open(f"/proc/{pid}/environ", "rb").read().decode(errors="replace").split("\0")
+        except OSError:
+            continue
+        if f"ROS_DOMAIN_ID={domain}" in env:
+            return int(pid)
+    return None
+
+
+def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
+    from mcap.reader import make_reader
+    out = tmp_path / "killed.mcap"
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", "600",
+                             "--output", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    victim = None
+    deadline = time.monotonic() + 120
+    while victim is None and time.monotonic() < deadline:
+        victim = _node_pid("__ns:=/barge", os.environ["ROS_DOMAIN_ID"])
+        time.sleep(0.2)
+    assert victim, "barge node never started"
+    time.sleep(3.0)  # let the run get going
+    os.kill(victim, signal.SIGKILL)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 3
+    assert "/barge/vessel" in stderr and "died" in stderr
+    with open(out, "rb") as f:  # the partial recording is finalised and readable
+        summary = make_reader(f).get_summary()
+    assert summary.statistics.message_count > 0
