@@ -71,6 +71,13 @@ def test_missing_file(tmp_path):
         load_rope_params(missing)
 
 
+def test_model_selector_key(tmp_path):
+    p = load_rope_params(_write(tmp_path, "m.yaml", "model: element_chain\nlength: 80\n"))
+    assert p.length == 80.0
+    with pytest.raises(RopeParamsError, match="c.yaml: key 'model'"):
+        load_rope_params(_write(tmp_path, "c.yaml", "model: fd_cable\n"))
+
+
 def test_partial_yaml_keeps_defaults(tmp_path):
     p = load_rope_params(_write(tmp_path, "short.yaml", "length: 50\nn_elements: 5\n"))
     assert p.length == 50.0 and p.n_elements == 5 and p.diameter == 0.05

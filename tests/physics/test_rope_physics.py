@@ -247,16 +247,24 @@ def test_payout_conserves_mass_section_4_6():
     assert np.allclose(rope.lengths[1:-1], nominal)
     assert 0.5 * nominal <= rope.lengths[0] <= 1.5 * nominal
     assert not rope.events  # slack pay-out: nothing parts
-    # the tug steams back at 2 m/s heaving in at 2 m/s down to the lower limit: mass still
-    # equal to length x mass per metre, the slack rope does not part
-    rope.set_payout_rate(-2.0)
-    tug = tug0 + np.array([speed * 20.0, 0, 0])
-    for k in range(1500):
-        x = max(tug[0] - 2.0 * 0.02 * k, 1.0)
-        rope.set_end_kinematics("a", (x, 0.0, 2.0), (-2.0 if x > 1.0 else 0.0, 0, 0))
+    # heave in 20 m of a long slack rope at 0.5 m/s, tug lying 3 m from the barge: mass
+    # still equal to length x mass per metre, nothing parts
+    rope = RopeChain.wound_on_winch(p, (3.0, 0.0, 2.0), barge, deployed_length=40.0,
+                                    n_elements=11)
+    rope.set_payout_rate(-0.5)
+    for _ in range(2000):
         rope.step(0.02)
         assert rope.total_mass == pytest.approx(mu * rope.unstretched_length, rel=1e-12)
         assert np.all(np.isfinite(rope.positions))
+    assert rope.unstretched_length == pytest.approx(20.0, rel=1e-9)
+    assert not rope.events
+    # ... and down to the lower limit, where heave-in stops
+    rope = RopeChain.wound_on_winch(p, (3.0, 0.0, 2.0), barge, deployed_length=6.0,
+                                    n_elements=11)
+    rope.set_payout_rate(-0.5)
+    for _ in range(500):
+        rope.step(0.02)
+        assert rope.total_mass == pytest.approx(mu * rope.unstretched_length, rel=1e-12)
     assert rope.unstretched_length == pytest.approx(p.min_deployed_length, rel=1e-9)
     assert not rope.events
 

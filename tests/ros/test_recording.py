@@ -73,10 +73,11 @@ def test_rosbags_reads_every_topic_with_the_predicted_counts(recordings):
     with AnyReader([Path(recordings["first"])], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
         for per_step in ("/tug/odom", "/tug/attachments", "/tug/status", "/barge/odom", "/barge/attachments",
-                         "/barge/status", "/towline/state", "/towline/markers", "/towline/end_a/wrench",
+                         "/barge/status", "/towline/state", "/towline/end_a/wrench",
                          "/towline/end_b/wrench"):
             assert counts[per_step] == STEPS + 1, per_step  # steps 0..N
         assert counts["/sim/step"] == STEPS and counts["/clock"] == STEPS
+        assert counts["/towline/markers"] == STEPS // 5 + 1  # markers at 10 Hz: every 5th step
         decoded_any = 0
         for conn, _t, raw in reader.messages():
             reader.deserialize(raw, conn.msgtype)
@@ -133,3 +134,42 @@ def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
     with open(out, "rb") as f:  # the partial recording is finalised and readable
         summary = make_reader(f).get_summary()
     assert summary.statistics.message_count > 0
+
+
+def test_ctrl_c_leaves_a_finalised_recording_and_no_nodes(tmp_path, ros_domain):
+    from mcap.reader import make_reader
+    out = tmp_path / "interrupted.mcap"
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", "600",
+                             "--output", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    deadline = time.monotonic() + 120
+    while _node_pid("__ns:=/towline", os.environ["ROS_DOMAIN_ID"]) is None and time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "interrupted" in stderr
+    with open(out, "rb") as f:
+        summary = make_reader(f).get_summary()  # the summary section exists: the file was finalised
+    assert summary.statistics.message_count > 0
+    assert _node_pid("__ns:=/towline", os.environ["ROS_DOMAIN_ID"]) is None  # nodes were stopped
+
+
+def test_realtime_mode_is_paced_and_reports_overruns(tmp_path, ros_domain):
+    import yaml
+    from ament_index_python.packages import get_package_share_directory
+    src = f"{get_package_share_directory('scenario_runner')}/scenarios/seed004_turn.yaml"
+    sc = dict(yaml.safe_load(open(src)), name="paced", mode="realtime", duration=3.0)
+    path = tmp_path / "paced.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    t0 = time.monotonic()
+    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--output",
+                           str(tmp_path / "paced.mcap"), "--quiet"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "overrun step(s)" in proc.stdout and "lateness" in proc.stdout
+    # Paced: the run cannot be faster than the simulated time (a lower bound, safe on a busy machine).
+    assert time.monotonic() - t0 >= 3.0
+    assert "3.0 s simulated in" in proc.stdout
+    wall = float(proc.stdout.split("simulated in")[1].split("s wall")[0])
+    assert wall >= 3.0 - 1.0 / 50.0

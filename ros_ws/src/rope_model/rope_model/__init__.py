@@ -13,7 +13,8 @@ API (what the rope node uses)::
     rope = RopeChain.slack(params, p_a, p_b, n_elements=None, sag_direction=(0, 0, -1),
                            length=None, **same_keywords)
     rope = RopeChain.wound_on_winch(params, p_a, p_b, deployed_length=None,
-                                    n_elements=None, **same_keywords)
+                                    n_elements=None, sag_direction=(0, 0, -1),
+                                    heading=(1, 0, 0), **same_keywords)
     rope.set_end_kinematics("a" | "b", position(3,), velocity(3,))   # pinned ends
     rope.set_payout_rate(rate_m_per_s)         # winch at end a: + pays out, - heaves in
     rope.step(dt)                              # exchange period; internal sub-steps;
@@ -24,7 +25,10 @@ API (what the rope node uses)::
     rope.body_velocities(), .tensions (N+1 connections: 0 = end a, N = end b),
     rope.joint_points(), .unstretched_length, .total_mass, .pieces, .events
     (PartingEvent(time, connection, tension)), .momentum(), .kinetic_energy(),
-    .potential_energy(), .total_energy(), .time, .n_elements (changes with the winch)
+    .potential_energy(), .total_energy(), .time, .n_elements (changes with the winch),
+    .breaking_load (N+1,) per-connection strength, .params
+
+Model, integrator and its stability limit, validation and benchmark: ../README.md.
 
 End modes: "pinned" (moves with set_end_kinematics), "fixed" (stays where created),
 "free" (no attachment).

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels as K
-from .layout import (catenary_curve, close_with_triangle, elements_from_joints, joints_on_curve,
-                     polygon_on_catenary, straight_joints)
+from .layout import (catenary_curve, close_with_fabrik, close_with_triangle, elements_from_joints,
+                     joints_on_curve, polygon_on_catenary, straight_joints)
 from .params import RopeParams
 
 END_MODES = ("pinned", "fixed", "free")
@@ -159,7 +159,10 @@ class RopeChain:
             joints = joints_on_curve(catenary_curve(p_a, p_b, float(L.sum()), sag_direction), L)
         # close exactly on p_b (the catenary of long links can miss it, e.g. ends on one
         # vertical, the tug and barge of section 4.6 starting side by side)
-        return close_with_triangle(joints, L, p_b, sag_direction)
+        joints = close_with_triangle(joints, L, p_b, sag_direction)
+        if len(L) > 2:
+            joints = close_with_fabrik(joints, L, p_b)
+        return joints
 
     @classmethod
     def straight(cls, params, p_a, p_b, n_elements=None, **kw):
@@ -247,7 +250,8 @@ class RopeChain:
         for k, v in enumerate(vals):
             if not math.isfinite(v):
                 what = "position" if k < 3 else "velocity"
-                raise ValueError(f"end {end} {what}: must be finite, got {list(vals[:3] if k < 3 else vals[3:])}")
+                got = list(vals[:3] if k < 3 else vals[3:])
+                raise ValueError(f"end {end} {what}: must be finite, got {got}")
         if self.end_modes[i] != "pinned":
             raise ValueError(f"end {end} is '{self.end_modes[i]}', only a pinned end can move")
         ap, av = self.att_pos[i], self.att_vel[i]
@@ -280,12 +284,12 @@ class RopeChain:
             self._ws = np.zeros(need)
         return self._ws
 
-    def _refresh(self):
+    def _refresh(self, t=None):
         """Recompute tensions and end forces for the current state (no time advance)."""
         imp = np.zeros((2, 3))
         info = np.zeros(2, dtype=np.int64)
         self._kernel(0.0, 0, imp, info)
-        self._collect_events(0.0)
+        self._collect_events(self.time if t is None else t)
 
     def _collect_events(self, t0):
         ne = int(self._nev[0])
@@ -338,7 +342,7 @@ class RopeChain:
             self.att_pos = pos0
             self._paying = False
             if st == K.OK:
-                self._refresh()
+                self._refresh(self.time + dt)
         else:  # the kernel restores the last good state itself on divergence
             n_ev = len(self.events)
             st = self._kernel(h, n_sub, imp, info)
@@ -361,6 +365,8 @@ class RopeChain:
         self._mean_end_force = imp_total * (1.0 / dt)
 
     # ------------------------------------------------------------------ winch
+    TINY = 1e-3  # element 0 is wound in completely below this fraction of a nominal length
+
     def _winch(self, dl, h):
         p = self.params
         if not self.conn_ok[0]:  # the rope has parted at the drum: nothing to wind
@@ -368,15 +374,14 @@ class RopeChain:
         dep = float(self.L.sum())
         tgt = min(max(dep + dl, p.min_deployed_length), p.length)
         dl = tgt - dep
-        if dl < 0.0 and self.n_elements >= 2 and not self.conn_ok[1]:
-            # element 0 is a piece of its own: wind it in down to half an element only
-            dl = max(dl, 0.5 * self.l_nom - self.L[0])
-        if dl == 0.0 or (dl < 0.0 and self.L[0] + dl <= 0.0):
+        tiny = self.TINY * self.l_nom
+        can_drop = self.n_elements >= 2 and bool(self.conn_ok[1])
+        if dl < 0.0:  # element 0 never shrinks below 'tiny' (then it is dropped)
+            dl = max(dl, (tiny if can_drop else 0.5 * min(self.l_nom, self.L[0])) - self.L[0])
+        if dl == 0.0:
             return
         l0 = self.L[0]
         l_new = l0 + dl
-        if l_new <= 1e-6 * self.l_nom:  # only possible with a single tiny element
-            return
         # rope leaves / enters at the winch end of element 0: its far end stays (a material
         # point) and the element grows / shrinks along its axis at the drum end. The rope
         # slides out of the drum at the pay-out rate: new rope leaves with the drum velocity
@@ -398,9 +403,23 @@ class RopeChain:
             self.X[0] -= over * e
         while self.L[0] > 1.5 * self.l_nom:
             self._split0()
-        while (dl < 0.0 and self.L[0] < 0.5 * self.l_nom and self.n_elements >= 2
-               and self.conn_ok[1]):
-            self._merge01()
+        if dl < 0.0 and can_drop:
+            if self.L[0] <= tiny * (1.0 + 1e-9):
+                # wound in completely: element 1 now hangs from the drum, its front within
+                # 'tiny' of it (merging two links at an angle would jump the geometry)
+                self._drop0()
+            elif self.L[0] < 0.5 * self.l_nom and self.E[0] @ self.E[1] > 0.98:
+                self._merge01()  # nearly straight: merging moves nothing noticeably
+
+    def _drop0(self):
+        self.X, self.E, self.V, self.W = self.X[1:], self.E[1:], self.V[1:], self.W[1:]
+        self.L = self.L[1:].copy()
+        self.X, self.E = self.X.copy(), self.E.copy()
+        self.V, self.W = self.V.copy(), self.W.copy()
+        self.conn_ok = np.delete(self.conn_ok, 1)
+        self.armed = np.delete(self.armed, 1)
+        self.breaking_load = np.delete(self.breaking_load, 1)
+        self.tensions = np.delete(self.tensions, 1)
 
     def _split0(self):
         l0, ln = self.L[0], self.l_nom
@@ -426,15 +445,20 @@ class RopeChain:
         front = self.X[0] + 0.5 * L0 * self.E[0]
         aft = self.X[1] - 0.5 * L1 * self.E[1]
         ln = L0 + L1
-        d = front - aft
+        # aim the merged element from the joint with element 2 (kept) at the drum, so that
+        # any excess length is axial (slack), never a sideways jump
+        d = (self.att_pos[0] if (self.att_on[0] and self.conn_ok[0]) else front) - aft
         nd = np.linalg.norm(d)
         e = d / nd if nd > 1e-9 else self.E[1].copy()
         m0, m1 = mu * L0, mu * L1
         v = (m0 * self.V[0] + m1 * self.V[1]) / (m0 + m1)
-        i0, i1 = m0 * L0 * L0, m1 * L1 * L1
-        w = (i0 * self.W[0] + i1 * self.W[1]) / (i0 + i1)
-        w -= (w @ e) * e
-        x = front - 0.5 * ln * e
+        # momentum kept (v); the rotation rate makes the kept joint move on as before, so
+        # that its spring-damper sees no jump
+        v_aft = self.V[1] + np.cross(self.W[1], aft - self.X[1])
+        dv = v_aft - v
+        dv -= (dv @ e) * e
+        w = -(2.0 / ln) * np.cross(e, dv)
+        x = aft + 0.5 * ln * e  # the joint with element 2 stays; any excess is at the drum
         self.X = np.vstack([x, self.X[2:]])
         self.E = np.vstack([e, self.E[2:]])
         self.V = np.vstack([v, self.V[2:]])
@@ -473,8 +497,8 @@ class RopeChain:
 
     @property
     def pitch_yaw(self):
-        """(N,2) pitch theta and yaw psi of Eq (7) (body x = (c psi c theta, s psi c theta, -s theta)),
-        radians; positive pitch = x axis (towards end a) pointing down."""
+        """(N,2) pitch theta and yaw psi of Eq (7), radians: body x = (c psi c theta,
+        s psi c theta, -s theta); positive pitch = x axis (towards end a) pointing down."""
         E = self.E
         th = np.arctan2(-E[:, 2], np.hypot(E[:, 0], E[:, 1]))
         ps = np.arctan2(E[:, 1], E[:, 0])

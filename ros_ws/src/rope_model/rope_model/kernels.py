@@ -18,7 +18,6 @@ block tri-diagonal (5x5 blocks) and solved in O(N) by block Thomas elimination.
 """
 import math
 
-import numpy as np
 from numba import njit
 
 # status codes returned by run_substeps
@@ -108,31 +107,6 @@ def _jac(J, s_half, b1, b2):
 
 
 @njit(cache=True)
-def _add_JtSJ(out, Ja, S, Jb, coef, tmp):
-    """out (5x5) += coef * Ja^T S Jb (tmp: 3x5 scratch)."""
-    for r in range(3):
-        for c in range(5):
-            acc = 0.0
-            for k in range(3):
-                acc += S[r, k] * Jb[k, c]
-            tmp[r, c] = acc
-    for r in range(5):
-        for c in range(5):
-            acc = 0.0
-            for k in range(3):
-                acc += Ja[k, r] * tmp[k, c]
-            out[r, c] += coef * acc
-
-
-@njit(cache=True)
-def _add_JtJ(out, Ja, Jb, coef):
-    """out (5x5) += coef * Ja^T Jb."""
-    for r in range(5):
-        for c in range(5):
-            out[r, c] += coef * (Ja[0, r] * Jb[0, c] + Ja[1, r] * Jb[1, c] + Ja[2, r] * Jb[2, c])
-
-
-@njit(cache=True)
 def _add_pair(out, ha, b1a, b2a, hb, b1b, b2b, S, coef):
     """out (5x5) += coef * Ja^T S Jb for J = [I | h*(-b2) | h*b1] (see _jac), using the
     structure (about 45 multiply-adds instead of 120)."""
@@ -174,7 +148,8 @@ def _add_Jt_vec(out, J, F, coef):
 def evaluate(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
              mu, radius, EA, Cd, Cf, tfac, Ca, rho_w, rho_a, g,
              z_ax, z_tr, z_rot, P_rot, cur, relax, h, theta, t, payout_a,
-             f, Md, Kd, Ko, Cdd, Cdo, rhs_att, tension, end_force, events, n_events, B1, B2, need_jac, Iy, sv, sJ, S):
+             f, Md, Kd, Ko, Cdd, Cdo, rhs_att, tension, end_force, events, n_events, B1, B2,
+             need_jac, Iy, sv, sJ, S):
     """Forces f (N,5) at the current state, mass blocks Md, stiffness (Kd, Ko) and damping
     (Cdd, Cdo) Jacobian blocks (diagonal and upper off-diagonal), attachment terms,
     connection tensions and the forces on the two attachments. Parts the most overloaded
@@ -379,10 +354,11 @@ def evaluate(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
                 Cdd[k, 4, 4] -= cm
                 Cdd[i, 3, 3] -= cm
                 Cdd[i, 4, 4] -= cm
-                Cdo[i, 3, 3] += cm * (B1[i, 0] * B1[k, 0] + B1[i, 1] * B1[k, 1] + B1[i, 2] * B1[k, 2])
-                Cdo[i, 3, 4] += cm * (B1[i, 0] * B2[k, 0] + B1[i, 1] * B2[k, 1] + B1[i, 2] * B2[k, 2])
-                Cdo[i, 4, 3] += cm * (B2[i, 0] * B1[k, 0] + B2[i, 1] * B1[k, 1] + B2[i, 2] * B1[k, 2])
-                Cdo[i, 4, 4] += cm * (B2[i, 0] * B2[k, 0] + B2[i, 1] * B2[k, 1] + B2[i, 2] * B2[k, 2])
+                for a in range(3):  # d torque_i / d w_k = cm B_i^T B_k
+                    Cdo[i, 3, 3] += cm * B1[i, a] * B1[k, a]
+                    Cdo[i, 3, 4] += cm * B1[i, a] * B2[k, a]
+                    Cdo[i, 4, 3] += cm * B2[i, a] * B1[k, a]
+                    Cdo[i, 4, 4] += cm * B2[i, a] * B2[k, a]
         if not active:
             continue
         # spring: stiffness equivalent to EA over the rope length it represents
@@ -452,7 +428,8 @@ def evaluate(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
         hk = 0.5 * L[k] if hn else 0.0
         for a in range(3):
             for b in range(3):
-                S[a, b] = axial_damp * nax[a] * nax[b] + ctr * ((1.0 if a == b else 0.0) - nax[a] * nax[b])
+                S[a, b] = (axial_damp * nax[a] * nax[b]
+                           + ctr * ((1.0 if a == b else 0.0) - nax[a] * nax[b]))
         if hn:  # spring -kc Jn^T Jn, damper -Jn^T S Jn, geometric stiffness of the moment
             _add_pair(Kd[k], hk, B1[k], B2[k], hk, B1[k], B2[k], I3, -kc)
             _add_pair(Cdd[k], hk, B1[k], B2[k], hk, B1[k], B2[k], S, -1.0)
@@ -469,9 +446,11 @@ def evaluate(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
             _add_pair(Ko[i], hi, B1[i], B2[i], hk, B1[k], B2[k], I3, kc)
             _add_pair(Cdo[i], hi, B1[i], B2[i], hk, B1[k], B2[k], S, 1.0)
         # attachment moving during the sub-step (position extrapolated with its velocity)
-        if not hp:
+        if not hp:  # (winch heave-in: the drum end also retracts along the rope; pay-out
+            # extensions are capped at the drum in chain._winch, so they are not anticipated)
+            pin = min(payout_a, 0.0)
             for a in range(3):
-                d[a] = kc * att_vel[0, a] * h
+                d[a] = kc * (att_vel[0, a] - pin * E[k, a]) * h
             _add_Jt_vec(rhs_att[k], Jn, d, h * theta)
         if not hn:
             for a in range(3):

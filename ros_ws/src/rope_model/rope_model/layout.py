@@ -174,3 +174,33 @@ def close_with_triangle(joints, lengths, p_b, sag_direction=(0.0, 0.0, -1.0)):
     joints[-2] = p0 + a * u + hh * w
     joints[-1] = p_b
     return joints
+
+
+def close_with_fabrik(joints, lengths, p_b, iterations=200, tol=1e-9):
+    """Move the joints (fixed link lengths, first joint fixed) until the last one lands on
+    p_b: FABRIK forward/backward reaching, which keeps the sagging shape of the guess."""
+    joints = np.array(joints, float)
+    p_a = joints[0].copy()
+    p_b = np.asarray(p_b, float)
+    lengths = np.asarray(lengths, float)
+    if np.linalg.norm(p_b - p_a) > lengths.sum():
+        return joints
+    n = len(lengths)
+    for _ in range(iterations):
+        chords = np.linalg.norm(np.diff(joints, axis=0), axis=1)
+        if (np.linalg.norm(joints[-1] - p_b) < tol * lengths.sum()
+                and np.abs(chords - lengths).max() < tol * lengths.sum()):
+            break
+        joints[-1] = p_b
+        for i in range(n - 1, -1, -1):
+            d = joints[i] - joints[i + 1]
+            nd = np.linalg.norm(d)
+            if nd > 0:
+                joints[i] = joints[i + 1] + lengths[i] * d / nd
+        joints[0] = p_a
+        for i in range(n):
+            d = joints[i + 1] - joints[i]
+            nd = np.linalg.norm(d)
+            if nd > 0:
+                joints[i + 1] = joints[i] + lengths[i] * d / nd
+    return joints

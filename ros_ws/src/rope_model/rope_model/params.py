@@ -129,7 +129,8 @@ _FIELDS = {f.name for f in dataclasses.fields(RopeParams)} - {"source"}
 
 
 def load_rope_params(path: str | os.PathLike) -> RopeParams:
-    """Read a rope YAML file (flat mapping of the RopeParams field names).
+    """Read a rope YAML file (flat mapping of the RopeParams field names; an optional
+    ``model: element_chain`` key, the rope node's model selector, is accepted).
 
     Raises FileNotFoundError (with the path) or RopeParamsError (file + key).
     """
@@ -146,6 +147,11 @@ def load_rope_params(path: str | os.PathLike) -> RopeParams:
         data = {}
     if not isinstance(data, dict):
         raise RopeParamsError(f"{src}: expected a mapping of keys, got {type(data).__name__}")
+    data = dict(data)
+    model = data.pop("model", "element_chain")  # the rope node's model selector
+    if model != "element_chain":
+        raise RopeParamsError(
+            f"{src}: key 'model': this loader reads 'element_chain' rope files, got {model!r}")
     for k in data:
         if k not in _FIELDS:
             raise RopeParamsError(

@@ -27,7 +27,7 @@ from std_msgs.msg import ColorRGBA
 from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rope_model import RopeChain, RopeDivergedError, load_rope_params
+from rope_model.models import ModelFailure, make_model, rope_file_model
 from tug_dynamics import ros_common as rc
 from tug_dynamics.stepping import SteppedNode, StepInput
 
@@ -71,6 +71,8 @@ class RopeNode(SteppedNode):
             "Initial deployed length (slack or winch layouts); 0 = the rope file's length", 0.0, 1e5, "m"))
         p("n_elements", 0, rc.int_param("Number of elements; 0 = the rope file's", 0, 2000))
         p("max_substep", 0.0, rc.float_param("Largest internal sub-step; 0 = the library default", 0.0, 1.0, "s"))
+        p("marker_rate", 10.0, rc.float_param(
+            "Rate of the visualization markers (at most the exchange rate)", 0.1, 1000.0, "Hz"))
         p("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
         p("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
         gp = self.get_parameter
@@ -79,7 +81,7 @@ class RopeNode(SteppedNode):
         path = rc.resolve_data_file("rope_model", "ropes", rope_file)
         if not os.path.isfile(path):
             raise FileNotFoundError(f"rope file '{path}' not found (parameter rope_file:={rope_file})")
-        self.params = load_rope_params(path)
+        rope_file_model(path)  # validates the model key early
         self.rope_path = path
         self.ends = [RopeEnd("a", gp("end_a").value, list(gp("end_a_position").value)),
                      RopeEnd("b", gp("end_b").value, list(gp("end_b_position").value))]
@@ -93,7 +95,8 @@ class RopeNode(SteppedNode):
         self.max_substep = gp("max_substep").value
         self.current = (gp("current_east").value, gp("current_north").value, 0.0)
         self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
-        self.rope: Optional[RopeChain] = None
+        self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
+        self._poses, self._twists = [], []
         self.reported_events = 0
 
         self.state_pub = self.create_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
@@ -112,6 +115,8 @@ class RopeNode(SteppedNode):
         if self.layout == "winch":
             inputs.append(StepInput("winch", WinchCommand, kind="order"))
         self.init_stepping(inputs, ready=False)
+        # markers on every n-th step: RViz needs no more than ~10 Hz and they cost a third of a step
+        self.marker_every = max(1, round(1e9 / self.period_ns / gp("marker_rate").value))
         if not self.vessel_topics:
             self._build()
         self.get_logger().info(
@@ -159,82 +164,78 @@ class RopeNode(SteppedNode):
                 end.orientation = point.orientation
 
     def _build(self) -> None:
-        kw = dict(end_a=self.ends[0].mode, end_b=self.ends[1].mode, current=self.current)
-        if self.max_substep > 0:
-            kw["max_substep"] = self.max_substep
-        p_a, p_b = self.ends[0].position, self.ends[1].position
-        if self.layout == "straight":
-            self.rope = RopeChain.straight(self.params, p_a, p_b, n_elements=self.n_elements, **kw)
-        elif self.layout == "slack":
-            self.rope = RopeChain.slack(self.params, p_a, p_b, n_elements=self.n_elements,
-                                        length=self.deployed_length, **kw)
-        else:
-            self.rope = RopeChain.wound_on_winch(self.params, p_a, p_b, deployed_length=self.deployed_length,
-                                                 n_elements=self.n_elements, **kw)
+        a = self.ends[0]
+        heading = 0.0
+        if a.orientation is not None:
+            q = a.orientation
+            heading = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        self.rope = make_model(self.rope_path, self.layout, a.position, self.ends[1].position,
+                               end_a=a.mode, end_b=self.ends[1].mode, current=self.current,
+                               n_elements=self.n_elements, deployed_length=self.deployed_length,
+                               max_substep=self.max_substep, velocity_a=a.velocity, heading=heading)
         for end in self.ends:
             if end.mode == "pinned":
-                self.rope.set_end_kinematics(end.label, end.position, end.velocity)
+                self.rope.set_end(end.label, end.position, end.velocity)
         self.ready_to_step = True
         self.publish_outputs()
-        self.get_logger().info(f"rope laid out: {self.rope.n_elements} elements, "
-                               f"{self.rope.unstretched_length:.2f} m deployed")
+        out = self.rope.outputs()
+        self.get_logger().info(f"rope laid out ({self.rope.name}): {len(out['positions'])} elements/nodes, "
+                               f"{out['unstretched_length']:.2f} m deployed")
 
     # -- stepping -------------------------------------------------------------------------
     def compute_step(self, inputs) -> None:
-        for topic, vessel in self.vessel_topics.items():
+        for topic in self.vessel_topics:
             msg = inputs.get(topic)
-            if msg is None:
-                continue
-            self._take_attachments(msg)
+            if msg is not None:
+                self._take_attachments(msg)
         for end in self.ends:
             if end.mode == "pinned":
-                self.rope.set_end_kinematics(end.label, end.position, end.velocity)
+                self.rope.set_end(end.label, end.position, end.velocity)
         order = inputs.get("winch")
         if order is not None:
             self.rope.set_payout_rate(order.payout_rate)
         try:
             self.rope.step(self.dt)
-        except RopeDivergedError as exc:
-            self.emit_event("rope_diverged", str(exc))
+        except ModelFailure as exc:
+            self.emit_event("rope_failed", str(exc))
             raise
-        for ev in self.rope.events[self.reported_events:]:
-            self.emit_event("rope_parted", f"rope parted at connection {ev.connection} (t = {ev.time:.3f} s) "
-                            f"with tension {ev.tension / 1e3:.1f} kN", ev.tension)
-        self.reported_events = len(self.rope.events)
+        for detail, tension in self.rope.new_events():
+            self.emit_event("rope_parted", detail, tension)
 
     def publish_outputs(self) -> None:
-        rope = self.rope
-        if rope is None:
+        if self.rope is None:
             return
         stamp = self.stamp()
-        st = RopeState(step=self.step_index, rope=self.rope_name, model="element_chain")
+        out = self.rope.outputs()
+        st = RopeState(step=self.step_index, rope=self.rope_name, model=self.rope.name)
         st.header.stamp = stamp
         st.header.frame_id = rc.WORLD_FRAME
-        X, E, V, W = rope.positions, rope.axes, rope.velocities, rope.angular_velocities
-        for i in range(rope.n_elements):
-            pose = Pose()
-            pose.position.x, pose.position.y, pose.position.z = map(float, X[i])
-            yaw = math.atan2(E[i, 1], E[i, 0])
-            pitch = math.atan2(-E[i, 2], math.hypot(E[i, 0], E[i, 1]))
-            pose.orientation = rc.quaternion_from_rpy((0.0, pitch, yaw))
-            st.element_poses.append(pose)
-            tw = Twist()
-            tw.linear.x, tw.linear.y, tw.linear.z = map(float, V[i])
-            tw.angular.x, tw.angular.y, tw.angular.z = map(float, W[i])
-            st.element_velocities.append(tw)
-        st.element_lengths = [float(v) for v in rope.lengths]
-        st.connection_tensions = [float(v) for v in rope.tensions]
-        st.piece_starts = [int(a) for a, _ in rope.pieces]
-        st.unstretched_length = rope.unstretched_length
-        joints = rope.joint_points()
-        st.stretched_length = float(np.linalg.norm(np.diff(joints, axis=0), axis=1).sum())
-        st.mass = rope.total_mass
+        n = len(out["positions"])
+        if len(self._poses) != n:  # element objects are reused while the count stays (cheaper)
+            self._poses = [Pose() for _ in range(n)]
+            self._twists = [Twist() for _ in range(n)]
+        for pose, tw, p, q, v, w in zip(self._poses, self._twists, np.asarray(out["positions"]).tolist(),
+                                        np.asarray(out["quaternions"]).tolist(),
+                                        np.asarray(out["velocities"]).tolist(),
+                                        np.asarray(out["angular_velocities"]).tolist()):
+            pose.position.x, pose.position.y, pose.position.z = p
+            pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
+            tw.linear.x, tw.linear.y, tw.linear.z = v
+            tw.angular.x, tw.angular.y, tw.angular.z = w
+        st.element_poses = self._poses
+        st.element_velocities = self._twists
+        st.element_lengths = [float(v) for v in out["lengths"]]
+        st.connection_tensions = [float(v) for v in out["tensions"]]
+        st.piece_starts = [int(a) for a in out["piece_starts"]]
+        st.unstretched_length = float(out["unstretched_length"])
+        line = np.asarray(out["line"])
+        st.stretched_length = float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum())
+        st.mass = float(out["mass"])
         forces = {}
         for end, vec in (("a", st.end_a_force), ("b", st.end_b_force)):
-            f = rope.mean_end_force(end) if self.step_index > 0 else rope.end_force(end)
-            forces[end] = f
-            vec.x, vec.y, vec.z = map(float, f)
-        st.broken = bool(rope.events)
+            forces[end] = self.rope.end_force(end, averaged=self.step_index > 0)
+            vec.x, vec.y, vec.z = map(float, forces[end])
+        st.broken = bool(out["broken"])
         self.state_pub.publish(st)
 
         for end in self.ends:
@@ -249,15 +250,16 @@ class RopeNode(SteppedNode):
             w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = map(float, f_body)
             self.wrench_pubs[end.label].publish(w)
 
-        self.marker_pub.publish(self._markers(joints, rope.tensions, stamp))
+        if self.step_index % self.marker_every == 0:
+            self.marker_pub.publish(self._markers(line, out["tensions"], stamp))
 
     def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp) -> MarkerArray:
         m = Marker(ns=self.rope_name, id=0, type=Marker.LINE_STRIP, action=Marker.ADD)
         m.header.stamp = stamp
         m.header.frame_id = rc.WORLD_FRAME
         m.pose.orientation.w = 1.0
-        m.scale.x = max(0.1, 2.0 * self.params.radius)
-        breaking = self.params.breaking_load
+        m.scale.x = max(0.1, 2.0 * self.rope.radius)
+        breaking = self.rope.breaking_load
         for p, t in zip(joints, tensions):
             m.points.append(Point(x=float(p[0]), y=float(p[1]), z=float(p[2])))
             # green (slack) -> yellow (half the breaking load) -> red (breaking load)
@@ -287,7 +289,7 @@ def main(args: Optional[List[str]] = None) -> int:
         rc.spin_forever(executor)
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
-    except RopeDivergedError as exc:
+    except ModelFailure as exc:
         sys.stderr.write(f"rope_node: {exc}\n")
         return 3
     finally:

@@ -100,7 +100,8 @@ def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
             m = v.motion
             params.update(motion=m.type, motion_speed=float(m.speed), motion_amplitude=float(m.amplitude),
                           motion_period=float(m.period), motion_acceleration=float(m.acceleration),
-                          motion_heading=m.heading)
+                          motion_heading=m.heading, motion_turn_rate=math.radians(m.turn_rate_deg),
+                          motion_turn_start=float(m.turn_start), motion_turn_duration=float(m.turn_duration))
         specs.append(NodeSpec(f"/{v.name}", "vessel", "tug_dynamics", "vessel_node", {**params, **common}))
     for r in sc.ropes:
         params = {"rope_file": resolve("rope_model", "ropes", r.rope_file, scenario_path),
@@ -173,6 +174,7 @@ class RunStats:
     overruns: int = 0  # realtime: steps finished after their wall-clock deadline
     lateness: List[float] = dataclasses.field(default_factory=list)  # realtime: s behind schedule per step
     round_trips: List[float] = dataclasses.field(default_factory=list)  # s from SimStep to last StepDone
+    compute_times: Dict[str, List[float]] = dataclasses.field(default_factory=dict)  # node -> s per step
 
 
 class Conductor(Node):
@@ -186,6 +188,7 @@ class Conductor(Node):
         self.expected = set(node_names)
         self.done: Dict[int, set] = {}
         self.failures: List[str] = []
+        self.compute_times: Dict[str, List[float]] = {n: [] for n in node_names}
         self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS)
         self.step_pub = self.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
@@ -202,6 +205,8 @@ class Conductor(Node):
         if not msg.ok:
             self.failures.append(f"{msg.node} failed at step {msg.step}: {msg.error}")
         self.done.setdefault(msg.step, set()).add(msg.node)
+        if msg.step > 0:
+            self.compute_times[msg.node].append(msg.compute_time)
 
     def _orders_by_step(self) -> Dict[int, List]:
         """Events merged per target and step: one order per namespace per step."""
@@ -325,8 +330,10 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         while conductor.done.get(step, set()) != conductor.expected:
             try:
                 executor.spin_once(timeout_sec=0.001)
+            except rclpy.executors.ExternalShutdownException:
+                raise  # Ctrl-C / SIGTERM: the caller finalises the recording
             except Exception as exc:  # an in-process node failed in its callback
-                raise RunError(f"a node failed while {what}: {exc}") from exc
+                raise RunError(f"a node failed while {what}: {exc!r}") from exc
             if conductor.failures:
                 raise RunError(conductor.failures[0])
             dead = procs.dead()
@@ -371,6 +378,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
             if on_step:
                 on_step(k + 1)
         stats.wall_time = time.monotonic() - t_start
+        stats.compute_times = conductor.compute_times
         conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
         # let the last messages reach subscribers in this process (recorder, summary)
         end = time.monotonic() + 0.3

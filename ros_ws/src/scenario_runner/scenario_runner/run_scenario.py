@@ -60,6 +60,9 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
     if stats.round_trips:
         lines.append(f"  step round trip: p50 {1e3 * cd.percentile(stats.round_trips, 50):.2f} ms, "
                      f"p99 {1e3 * cd.percentile(stats.round_trips, 99):.2f} ms")
+    if stats.compute_times:
+        lines.append("  compute per step: " + ", ".join(
+            f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
     if sc.mode == "realtime":
         lines.append(f"  realtime: {stats.overruns} overrun step(s); lateness p99 "
                      f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
@@ -85,6 +88,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument("--layout", choices=cd.LAYOUTS, default="processes",
                         help="processes: every node its own process (as `ros2 run` starts them); "
                              "one_process: all nodes in this process on one executor")
+    parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(rclpy.utilities.remove_ros_args(argv))
 
@@ -100,7 +104,7 @@ def main(argv: Optional[List[str]] = None) -> int:
 
     rclpy.init(args=argv)
     mon = Monitor([v.name for v in sc.vessels], [r.name for r in sc.ropes])
-    recorder = McapRecorder(output, cd.contract_topics(sc)) if sc.recording.enabled else None
+    recorder = McapRecorder(output, cd.contract_topics(sc)) if sc.recording.enabled and not args.no_record else None
     progress = None
     if not args.quiet:
         from tqdm import tqdm
@@ -113,8 +117,9 @@ def main(argv: Optional[List[str]] = None) -> int:
             progress.close()
         sys.stderr.write(f"run_scenario: run stopped: {exc}\n")
         return 3
-    except KeyboardInterrupt:
-        sys.stderr.write("run_scenario: interrupted; nodes stopped\n")
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        sys.stderr.write("run_scenario: interrupted; nodes stopped"
+                         + (f", partial recording finalised: {os.path.abspath(output)}" if recorder else "") + "\n")
         return 130
     finally:
         if progress:

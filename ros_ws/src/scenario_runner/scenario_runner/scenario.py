@@ -58,15 +58,20 @@ class InitialState(_Strict):
 
 class Motion(_Strict):
     """Prescribed motion (seed 000 section 4 tug tracks), in the initial frame."""
-    type: Literal["constant_speed", "sinusoidal_sway", "acceleration"]
+    type: Literal["constant_speed", "sinusoidal_sway", "acceleration", "turn"]
     speed: float = Field(ge=0.0, le=40.0)  # m/s, U or U_max
     amplitude: float = Field(0.0, ge=0.0)  # m
     period: float = Field(0.0, ge=0.0)  # s
     acceleration: float = Field(0.0, ge=0.0)  # m/s^2
     heading: Literal["track", "fixed"] = "track"
+    turn_rate_deg: float = 0.0  # deg/s, positive to port
+    turn_start: float = Field(0.0, ge=0.0)  # s
+    turn_duration: float = Field(0.0, ge=0.0)  # s
 
     @model_validator(mode="after")
     def _complete(self):
+        if self.type == "turn" and (self.turn_rate_deg == 0 or self.turn_duration <= 0):
+            raise ValueError("turn needs a non-zero turn_rate_deg and a positive turn_duration")
         if self.type == "sinusoidal_sway" and self.period <= 0:
             raise ValueError("sinusoidal_sway needs a positive period")
         if self.type == "acceleration" and self.acceleration <= 0:
@@ -238,7 +243,7 @@ def resolve(package: str, subdir: str, name: str, scenario_path: str) -> str:
 
 
 def _check_files(path: str, sc: Scenario) -> None:
-    from rope_model import load_rope_params
+    from rope_model.models import load_params as load_rope_params
     from tug_dynamics.ship_file import load_ship
     attachments = {}
     for i, v in enumerate(sc.vessels):

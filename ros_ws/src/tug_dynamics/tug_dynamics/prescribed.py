@@ -5,6 +5,9 @@ The track is written in the vessel's initial frame (x along the initial heading,
   constant_speed     x = U t
   sinusoidal_sway    x = U t,  y = A sin(2 pi t / T)          (seed 000 4.5: 2 kn, 10 m, 50 s)
   acceleration       x = a t^2 / 2 until U_max is reached, then U_max
+  turn               speed U straight, from turn_start a circular arc at turn_rate (positive
+                     to port) for turn_duration, then straight again (seed 001: 1 m/s,
+                     0.5 deg/s to port for 100 s)
 The heading follows the track tangent (heading: track) or keeps its initial value (heading:
 fixed). External wrenches are ignored; the attachment kinematics are exact derivatives.
 """
@@ -18,7 +21,7 @@ import numpy as np
 
 from tug_dynamics.vessel import Command, ExternalWrench, Vessel, VesselState
 
-MOTION_KINDS = ("constant_speed", "sinusoidal_sway", "acceleration")
+MOTION_KINDS = ("constant_speed", "sinusoidal_sway", "acceleration", "turn")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,13 +32,16 @@ class MotionLaw:
     period: float = 0.0  # s
     acceleration: float = 0.0  # m/s^2
     heading: str = "track"  # track | fixed
+    turn_rate: float = 0.0  # rad/s, positive to port
+    turn_start: float = 0.0  # s
+    turn_duration: float = 0.0  # s
 
     def __post_init__(self):
         def bad(key, what):
             raise ValueError(f"prescribed motion '{self.kind}': {key} {what}")
         if self.kind not in MOTION_KINDS:
             raise ValueError(f"prescribed motion: unknown type {self.kind!r}; expected one of {MOTION_KINDS}")
-        for key in ("speed", "amplitude", "period", "acceleration"):
+        for key in ("speed", "amplitude", "period", "acceleration", "turn_rate", "turn_start", "turn_duration"):
             if not math.isfinite(getattr(self, key)):
                 bad(key, f"must be finite, got {getattr(self, key)}")
         if self.heading not in ("track", "fixed"):
@@ -44,6 +50,8 @@ class MotionLaw:
             bad("period", f"must be positive, got {self.period}")
         if self.kind == "acceleration" and (self.acceleration <= 0 or self.speed <= 0):
             bad("acceleration/speed", f"must both be positive, got {self.acceleration}, {self.speed}")
+        if self.kind == "turn" and (self.turn_rate == 0 or self.turn_duration < 0 or self.turn_start < 0):
+            bad("turn_rate/turn_start/turn_duration", "need a non-zero rate and non-negative start and duration")
 
     def track(self, t: float):
         """Position, velocity, acceleration (x, y) in the initial frame at time t."""
@@ -53,12 +61,29 @@ class MotionLaw:
                 return (0.5 * self.acceleration * t * t, 0.0), (self.acceleration * t, 0.0), (self.acceleration, 0.0)
             x = 0.5 * self.acceleration * t_full ** 2 + self.speed * (t - t_full)
             return (x, 0.0), (self.speed, 0.0), (0.0, 0.0)
+        if self.kind == "turn":
+            return self._turn_track(t)
         x, vx = self.speed * t, self.speed
         if self.kind == "constant_speed":
             return (x, 0.0), (vx, 0.0), (0.0, 0.0)
         w = 2.0 * math.pi / self.period
         a = self.amplitude
         return (x, a * math.sin(w * t)), (vx, a * w * math.cos(w * t)), (0.0, -a * w * w * math.sin(w * t))
+
+
+    def _turn_track(self, t: float):
+        U, r, t0, T = self.speed, self.turn_rate, self.turn_start, self.turn_duration
+        if t <= t0:
+            return (U * t, 0.0), (U, 0.0), (0.0, 0.0)
+        tau = min(t - t0, T)
+        psi = r * tau
+        x = U * t0 + U / r * math.sin(psi)
+        y = U / r * (1.0 - math.cos(psi))
+        vx, vy = U * math.cos(psi), U * math.sin(psi)
+        if t - t0 <= T:
+            return (x, y), (vx, vy), (-r * vy, r * vx)
+        extra = t - t0 - T
+        return (x + vx * extra, y + vy * extra), (vx, vy), (0.0, 0.0)
 
 
 class PrescribedMotion(Vessel):

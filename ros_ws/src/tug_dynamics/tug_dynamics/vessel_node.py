@@ -52,13 +52,17 @@ class VesselNode(SteppedNode):
         self.declare_parameter("ship_overrides", "", rc.text_param(
             "YAML mapping merged over the ship file, e.g. \"{towline_simple: {enabled: true}}\""))
         self.declare_parameter("motion", "", rc.text_param(
-            "Prescribed motion instead of dynamics: '' (none), constant_speed, sinusoidal_sway, acceleration"))
+            "Prescribed motion instead of dynamics: '' (none), constant_speed, sinusoidal_sway, acceleration, turn"))
         self.declare_parameter("motion_speed", 0.0, rc.float_param(
             "Prescribed speed U (or U_max for acceleration)", 0.0, 40.0, "m/s"))
         self.declare_parameter("motion_amplitude", 0.0, rc.float_param("Sinusoidal sway amplitude", 0.0, 1e3, "m"))
         self.declare_parameter("motion_period", 0.0, rc.float_param("Sinusoidal sway period", 0.0, 1e4, "s"))
         self.declare_parameter("motion_acceleration", 0.0, rc.float_param("Prescribed acceleration", 0.0, 10.0,
                                                                           "m/s^2"))
+        self.declare_parameter("motion_turn_rate", 0.0, rc.float_param(
+            "Prescribed turn: rate, positive to port", -1.0, 1.0, "rad/s"))
+        self.declare_parameter("motion_turn_start", 0.0, rc.float_param("Prescribed turn: start time", 0.0, 1e6, "s"))
+        self.declare_parameter("motion_turn_duration", 0.0, rc.float_param("Prescribed turn: duration", 0.0, 1e6, "s"))
         self.declare_parameter("motion_heading", "track", rc.text_param(
             "Heading of a prescribed motion: track (follows the track tangent) or fixed"))
         self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
@@ -95,7 +99,10 @@ class VesselNode(SteppedNode):
                             amplitude=self.get_parameter("motion_amplitude").value,
                             period=self.get_parameter("motion_period").value,
                             acceleration=self.get_parameter("motion_acceleration").value,
-                            heading=self.get_parameter("motion_heading").value)
+                            heading=self.get_parameter("motion_heading").value,
+                            turn_rate=self.get_parameter("motion_turn_rate").value,
+                            turn_start=self.get_parameter("motion_turn_start").value,
+                            turn_duration=self.get_parameter("motion_turn_duration").value)
             self.model = PrescribedMotion(self.model, law)
         current = np.array([self.get_parameter("current_east").value, self.get_parameter("current_north").value, 0.0])
         if np.any(current) and hasattr(self.model, "set_current"):
@@ -177,41 +184,53 @@ class VesselNode(SteppedNode):
                                            moment_world=rot @ np.array([m.x, m.y, m.z])))
         self.model.step(self.dt, wrenches)
 
+    def _make_messages(self) -> None:
+        """Output messages built once and refilled every step (building them is most of a step's cost)."""
+        self._names = sorted(self.model.attachments)
+        self._points_body = np.array([self.model.attachments[n] for n in self._names], float).reshape(-1, 3)
+        self._odom = Odometry(child_frame_id=self.body_frame)
+        self._odom.header.frame_id = rc.WORLD_FRAME
+        self._attach = AttachmentArray(vessel=self.vessel_name,
+                                       points=[AttachmentPoint(name=n) for n in self._names])
+        self._attach.header.frame_id = rc.WORLD_FRAME
+        self._status = VesselStatus(vessel=self.vessel_name)
+        self._status.header.frame_id = self.body_frame
+
     def publish_outputs(self) -> None:
+        if not hasattr(self, "_odom"):
+            self._make_messages()
         stamp = self.stamp()
         s = self.model.state
         q = rc.quaternion_from_rpy(s.rpy)
-
-        odom = Odometry()
-        odom.header.stamp = stamp
-        odom.header.frame_id = rc.WORLD_FRAME
-        odom.child_frame_id = self.body_frame
-        odom.pose.pose.position.x, odom.pose.pose.position.y, odom.pose.pose.position.z = map(float, s.position)
-        odom.pose.pose.orientation = q
         v, w = s.linear_velocity_body, s.angular_velocity_body
-        odom.twist.twist.linear.x, odom.twist.twist.linear.y, odom.twist.twist.linear.z = map(float, v)
-        odom.twist.twist.angular.x, odom.twist.twist.angular.y, odom.twist.twist.angular.z = map(float, w)
+
+        odom = self._odom
+        odom.header.stamp = stamp
+        pose, twist = odom.pose.pose, odom.twist.twist
+        pose.position.x, pose.position.y, pose.position.z = s.position.tolist()
+        pose.orientation = q
+        twist.linear.x, twist.linear.y, twist.linear.z = v.tolist()
+        twist.angular.x, twist.angular.y, twist.angular.z = w.tolist()
         self.odom_pub.publish(odom)
 
-        arr = AttachmentArray()
+        # All attachment points at once: p = x + R r, v = R (v_b + w x r).
+        rot = rotation_body_to_world(s.rpy)
+        r = self._points_body
+        positions = s.position + r @ rot.T
+        velocities = (v + np.cross(w, r)) @ rot.T
+        arr = self._attach
         arr.header.stamp = stamp
-        arr.header.frame_id = rc.WORLD_FRAME
         arr.step = self.step_index
-        arr.vessel = self.vessel_name
-        for name in sorted(self.model.attachments):
-            pos, vel = self.model.attachment_kinematics(name)
-            p = AttachmentPoint(name=name, orientation=q)
-            p.position.x, p.position.y, p.position.z = map(float, pos)
-            p.velocity.x, p.velocity.y, p.velocity.z = map(float, vel)
-            arr.points.append(p)
+        for point, pos, vel in zip(arr.points, positions.tolist(), velocities.tolist()):
+            point.position.x, point.position.y, point.position.z = pos
+            point.velocity.x, point.velocity.y, point.velocity.z = vel
+            point.orientation = q
         self.attach_pub.publish(arr)
 
         st = self.model.status()
-        msg = VesselStatus()
+        msg = self._status
         msg.header.stamp = stamp
-        msg.header.frame_id = self.body_frame
         msg.step = self.step_index
-        msg.vessel = self.vessel_name
         msg.engine_order = float(st.get("engine_order", self.command.engine_order))
         msg.steering_angle_ordered = float(st.get("steering_angle_ordered", self.command.steering_angle))
         for key in ("steering_angle", "shaft_speed", "thrust", "speed_through_water", "heel", "trim", "rise",

@@ -1,0 +1,147 @@
+"""One face for every rope model, so the one rope node can run any rope file.
+
+The rope file's ``model:`` key picks the model: ``element_chain`` (seed 000, the default when
+the key is absent) or ``fd_cable`` (seed 001). Each adapter offers the same outputs in the
+world frame (ENU, m, m/s, N).
+"""
+from __future__ import annotations
+
+import math
+from typing import List, Optional
+
+import numpy as np
+import yaml
+
+from rope_model.chain import RopeChain, RopeDivergedError
+from rope_model.fd_cable import FdCable, FdCableConvergenceError, load_cable_params
+from rope_model.params import load_rope_params
+
+MODELS = ("element_chain", "fd_cable")
+# What a model raises when it cannot go on; the node reports it and stops.
+ModelFailure = (RopeDivergedError, FdCableConvergenceError)
+
+
+def rope_file_model(path: str) -> str:
+    with open(path) as f:
+        data = yaml.safe_load(f)
+    model = data.get("model", "element_chain") if isinstance(data, dict) else "element_chain"
+    if model not in MODELS:
+        raise ValueError(f"{path}: key 'model': expected one of {MODELS}, got {model!r}")
+    return model
+
+
+def yaw_pitch_quaternions(axes: np.ndarray) -> np.ndarray:
+    """(N, 4) quaternions (x, y, z, w) of R = Rz(yaw) Ry(pitch) with R e_x = axis (no roll)."""
+    axes = np.asarray(axes, float).reshape(-1, 3)
+    yaw = np.arctan2(axes[:, 1], axes[:, 0])
+    pitch = np.arctan2(-axes[:, 2], np.hypot(axes[:, 0], axes[:, 1]))
+    cy, sy, cp, sp = np.cos(yaw / 2), np.sin(yaw / 2), np.cos(pitch / 2), np.sin(pitch / 2)
+    return np.stack([-sy * sp, cy * sp, sy * cp, cy * cp], axis=1)
+
+
+class ChainAdapter:
+    """Seed 000 multi-body element chain."""
+
+    name = "element_chain"
+
+    def __init__(self, path: str, layout: str, p_a, p_b, *, end_a: str, end_b: str, current,
+                 n_elements: Optional[int], deployed_length: Optional[float], max_substep: float):
+        self.params = load_rope_params(path)
+        kw = dict(end_a=end_a, end_b=end_b, current=current)
+        if max_substep > 0:
+            kw["max_substep"] = max_substep
+        if layout == "straight":
+            self.rope = RopeChain.straight(self.params, p_a, p_b, n_elements=n_elements, **kw)
+        elif layout == "slack":
+            self.rope = RopeChain.slack(self.params, p_a, p_b, n_elements=n_elements, length=deployed_length, **kw)
+        else:
+            self.rope = RopeChain.wound_on_winch(self.params, p_a, p_b, deployed_length=deployed_length,
+                                                 n_elements=n_elements, **kw)
+        self.breaking_load = self.params.breaking_load
+        self.radius = self.params.radius
+        self.reported = 0
+
+    def set_end(self, label: str, position, velocity) -> None:
+        self.rope.set_end_kinematics(label, position, velocity)
+
+    def set_payout_rate(self, rate: float) -> None:
+        self.rope.set_payout_rate(rate)
+
+    def step(self, dt: float) -> None:
+        self.rope.step(dt)
+
+    def new_events(self) -> List[str]:
+        """Partings since the last call, as (description, tension N)."""
+        out = [(f"rope parted at connection {e.connection} (t = {e.time:.3f} s) with tension "
+                f"{e.tension / 1e3:.1f} kN", e.tension) for e in self.rope.events[self.reported:]]
+        self.reported = len(self.rope.events)
+        return out
+
+    def end_force(self, label: str, averaged: bool) -> np.ndarray:
+        return self.rope.mean_end_force(label) if averaged else self.rope.end_force(label)
+
+    def outputs(self):
+        r = self.rope
+        quats = yaw_pitch_quaternions(r.axes)
+        return dict(positions=r.positions, quaternions=quats, velocities=r.velocities,
+                    angular_velocities=r.angular_velocities, lengths=r.lengths, tensions=r.tensions,
+                    piece_starts=[a for a, _ in r.pieces], unstretched_length=r.unstretched_length,
+                    mass=r.total_mass, line=r.joint_points(), broken=bool(r.events))
+
+
+class CableAdapter:
+    """Seed 001 finite-difference towed cable: end a on the ship, end b free."""
+
+    name = "fd_cable"
+
+    def __init__(self, path: str, layout: str, p_a, p_b, *, end_a: str, end_b: str, current,
+                 n_elements: Optional[int], deployed_length: Optional[float], max_substep: float,
+                 velocity_a=(0.0, 0.0, 0.0), heading: float = 0.0):
+        if end_a == "free" or end_b != "free":
+            raise ValueError("an fd_cable rope has end a on a vessel (or fixed) and end b 'free' (seed 001 Eq 14-15)")
+        if layout != "straight":
+            raise ValueError("an fd_cable rope starts from its steady state: use layout 'straight'")
+        self.params = load_cable_params(path)
+        self.cable = FdCable(self.params, p_a, velocity_a, heading, n_nodes=n_elements,
+                             current=np.asarray(current, float))
+        self.breaking_load = float("inf")
+        self.radius = 0.5 * self.params.diameter
+
+    def set_end(self, label: str, position, velocity) -> None:
+        if label == "a":
+            self.cable.set_top_kinematics(position, velocity)
+
+    def set_payout_rate(self, rate: float) -> None:
+        raise ValueError("an fd_cable rope has no winch")
+
+    def step(self, dt: float) -> None:
+        self.cable.step(dt)
+
+    def new_events(self):
+        return []
+
+    def end_force(self, label: str, averaged: bool) -> np.ndarray:
+        return self.cable.top_force() if label == "a" else np.zeros(3)
+
+    def outputs(self):
+        c = self.cable
+        rot = c.rotations  # columns t, n, b in world; t points towards the towing point (end a)
+        quats = yaw_pitch_quaternions(rot[:, :, 0])
+        return dict(positions=c.positions, quaternions=quats, velocities=c.velocities,
+                    angular_velocities=c.angular_velocities, lengths=c.segment_lengths,
+                    tensions=np.maximum(c.tensions, 0.0), piece_starts=[0], unstretched_length=c.unstretched_length,
+                    mass=c.total_mass, line=c.positions, broken=False)
+
+
+def make_model(path: str, layout: str, p_a, p_b, **kw):
+    model = rope_file_model(path)
+    if model == "fd_cable":
+        return CableAdapter(path, layout, p_a, p_b, **kw)
+    kw.pop("velocity_a", None)
+    kw.pop("heading", None)
+    return ChainAdapter(path, layout, p_a, p_b, **kw)
+
+
+def load_params(path: str):
+    """Validated parameters of any rope file (errors name the file and the key)."""
+    return load_cable_params(path) if rope_file_model(path) == "fd_cable" else load_rope_params(path)

@@ -1,0 +1,666 @@
+"""Turn a recording into the papers' figures (PNG) and a summary (JSON + CSV).
+
+    ros2 run scenario_runner analyze output/default_demo.mcap [-o output/default_demo_analysis]
+
+Reads any MCAP recording that has the topic contract's topics (this project's recorder, a
+replay recorded again, rosbag2): /<vessel>/odom, /<vessel>/status, /<vessel>/command,
+/<rope>/state, /<rope>/end_a|end_b/wrench, /scenario/events; vessels and ropes are found by
+topic name and type. Time is the messages' header stamp (simulation time), so a re-recorded
+replay gives the same results as the original; duplicated stamps (a looped replay) are kept
+once. A truncated or corrupt file is reported (path, byte offset, what is wrong) and its
+readable part is analysed.
+
+Writes to the output directory (default: <recording without .mcap>_analysis/):
+  tracks.png           XY tracks (map frame, x east, y north) of every vessel and rope element
+                       (snapshots of each rope and the paths of selected elements)
+  yaw.png              yaw (heading) angle of every vessel, unwrapped, deg
+  speed_yaw_rate.png   speed over ground and yaw rate of every vessel
+  motions.png          speed, roll and pitch histories of every vessel (the planing-hull figure)
+  towline_tension.png  tension at end a and end b of every rope, kN
+  rope_heights.png     heights z of selected rope elements (and the lowest element) over time
+  rope_pitch.png       pitch angles of the same elements over time
+  turn_<vessel>.png    a turning manoeuvre: track in approach-course axes with advance, transfer,
+                       tactical diameter and the fitted steady circle
+  summary.json, summary.csv (entity, quantity, value, unit), vessel_<name>.csv, rope_<name>.csv
+
+The manoeuvre measures are defined in scenario_runner/analysis_measures.py (and docs/tools.md).
+Exit status: 0 done; 1 done on the readable part of a damaged file; 2 nothing to analyse.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import sys
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from scenario_runner.analysis_measures import turning_measures
+from scenario_runner.mcap_io import Decoder, McapFile, McapReadError
+
+EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
+EPOCH_LIKE = 1e8  # s: stamps beyond ~3 years are wall-clock (epoch) times, shown relative to the first
+
+
+def _stamp_ns(msg) -> int:
+    st = msg.header.stamp
+    return int(st.sec) * 1_000_000_000 + int(st.nanosec)
+
+
+def rpy_from_quaternion(qx, qy, qz, qw):
+    """Roll, pitch, yaw (arrays) of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103)."""
+    qx, qy, qz, qw = (np.asarray(a, float) for a in (qx, qy, qz, qw))
+    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    n[n == 0] = 1.0
+    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
+    roll = np.arctan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
+    pitch = np.arcsin(np.clip(2 * (qw * qy - qz * qx), -1.0, 1.0))
+    yaw = np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+    return roll, pitch, yaw
+
+
+class _Series:
+    """Samples of one topic: (stamp, log time, values) -> time-sorted arrays, duplicates dropped."""
+
+    def __init__(self):
+        self.stamps: List[int] = []
+        self.logs: List[int] = []
+        self.rows: List[object] = []
+
+    def add(self, stamp: int, log: int, row) -> None:
+        self.stamps.append(stamp)
+        self.logs.append(log)
+        self.rows.append(row)
+
+    def any_stamp(self) -> bool:
+        return any(s != 0 for s in self.stamps)
+
+    def order(self, use_stamps: bool):
+        """Indices in time order (header stamps, or log times for a file without stamps), the
+        last of equal times."""
+        if not self.rows:
+            return np.zeros(0, int), np.zeros(0)
+        t = np.asarray(self.stamps if use_stamps else self.logs, np.int64)
+        idx = np.argsort(t, kind="stable")
+        ts = t[idx]
+        keep = np.ones(ts.size, bool)
+        keep[:-1] = ts[1:] != ts[:-1]  # of equal stamps keep the last received
+        return idx[keep], ts[keep] * 1e-9
+
+
+class Recording:
+    """Everything the figures need, decoded from one MCAP file."""
+
+    def __init__(self, path: str, vessels: Optional[List[str]] = None, ropes: Optional[List[str]] = None):
+        self.path = path
+        self.file = McapFile(path)
+        self.decoder = Decoder()
+        self._odom: Dict[str, _Series] = {}
+        self._status: Dict[str, _Series] = {}
+        self._command: Dict[str, _Series] = {}
+        self._rope: Dict[str, _Series] = {}
+        self._wrench: Dict[str, Dict[str, _Series]] = {}
+        self.events: List[dict] = []
+        want_v = set(vessels) if vessels else None
+        want_r = set(ropes) if ropes else None
+        handlers = {}
+        for msg in self.file.messages():
+            ch = msg.channel
+            h = handlers.get(ch.id)
+            if h is None:
+                h = handlers[ch.id] = self._handler(ch.topic, ch.type_name, want_v, want_r)
+            if h is False:
+                continue
+            m = self.decoder.decode(msg)
+            if m is None:
+                continue
+            try:
+                h(m, msg.log_time)
+            except (AttributeError, TypeError, ValueError, IndexError) as exc:
+                self.decoder.notes.append(f"{ch.topic}: message not usable ({exc})")
+        self._finish()
+
+    # -- reading --------------------------------------------------------------------------
+    def _handler(self, topic: str, tname: str, want_v, want_r):
+        short = tname.replace("/msg/", "/")
+        m = re.fullmatch(r"/(.+)/(odom|status|command)", topic)
+        if m and (want_v is None or m.group(1) in want_v):
+            name, kind = m.groups()
+            if kind == "odom" and short == "nav_msgs/Odometry":
+                s = self._odom.setdefault(name, _Series())
+                return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, self._odom_row(msg))
+            if kind == "status" and short == "tug_msgs/VesselStatus":
+                s = self._status.setdefault(name, _Series())
+                return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [
+                    msg.engine_order, msg.steering_angle_ordered, msg.steering_angle, msg.shaft_speed, msg.thrust,
+                    msg.speed_through_water, msg.heel, msg.trim, msg.rise, msg.girting_ratio])
+            if kind == "command" and short == "tug_msgs/VesselCommand":
+                s = self._command.setdefault(name, _Series())
+                return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [msg.engine_order, msg.steering_angle])
+        m = re.fullmatch(r"/(.+)/state", topic)
+        if m and short == "tug_msgs/RopeState" and (want_r is None or m.group(1) in want_r):
+            s = self._rope.setdefault(m.group(1), _Series())
+            return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, self._rope_row(msg))
+        m = re.fullmatch(r"/(.+)/end_([ab])/wrench", topic)
+        if m and short == "geometry_msgs/WrenchStamped" and (want_r is None or m.group(1) in want_r):
+            s = self._wrench.setdefault(m.group(1), {}).setdefault(m.group(2), _Series())
+            return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [math.sqrt(
+                msg.wrench.force.x ** 2 + msg.wrench.force.y ** 2 + msg.wrench.force.z ** 2)])
+        if topic == "/scenario/events" and short == "tug_msgs/ScenarioEvent":
+            return lambda msg, log: self.events.append({
+                "stamp_ns": _stamp_ns(msg), "step": int(msg.step), "source": msg.source, "kind": msg.kind,
+                "target": msg.target, "detail": msg.detail,
+                "value": None if not math.isfinite(msg.value) else float(msg.value)})
+        return False
+
+    @staticmethod
+    def _odom_row(msg):
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
+        return [p.x, p.y, p.z, q.x, q.y, q.z, q.w, lin.x, lin.y, lin.z, ang.x, ang.y, ang.z]
+
+    @staticmethod
+    def _rope_row(msg):
+        poses = msg.element_poses
+        n = len(poses)
+        pos = np.empty((n, 3))
+        quat = np.empty((n, 4))
+        for i, pose in enumerate(poses):
+            pp, qq = pose.position, pose.orientation
+            pos[i] = (pp.x, pp.y, pp.z)
+            quat[i] = (qq.x, qq.y, qq.z, qq.w)
+        fa, fb = msg.end_a_force, msg.end_b_force
+        tens = np.asarray(msg.connection_tensions, float)
+        return {"pos": pos, "quat": quat, "tension_a": math.sqrt(fa.x ** 2 + fa.y ** 2 + fa.z ** 2),
+                "tension_b": math.sqrt(fb.x ** 2 + fb.y ** 2 + fb.z ** 2), "broken": bool(msg.broken),
+                "max_tension": float(tens.max()) if tens.size else math.nan,
+                "stretched": float(msg.stretched_length), "unstretched": float(msg.unstretched_length)}
+
+    def _finish(self) -> None:
+        """Arrays per vessel / rope on a common time origin."""
+        firsts = []
+        built = {}
+        every = [s for table in (self._odom, self._status, self._command, self._rope) for s in table.values()]
+        every += [s for ends in self._wrench.values() for s in ends.values()]
+        # header stamps (simulation time) unless no message of the file has one
+        self.time_source = "header stamps" if any(s.any_stamp() for s in every) else "log times"
+        use = self.time_source == "header stamps"
+        for kind, table in (("odom", self._odom), ("status", self._status), ("command", self._command),
+                            ("rope", self._rope)):
+            for name, s in table.items():
+                idx, t = s.order(use)
+                built[(kind, name)] = (idx, t, s)
+                if t.size:
+                    firsts.append(t[0])
+        for name, ends in self._wrench.items():
+            for end, s in ends.items():
+                idx, t = s.order(use)
+                built[("wrench_" + end, name)] = (idx, t, s)
+                if t.size:
+                    firsts.append(t[0])
+        self.t_ref = min(firsts) if firsts and min(firsts) > EPOCH_LIKE else 0.0
+        self.vessels: Dict[str, Dict[str, np.ndarray]] = {}
+        self.ropes: Dict[str, Dict[str, object]] = {}
+        for (kind, name), (idx, t, s) in built.items():
+            if not idx.size:
+                continue
+            t = t - self.t_ref
+            if kind == "odom":
+                a = np.asarray([s.rows[i] for i in idx], float)
+                roll, pitch, yaw = rpy_from_quaternion(a[:, 3], a[:, 4], a[:, 5], a[:, 6])
+                v = self.vessels.setdefault(name, {})
+                v.update(t=t, x=a[:, 0], y=a[:, 1], z=a[:, 2], roll=roll, pitch=pitch, yaw=yaw,
+                         u=a[:, 7], v=a[:, 8], w=a[:, 9], p=a[:, 10], q=a[:, 11], r=a[:, 12])
+                v["speed"] = np.hypot(v["u"], v["v"])
+                v["yaw_unwrapped"] = np.unwrap(yaw)
+            elif kind in ("status", "command"):
+                a = np.asarray([s.rows[i] for i in idx], float)
+                self.vessels.setdefault(name, {})[kind] = {"t": t, "data": a}
+            elif kind == "rope":
+                rows = [s.rows[i] for i in idx]
+                rope = self.ropes.setdefault(name, {})
+                rope.update(t=t, pos=[r["pos"] for r in rows],
+                            pitch=[rpy_from_quaternion(*r["quat"].T)[1] if len(r["quat"]) else np.zeros(0)
+                                   for r in rows],
+                            tension_a=np.array([r["tension_a"] for r in rows]),
+                            tension_b=np.array([r["tension_b"] for r in rows]),
+                            max_tension=np.array([r["max_tension"] for r in rows]),
+                            broken=np.array([r["broken"] for r in rows]),
+                            stretched=np.array([r["stretched"] for r in rows]),
+                            unstretched=np.array([r["unstretched"] for r in rows]))
+                rope["min_z"] = np.array([p[:, 2].min() if len(p) else math.nan for p in rope["pos"]])
+            else:
+                a = np.asarray([s.rows[i][0] for i in idx], float)
+                self.ropes.setdefault(name, {})[kind] = {"t": t, "tension": a}
+        self.vessels = {k: v for k, v in self.vessels.items() if "t" in v}  # vessels need odom
+        for ev in self.events:
+            ev["time"] = ev["stamp_ns"] * 1e-9 - self.t_ref
+        self.events.sort(key=lambda e: e["stamp_ns"])
+
+    # -- manoeuvres -----------------------------------------------------------------------
+    def steering_orders(self, name: str):
+        """(times, steering angles) of the helm orders given to a vessel: from its command topic
+        (order stamps), else from its status topic (the time of the last state before the held
+        order changed)."""
+        v = self.vessels[name]
+        if "command" in v and v["command"]["t"].size:
+            return v["command"]["t"], v["command"]["data"][:, 1]
+        if "status" in v and v["status"]["t"].size:
+            t, d = v["status"]["t"], v["status"]["data"][:, 1]
+            change = np.nonzero(np.abs(np.diff(d)) > 1e-9)[0]
+            return np.concatenate([[t[0]], t[change]]), np.concatenate([[d[0]], d[change + 1]])
+        return np.zeros(0), np.zeros(0)
+
+    def find_turn(self, name: str, min_steering_deg: float = 1.0):
+        """(t0, t1) of the first turn: from the first helm order of at least min_steering_deg
+        to the next change of the helm order (or the end of the data); None if there is none."""
+        t, d = self.steering_orders(name)
+        prev = 0.0
+        for i in range(t.size):
+            if abs(d[i]) >= math.radians(min_steering_deg) and abs(d[i] - prev) > 1e-9:
+                later = np.nonzero(np.abs(d[i + 1:] - d[i]) > 1e-9)[0]
+                t1 = float(t[i + 1 + later[0]]) if later.size else float(self.vessels[name]["t"][-1])
+                return float(t[i]), t1
+            prev = d[i]
+        return None
+
+
+# ---------------------------------------------------------------------------------------
+# Figures
+# ---------------------------------------------------------------------------------------
+def _element_picks(n: int, k: int) -> List[int]:
+    if n <= 0:
+        return []
+    return sorted(set(int(round(f * (n - 1))) for f in np.linspace(0.0, 1.0, min(k, n))))
+
+
+def _rope_element_series(rope: dict, k: int, key: str):
+    """Values of elements at fixed fractions along the rope (index by the current element count)."""
+    fracs = np.linspace(0.0, 1.0, k)
+    out = np.full((len(rope["t"]), k), np.nan)
+    for j, arr in enumerate(rope["pos"] if key == "z" else rope["pitch"]):
+        n = len(arr)
+        if not n:
+            continue
+        idx = np.round(fracs * (n - 1)).astype(int)
+        out[j] = arr[idx, 2] if key == "z" else arr[idx]
+    return fracs, out
+
+
+def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int = 6, dpi: int = 110,
+                 turns: Optional[Dict[str, dict]] = None) -> List[str]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    files: List[str] = []
+
+    def save(fig, name):
+        path = os.path.join(out_dir, name)
+        fig.tight_layout()
+        fig.savefig(path, dpi=dpi)
+        plt.close(fig)
+        files.append(path)
+
+    deg = math.degrees
+    title = os.path.basename(rec.path)
+    if rec.vessels or rec.ropes:
+        fig, ax = plt.subplots(figsize=(8, 7))
+        for name, v in rec.vessels.items():
+            line, = ax.plot(v["x"], v["y"], lw=1.6, label=f"{name}")
+            ax.plot(v["x"][0], v["y"][0], "o", color=line.get_color(), ms=4)
+            for j in np.linspace(0, len(v["t"]) - 1, snapshots).astype(int):  # heading arrows
+                ax.annotate("", xy=(v["x"][j] + 8 * math.cos(v["yaw"][j]), v["y"][j] + 8 * math.sin(v["yaw"][j])),
+                            xytext=(v["x"][j], v["y"][j]), arrowprops=dict(arrowstyle="->", color=line.get_color()))
+        for name, rope in rec.ropes.items():
+            if "pos" not in rope or not len(rope["t"]):
+                continue
+            cmap = plt.get_cmap("viridis")
+            js = np.linspace(0, len(rope["t"]) - 1, snapshots).astype(int)
+            for c, j in enumerate(js):
+                p = rope["pos"][j]
+                if len(p):
+                    ax.plot(p[:, 0], p[:, 1], ".-", ms=2, lw=0.8, color=cmap(c / max(1, len(js) - 1)),
+                            label=f"{name} elements t={rope['t'][j]:.0f} s")
+            fr, _ = _rope_element_series(rope, 3, "z")
+            for f in fr:
+                xs = [p[int(round(f * (len(p) - 1))), 0] if len(p) else np.nan for p in rope["pos"]]
+                ys = [p[int(round(f * (len(p) - 1))), 1] if len(p) else np.nan for p in rope["pos"]]
+                ax.plot(xs, ys, ":", lw=0.8, color="gray")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x east (m)")
+        ax.set_ylabel("y north (m)")
+        ax.set_title(f"XY tracks (map frame): {title}")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+        save(fig, "tracks.png")
+    if rec.vessels:
+        fig, ax = plt.subplots(figsize=(8, 4))
+        for name, v in rec.vessels.items():
+            ax.plot(v["t"], np.degrees(v["yaw_unwrapped"]), label=name)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("yaw (deg, unwrapped, + to port)")
+        ax.set_title("Yaw angles")
+        ax.grid(alpha=0.3)
+        ax.legend()
+        save(fig, "yaw.png")
+
+        fig, axs = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+        for name, v in rec.vessels.items():
+            axs[0].plot(v["t"], v["speed"], label=name)
+            axs[1].plot(v["t"], np.degrees(v["r"]), label=name)
+        axs[0].set_ylabel("speed over ground (m/s)")
+        axs[1].set_ylabel("yaw rate (deg/s)")
+        axs[1].set_xlabel("time (s)")
+        for a in axs:
+            a.grid(alpha=0.3)
+            a.legend()
+        axs[0].set_title("Speed and yaw rate")
+        save(fig, "speed_yaw_rate.png")
+
+        risers = {n: v["status"] for n, v in rec.vessels.items()
+                  if "status" in v and np.any(v["status"]["data"][:, 8] != 0.0)}  # planing hulls
+        rows = 4 if risers else 3
+        fig, axs = plt.subplots(rows, 1, figsize=(8, 2.7 * rows), sharex=True)
+        for name, v in rec.vessels.items():
+            axs[0].plot(v["t"], v["speed"], label=name)
+            axs[1].plot(v["t"], np.degrees(v["roll"]), label=name)
+            axs[2].plot(v["t"], np.degrees(v["pitch"]), label=name)
+        for name, st in risers.items():
+            axs[3].plot(st["t"], st["data"][:, 8], label=name)
+            axs[3].set_ylabel("rise (m)")
+        axs[0].set_ylabel("speed (m/s)")
+        axs[1].set_ylabel("roll (deg, + stbd down)")
+        axs[2].set_ylabel("pitch (deg, + bow down)")
+        axs[-1].set_xlabel("time (s)")
+        for a in axs:
+            a.grid(alpha=0.3)
+            a.legend()
+        axs[0].set_title("Speed, roll and pitch histories")
+        save(fig, "motions.png")
+
+    ropes = {n: r for n, r in rec.ropes.items() if "t" in r or "wrench_a" in r or "wrench_b" in r}
+    if ropes:
+        fig, axs = plt.subplots(len(ropes), 1, figsize=(8, 3.5 * len(ropes)), squeeze=False)
+        for a, (name, rope) in zip(axs[:, 0], ropes.items()):
+            if "t" in rope:
+                a.plot(rope["t"], rope["tension_a"] / 1e3, label=f"{name} end a")
+                a.plot(rope["t"], rope["tension_b"] / 1e3, "--", label=f"{name} end b")
+            else:
+                for end in ("a", "b"):
+                    if f"wrench_{end}" in rope:
+                        w = rope[f"wrench_{end}"]
+                        a.plot(w["t"], w["tension"] / 1e3, label=f"{name} end {end} (wrench)")
+            a.set_ylabel("tension (kN)")
+            a.grid(alpha=0.3)
+            a.legend()
+        axs[-1, 0].set_xlabel("time (s)")
+        axs[0, 0].set_title("Towline tension at both ends")
+        save(fig, "towline_tension.png")
+    chains = {n: r for n, r in rec.ropes.items() if "pos" in r and len(r["t"])}
+    if chains:
+        for key, fname, ylabel, ttl in (("z", "rope_heights.png", "element height z (m)", "Rope element heights"),
+                                        ("pitch", "rope_pitch.png", "element pitch (deg, + axis down to end a)",
+                                         "Rope element pitch angles")):
+            fig, axs = plt.subplots(len(chains), 1, figsize=(8, 3.8 * len(chains)), squeeze=False)
+            for a, (name, rope) in zip(axs[:, 0], chains.items()):
+                fracs, vals = _rope_element_series(rope, elements, key)
+                for i, f in enumerate(fracs):
+                    y = vals[:, i] if key == "z" else np.degrees(vals[:, i])
+                    a.plot(rope["t"], y, lw=1, label=f"{name} element at {f:.2f} of length (end a = 0)")
+                if key == "z":
+                    a.plot(rope["t"], rope["min_z"], "k--", lw=1, label=f"{name} lowest element")
+                a.set_ylabel(ylabel)
+                a.grid(alpha=0.3)
+                a.legend(fontsize=7)
+            axs[-1, 0].set_xlabel("time (s)")
+            axs[0, 0].set_title(ttl)
+            save(fig, fname)
+    for name, m in (turns or {}).items():
+        if "_along" not in m:
+            continue
+        fig, ax = plt.subplots(figsize=(7, 7))
+        ax.plot(m["_across"], m["_along"], lw=1.5, label=f"{name} track from execute (t0 = {m['t0']:.1f} s)")
+        if math.isfinite(m.get("advance", math.nan)):
+            ax.plot([m["transfer"]], [m["advance"]], "o", label=f"90 deg: advance {m['advance']:.1f} m, "
+                                                                 f"transfer {m['transfer']:.1f} m")
+        if math.isfinite(m.get("tactical_diameter", math.nan)):
+            j = int(np.argmax(m["_dpsi"] >= math.pi))
+            ax.plot([m["tactical_diameter"]], [m["_along"][j]], "s",
+                    label=f"180 deg: tactical diameter {m['tactical_diameter']:.1f} m")
+        if math.isfinite(m.get("steady_diameter", math.nan)):
+            psi0, x0, y0 = m["_psi0"], m["_x0"], m["_y0"]
+            c, s, side = math.cos(psi0), math.sin(psi0), m["turn_direction"]
+            dx, dy = m["steady_centre_x"] - x0, m["steady_centre_y"] - y0
+            ca, cx = c * dx + s * dy, side * (-s * dx + c * dy)
+            ang = np.linspace(0, 2 * math.pi, 200)
+            rr = m["steady_diameter"] / 2
+            ax.plot(cx + rr * np.cos(ang), ca + rr * np.sin(ang), "k:", lw=1,
+                    label=f"steady circle: D = {m['steady_diameter']:.1f} m")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("transfer direction: across the approach course, towards the turn (m)")
+        ax.set_ylabel("advance direction: along the approach course (m)")
+        ax.set_title(f"Turning manoeuvre of {name}")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        save(fig, f"turn_{name}.png")
+    return files
+
+
+# ---------------------------------------------------------------------------------------
+# Summary
+# ---------------------------------------------------------------------------------------
+def _clean(value):
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items() if not k.startswith("_")}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+TURN_UNITS = {"t0": "s", "t1": "s", "approach_speed": "m/s", "approach_heading": "rad", "turn_direction": "1",
+              "heading_change": "rad", "advance": "m", "transfer": "m", "time_to_90": "s",
+              "tactical_diameter": "m", "time_to_180": "s", "steady_window_from": "rad",
+              "steady_window_span": "rad", "steady_diameter": "m", "steady_centre_x": "m", "steady_centre_y": "m",
+              "steady_fit_rms": "m", "steady_speed": "m/s", "steady_yaw_rate": "rad/s", "steady_drift_angle": "rad",
+              "steady_diameter_kinematic": "m", "speed_loss": "1", "steady_t_start": "s"}
+
+
+def summarise(rec: Recording, turns: Dict[str, dict]) -> dict:
+    vessels = {}
+    for name, v in rec.vessels.items():
+        d = np.hypot(np.diff(v["x"]), np.diff(v["y"])).sum() if len(v["t"]) > 1 else 0.0
+        vs = {"samples": int(len(v["t"])), "t_start": v["t"][0], "t_end": v["t"][-1],
+              "x_start": v["x"][0], "y_start": v["y"][0], "x_end": v["x"][-1], "y_end": v["y"][-1],
+              "yaw_start": v["yaw"][0], "yaw_end": v["yaw"][-1],
+              "heading_change": v["yaw_unwrapped"][-1] - v["yaw_unwrapped"][0], "distance_run": d,
+              "speed_max": v["speed"].max(), "speed_mean": v["speed"].mean(), "speed_end": v["speed"][-1],
+              "yaw_rate_max_abs": np.abs(v["r"]).max(), "roll_max_abs": np.abs(v["roll"]).max(),
+              "pitch_max": v["pitch"].max(), "pitch_min": v["pitch"].min()}
+        if "status" in v:
+            st = v["status"]["data"]
+            vs["girting_ratio_max"] = st[:, 9].max()
+            vs["rise_max"] = st[:, 8].max()
+        if name in turns:
+            vs["turn"] = turns[name]
+        vessels[name] = vs
+    ropes = {}
+    for name, r in rec.ropes.items():
+        rs: Dict[str, object] = {}
+        if "t" in r:
+            broken = np.nonzero(r["broken"])[0]
+            rs.update(samples=int(len(r["t"])), tension_a_max=r["tension_a"].max(), tension_a_mean=r["tension_a"].mean(),
+                      tension_b_max=r["tension_b"].max(), tension_b_mean=r["tension_b"].mean(),
+                      tension_max_anywhere=np.nanmax(r["max_tension"]) if np.isfinite(r["max_tension"]).any() else None,
+                      min_element_height=np.nanmin(r["min_z"]) if np.isfinite(r["min_z"]).any() else None,
+                      max_abs_element_pitch=max((float(np.abs(p).max()) for p in r["pitch"] if len(p)), default=None),
+                      elements_start=len(r["pos"][0]), elements_end=len(r["pos"][-1]),
+                      stretched_length_end=r["stretched"][-1], unstretched_length_end=r["unstretched"][-1],
+                      broken=bool(broken.size), broken_at=float(r["t"][broken[0]]) if broken.size else None)
+        for end in ("a", "b"):
+            if f"wrench_{end}" in r:
+                rs[f"wrench_{end}_max"] = r[f"wrench_{end}"]["tension"].max()
+        ropes[name] = rs
+    f = rec.file
+    return _clean({
+        "recording": os.path.abspath(rec.path),
+        "file": {"bytes": f.size, "complete": f.complete, "messages_read": f.message_count,
+                 "problems": [str(p) for p in f.problems], "log_time_start": (f.start_time or 0) * 1e-9,
+                 "log_time_end": (f.end_time or 0) * 1e-9, "undecodable_messages": rec.decoder.errors,
+                 "notes": sorted(set(rec.decoder.notes))},
+        "time_reference": rec.t_ref, "time_source": rec.time_source,
+        "vessels": vessels, "ropes": ropes,
+        "events": [{k: v for k, v in e.items() if k != "stamp_ns"} for e in rec.events],
+    })
+
+
+def _units(key: str) -> str:
+    if key in TURN_UNITS:
+        return TURN_UNITS[key]
+    for pat, unit in (("tension|wrench", "N"), ("speed", "m/s"), ("yaw_rate", "rad/s"), ("yaw|roll|pitch|heading", "rad"),
+                      ("^t_|_at$", "s"), ("^[xy]_|distance|length|height|rise", "m")):
+        if re.search(pat, key):
+            return unit
+    return ""
+
+
+def write_csvs(rec: Recording, summary: dict, out_dir: str) -> List[str]:
+    files = []
+    path = os.path.join(out_dir, "summary.csv")
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["entity", "quantity", "value", "unit"])
+        for kind in ("vessels", "ropes"):
+            for name, vals in summary[kind].items():
+                for k, val in vals.items():
+                    if k == "turn":
+                        for tk, tv in val.items():
+                            if tk != "notes":
+                                w.writerow([f"{kind[:-1]}/{name}", f"turn.{tk}", "" if tv is None else tv, _units(tk)])
+                    else:
+                        w.writerow([f"{kind[:-1]}/{name}", k, "" if val is None else val, _units(k)])
+    files.append(path)
+    for name, v in rec.vessels.items():
+        path = os.path.join(out_dir, f"vessel_{name}.csv")
+        cols = ["t", "x", "y", "z", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r", "speed"]
+        np.savetxt(path, np.column_stack([v[c] for c in cols]), delimiter=",", header=",".join(cols),
+                   comments="", fmt="%.9g")
+        files.append(path)
+    for name, r in rec.ropes.items():
+        if "t" not in r:
+            continue
+        path = os.path.join(out_dir, f"rope_{name}.csv")
+        cols = ["t", "tension_a", "tension_b", "max_tension", "min_z", "stretched", "unstretched", "broken"]
+        np.savetxt(path, np.column_stack([np.asarray(r[c], float) for c in cols]), delimiter=",",
+                   header=",".join(cols), comments="", fmt="%.9g")
+        files.append(path)
+    return files
+
+
+def analyse_turns(rec: Recording, turn_start: Optional[float], turn_end: Optional[float],
+                  steady_from_deg: float) -> Dict[str, dict]:
+    turns = {}
+    for name, v in rec.vessels.items():
+        if turn_start is not None:
+            span = (turn_start, turn_end if turn_end is not None else float(v["t"][-1]))
+        else:
+            span = rec.find_turn(name)
+            if span and turn_end is not None:
+                span = (span[0], turn_end)
+        if span is None or len(v["t"]) < 3:
+            continue
+        m = turning_measures(v["t"], v["x"], v["y"], v["yaw"], v["u"], v["v"], v["r"], span[0], span[1],
+                             steady_from_deg)
+        if "_along" in m:
+            m["_psi0"] = float(np.interp(span[0], v["t"], v["yaw_unwrapped"]))
+            m["_x0"], m["_y0"] = float(np.interp(span[0], v["t"], v["x"])), float(np.interp(span[0], v["t"], v["y"]))
+        if m.get("heading_change", 0.0) and abs(m["heading_change"]) >= math.radians(10) or turn_start is not None:
+            turns[name] = m
+    return turns
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="analyze", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog="Exit status: 0 done; 1 damaged file, its readable part analysed; "
+                                       "2 nothing to analyse.")
+    p.add_argument("recording", help="MCAP file")
+    p.add_argument("-o", "--output", help="output directory (default: <recording>_analysis next to the file)")
+    p.add_argument("--vessels", nargs="+", help="only these vessels (namespaces); default: every /<name>/odom")
+    p.add_argument("--ropes", nargs="+", help="only these ropes; default: every /<name>/state")
+    p.add_argument("--turn-start", type=float, metavar="S", help="execute time of the turn (simulation s); "
+                   "default: the first helm order of >= 1 deg found on the command or status topic")
+    p.add_argument("--turn-end", type=float, metavar="S", help="end of the turn; default: next helm order or the end")
+    p.add_argument("--steady-from-deg", type=float, default=180.0,
+                   help="heading change before which the turn is never taken as steady (default 180)")
+    p.add_argument("--elements", type=int, default=5, help="rope elements per height/pitch figure (default 5)")
+    p.add_argument("--snapshots", type=int, default=6, help="rope shapes drawn in the XY figure (default 6)")
+    p.add_argument("--dpi", type=int, default=110)
+    p.add_argument("--no-figures", action="store_true", help="only the summary files")
+    p.add_argument("--quiet", action="store_true")
+    return p
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser().parse_args(argv)
+    say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
+    try:
+        rec = Recording(args.recording, args.vessels, args.ropes)
+    except McapReadError as exc:
+        sys.stderr.write(f"analyze: {exc}\n")
+        return EXIT_NOTHING
+    f = rec.file
+    if f.problems:
+        sys.stderr.write(f"analyze: the recording is damaged; analysing its readable part:\n{f.report()}\n")
+    for note in sorted(set(rec.decoder.notes)):
+        sys.stderr.write(f"analyze: {note}\n")
+    if not rec.vessels and not rec.ropes:
+        sys.stderr.write(f"analyze: {args.recording}: no contract topics with readable messages (/<vessel>/odom "
+                         f"nav_msgs/Odometry, /<rope>/state tug_msgs/RopeState); nothing to analyse\n")
+        return EXIT_NOTHING
+    out_dir = args.output or os.path.splitext(os.path.abspath(args.recording))[0] + "_analysis"
+    os.makedirs(out_dir, exist_ok=True)
+    turns = analyse_turns(rec, args.turn_start, args.turn_end, args.steady_from_deg)
+    summary = summarise(rec, turns)
+    figures = [] if args.no_figures else make_figures(rec, out_dir, args.elements, args.snapshots, args.dpi, turns)
+    summary["figures"] = figures
+    path = os.path.join(out_dir, "summary.json")
+    with open(path, "w") as fh:
+        json.dump(summary, fh, indent=1, allow_nan=False)
+    files = [path] + write_csvs(rec, summary, out_dir)
+
+    say(f"analyze: {os.path.abspath(args.recording)}: {f.message_count} messages"
+        + (" (DAMAGED FILE: readable part only)" if f.problems else ""))
+    for name, v in summary["vessels"].items():
+        say(f"  vessel {name}: {v['samples']} states, {v['t_start']:.1f} .. {v['t_end']:.1f} s, distance "
+            f"{v['distance_run']:.1f} m, max speed {v['speed_max']:.2f} m/s")
+        t = v.get("turn")
+        if t:
+            fmt = lambda k, scale=1.0: "-" if t.get(k) is None else f"{t[k] * scale:.1f}"  # noqa: E731
+            say(f"    turn from t0 = {t['t0']:.1f} s ({'port' if t.get('turn_direction', 1) > 0 else 'starboard'}): "
+                f"advance {fmt('advance')} m, transfer {fmt('transfer')} m, tactical diameter "
+                f"{fmt('tactical_diameter')} m, steady diameter {fmt('steady_diameter')} m (2U/r "
+                f"{fmt('steady_diameter_kinematic')} m), steady speed {fmt('steady_speed', 1.0)} m/s, "
+                f"yaw rate {fmt('steady_yaw_rate', 180 / math.pi)} deg/s"
+                + (f"; {t['notes']}" if t.get("notes") else ""))
+    for name, r in summary["ropes"].items():
+        if "tension_a_max" in r:
+            say(f"  rope {name}: max tension end a {r['tension_a_max'] / 1e3:.1f} kN, end b "
+                f"{r['tension_b_max'] / 1e3:.1f} kN, lowest element z {r['min_element_height']:.2f} m"
+                + (f", parted at {r['broken_at']:.1f} s" if r.get("broken") else ""))
+    say(f"  wrote {len(figures)} figure(s) and {len(files)} summary file(s) to {out_dir}")
+    return EXIT_DAMAGED if f.problems else EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,207 @@
+"""Issue 7 acceptance, analysis (`analyze`, scenario_runner/analysis.py):
+
+- a turning recording (harbour tug, engine order 0.6, 20 deg helm from rest, 120 s at 20 Hz)
+  gives the steady turning diameter the vessel library measures: the analysis of the MCAP
+  file is compared with an independent run of tug_dynamics (load_ship + the same dt and
+  commands) measured two ways in this test: its own least-squares circle over the last
+  revolution (tolerance 0.5 %) and the library's turning_metrics (2 U / r over the last 20 %,
+  tolerance 1 %); advance, transfer and tactical diameter against turning_metrics within 0.5 m;
+- the figures render: every PNG exists and is a non-trivial image (size, pixel spread, share
+  of non-background pixels), for a towing recording with a rope (default demo, 10 s);
+- bad input: a recording cut in the middle is reported with its path and "truncated" (exit
+  status 1) and its readable part is still analysed (same turn measures as the full file); a
+  file damaged in the middle is reported and the messages after the damage are analysed; a
+  file that is not MCAP is refused with its path (exit status 2).
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import executable_path
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(180)]
+
+TURN_SCENARIO = """\
+name: tug_turn_test
+description: "harbour tug, engine 0.6 and 20 deg helm to port from rest, 120 s"
+duration: 120.0
+exchange_rate: 20.0
+mode: lockstep
+vessels:
+  - name: tug
+    ship_file: harbour_tug.yaml
+    initial: {x: 0.0, y: 0.0, heading_deg: 0.0, speed: 0.0}
+events:
+  - {time: 0.0, vessel: tug, engine_order: 0.6, steering_deg: 20.0}
+"""
+DT = 0.05  # 1 / exchange_rate
+EXPECTED_FIGURES = ["tracks.png", "yaw.png", "speed_yaw_rate.png", "motions.png", "towline_tension.png",
+                    "rope_heights.png", "rope_pitch.png"]
+
+
+def tool(executable, module):
+    """The installed executable once setup.py lists it, else `python -m module`."""
+    try:
+        return [executable_path("scenario_runner", executable)]
+    except FileNotFoundError:
+        return [sys.executable, "-m", module]
+
+
+def analyze(*args, timeout=120):
+    return subprocess.run(tool("analyze", "scenario_runner.analysis") + [str(a) for a in args],
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def record(scenario, output, *extra):
+    """run_scenario in a domain of its own; the recording's path."""
+    from domain_coordinator import domain_id
+    with domain_id() as did:
+        env = dict(os.environ, ROS_DOMAIN_ID=str(did), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        out = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(scenario), "--output",
+                              str(output), "--quiet", *extra], env=env, capture_output=True, text=True, timeout=150)
+    assert out.returncode == 0, out.stdout + out.stderr
+    return output
+
+
+@pytest.fixture(scope="module")
+def turn_recording(tmp_path_factory):
+    d = tmp_path_factory.mktemp("turn")
+    (d / "turn.yaml").write_text(TURN_SCENARIO)
+    return record(d / "turn.yaml", d / "turn.mcap")
+
+
+@pytest.fixture(scope="module")
+def demo_recording(tmp_path_factory):
+    d = tmp_path_factory.mktemp("demo")
+    return record("default_demo.yaml", d / "demo.mcap", "--duration", "10")
+
+
+@pytest.fixture(scope="module")
+def library_turn():
+    """The same turn straight from the vessel library (no ROS)."""
+    from tug_dynamics.maneuver_trials import run, turning_metrics
+    from tug_dynamics.ship_file import load_ship
+    from tug_dynamics.vessel import Command
+    tr = run(load_ship("harbour_tug.yaml"), 120.0, DT, {0.0: Command(0.6, math.radians(20.0))})
+    return tr, turning_metrics(tr)
+
+
+def kasa_diameter(x, y):
+    """Independent check: algebraic least-squares circle x^2 + y^2 = a x + b y + c."""
+    a, b, c = np.linalg.lstsq(np.column_stack([x, y, np.ones_like(x)]), x * x + y * y, rcond=None)[0]
+    return 2.0 * math.sqrt(c + a * a / 4 + b * b / 4)
+
+
+def check_png(path):
+    import matplotlib.image as mpimg
+    assert os.path.isfile(path), f"{path} missing"
+    assert os.path.getsize(path) > 10_000, f"{path}: only {os.path.getsize(path)} bytes"
+    img = mpimg.imread(path)
+    h, w = img.shape[:2]
+    assert h >= 300 and w >= 400, f"{path}: {w}x{h} pixels"
+    rgb = img[..., :3]
+    assert float(rgb.std()) > 0.03, f"{path}: nearly uniform image (std {rgb.std():.4f})"
+    drawn = float(np.mean(np.any(rgb < 0.9, axis=-1)))  # share of pixels that are not white background
+    assert 0.01 < drawn < 0.9, f"{path}: {drawn:.3f} of the pixels drawn"
+    return img
+
+
+def test_turning_diameter_matches_the_vessel_library(turn_recording, library_turn, tmp_path):
+    out = analyze(turn_recording, "-o", tmp_path / "an")
+    assert out.returncode == 0, out.stdout + out.stderr
+    summary = json.loads((tmp_path / "an" / "summary.json").read_text())
+    assert summary["file"]["complete"] and not summary["file"]["problems"]
+    turn = summary["vessels"]["tug"]["turn"]
+    tr, lib = library_turn
+
+    # the recording holds exactly the library's trajectory (same model, dt and commands)
+    v = np.loadtxt(tmp_path / "an" / "vessel_tug.csv", delimiter=",", skiprows=1)
+    assert v.shape[0] == tr.t.size
+    assert np.max(np.abs(v[:, 1] - tr.x)) < 1e-6 and np.max(np.abs(v[:, 2] - tr.y)) < 1e-6
+
+    # independent steady diameter: circle through the library track's last full revolution
+    psi = np.unwrap(tr.psi)
+    last = psi >= psi[-1] - 2 * math.pi
+    d_circle = kasa_diameter(tr.x[last], tr.y[last])
+    print(f"steady turning diameter: analysis {turn['steady_diameter']:.3f} m, independent circle fit "
+          f"{d_circle:.3f} m, library turning_metrics (2U/r) {lib['steady_diameter']:.3f} m; "
+          f"advance {turn['advance']:.2f} / {lib['advance']:.2f} m, transfer {turn['transfer']:.2f} / "
+          f"{lib['transfer']:.2f} m, tactical {turn['tactical_diameter']:.2f} / {lib['tactical_diameter']:.2f} m")
+    assert turn["steady_diameter"] == pytest.approx(d_circle, rel=0.005)
+    assert turn["steady_diameter"] == pytest.approx(lib["steady_diameter"], rel=0.01)
+    assert turn["steady_diameter_kinematic"] == pytest.approx(lib["steady_diameter"], rel=0.01)
+    assert turn["steady_fit_rms"] < 0.05  # a steady turn: the track is a circle
+    for key in ("advance", "transfer", "tactical_diameter"):
+        assert turn[key] == pytest.approx(lib[key], abs=0.5), key
+    assert turn["steady_speed"] == pytest.approx(lib["steady_speed"], rel=0.01)
+    assert turn["steady_yaw_rate"] == pytest.approx(lib["steady_yaw_rate"], rel=0.01)
+    assert turn["t0"] == pytest.approx(0.0) and turn["turn_direction"] == 1.0  # port, from the command
+    assert turn["heading_change"] > 2 * math.pi + math.pi  # more than 1.5 turns: one full steady revolution
+    assert "tug" in out.stdout and "steady diameter" in out.stdout
+    check_png(str(tmp_path / "an" / "turn_tug.png"))
+
+
+def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
+    out = analyze(demo_recording, "-o", tmp_path / "an")
+    assert out.returncode == 0, out.stdout + out.stderr
+    summary = json.loads((tmp_path / "an" / "summary.json").read_text())
+    assert set(summary["vessels"]) == {"tug", "barge"} and set(summary["ropes"]) == {"towline"}
+    names = [os.path.basename(f) for f in summary["figures"]]
+    for name in EXPECTED_FIGURES:
+        assert name in names
+        check_png(str(tmp_path / "an" / name))
+    rope = summary["ropes"]["towline"]
+    assert rope["tension_a_max"] > 0 and rope["tension_b_max"] > 0 and rope["elements_start"] > 1
+    assert rope["min_element_height"] < 0  # the towline hangs into the water
+    kinds = {e["kind"] for e in summary["events"]}
+    assert {"scenario_started", "order"} <= kinds
+    rows = (tmp_path / "an" / "summary.csv").read_text().splitlines()
+    assert rows[0] == "entity,quantity,value,unit" and any(r.startswith("rope/towline,tension_a_max,") for r in rows)
+
+
+def test_truncated_recording_is_reported_and_its_readable_part_analysed(turn_recording, tmp_path):
+    data = turn_recording.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[:len(data) // 2])
+    out = analyze(cut, "-o", tmp_path / "an")
+    assert out.returncode == 1, out.stdout + out.stderr
+    assert str(cut) in out.stderr and "truncated" in out.stderr
+    summary = json.loads((tmp_path / "an" / "summary.json").read_text())
+    assert not summary["file"]["complete"] and any("truncated" in p for p in summary["file"]["problems"])
+    tug = summary["vessels"]["tug"]
+    assert 30.0 < tug["t_end"] < 110.0  # about half of the 120 s
+    # what is readable gives the same early measures as the whole file
+    full = analyze(turn_recording, "-o", tmp_path / "full", "--no-figures")
+    ref = json.loads((tmp_path / "full" / "summary.json").read_text())["vessels"]["tug"]["turn"]
+    assert tug["turn"]["advance"] == pytest.approx(ref["advance"], abs=1e-9)
+    assert tug["turn"]["tactical_diameter"] == pytest.approx(ref["tactical_diameter"], abs=1e-9)
+    for name in ("tracks.png", "yaw.png", "motions.png"):
+        check_png(str(tmp_path / "an" / name))
+
+
+def test_corrupt_recording_is_reported_and_the_rest_analysed(demo_recording, tmp_path):
+    data = bytearray(demo_recording.read_bytes())
+    start = len(data) // 3
+    data[start:start + 2000] = b"\xa5" * 2000
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    out = analyze(bad, "-o", tmp_path / "an", "--no-figures")
+    assert out.returncode == 1, out.stdout + out.stderr
+    assert str(bad) in out.stderr and ("CRC" in out.stderr or "corrupt" in out.stderr), out.stderr
+    summary = json.loads((tmp_path / "an" / "summary.json").read_text())
+    assert summary["file"]["problems"]
+    assert summary["vessels"]["tug"]["t_end"] == pytest.approx(10.0)  # messages after the damage were read
+
+
+def test_not_an_mcap_file_is_refused_with_its_path(tmp_path):
+    junk = tmp_path / "junk.mcap"
+    junk.write_text("not a recording\n")
+    out = analyze(junk, "-o", tmp_path / "an")
+    assert out.returncode == 2 and str(junk) in out.stderr and "not an MCAP file" in out.stderr
+    out = analyze(tmp_path / "missing.mcap")
+    assert out.returncode == 2 and "missing.mcap" in out.stderr
