@@ -151,8 +151,13 @@ def test_misbehaving_autopilot_does_not_disturb_the_vessel(start_node, rclpy_con
     def last():
         return obs.status[-1]
 
-    send(0.4, 0.1)
-    assert obs.spin_until(lambda: last().engine_order == 0.4 and last().steering_angle_ordered == 0.1, 20)
+    # Commands are volatile and our writer may match the vessel's reader before the reader matches
+    # us: repeat the first order until it shows (afterwards every sample is delivered).
+    deadline = time.monotonic() + 20
+    while not (last().engine_order == 0.4 and last().steering_angle_ordered == 0.1):
+        assert time.monotonic() < deadline, vessel.log()
+        send(0.4, 0.1)
+        obs.spin_until(lambda: last().engine_order == 0.4, 0.5)
 
     # NaN / infinite: rejected, counted, the last valid command kept.
     for engine, steering in ((float("nan"), 0.0), (0.5, float("inf")), (float("-inf"), float("nan"))):
@@ -276,10 +281,17 @@ def test_autopilot_ignores_non_finite_and_stale_odometry(start_autopilot, rclpy_
 def _lockstep_run(start_node, start_autopilot, ctx, n_steps, run, autopilot_first=False):
     """Vessel and autopilot in lockstep; this node is the runner: SimStep(k, ordered=[tug]) once
     every node has answered StepDone(k). Returns the odometry and commands by step."""
+    obs = Observer(ctx, name=f"runner_{run}")  # first: the autopilot's step-0 command waits for it
+    try:
+        return _lockstep_steps(obs, start_node, start_autopilot, n_steps, autopilot_first)
+    finally:
+        obs.node.destroy_node()  # never leave a runner behind in this domain, even on failure
+
+
+def _lockstep_steps(obs, start_node, start_autopilot, n_steps, autopilot_first):
     from rclpy.node import Node
     from tug_dynamics import ros_common as rc
     from tug_msgs.msg import SimStep, StepDone
-    obs = Observer(ctx, name=f"runner_{run}")  # first: the autopilot's step-0 command waits for it
     pilot_args = (*AUTOPILOT_NS, "-p", "lockstep:=true", "-p", "vessel:=tug", "-p", "heading:=90.0",
                   "-p", "speed:=3.0", "-p", "log_period:=0.0")
     if autopilot_first:
@@ -295,6 +307,8 @@ def _lockstep_run(start_node, start_autopilot, ctx, n_steps, run, autopilot_firs
     step_pub = node.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
     expected = {"/tug/vessel", "/tug_autopilot/autopilot"}
     assert obs.spin_until(lambda: set(done.get(0, {})) == expected, 60), f"{vessel.log()}\n{pilot.log()}"
+    # /sim/step is volatile: send step 0 only once both participants have matched it (as the runner does)
+    assert obs.spin_until(lambda: step_pub.get_subscription_count() >= len(expected), 30)
     t0 = time.monotonic()
     for k in range(n_steps):
         msg = SimStep(step=k, time=rc.step_time(k, PERIOD_NS), period=PERIOD_NS * 1e-9, ordered=["tug"])
@@ -311,7 +325,6 @@ def _lockstep_run(start_node, start_autopilot, ctx, n_steps, run, autopilot_firs
         k = _stamp_ns(c.header.stamp) // PERIOD_NS
         assert k not in commands, f"two commands stamped step {k}"
         commands[k] = c
-    node.destroy_node()
     vessel.stop()
     pilot.stop()
     log = vessel.log()

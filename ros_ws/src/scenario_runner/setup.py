@@ -25,6 +25,7 @@ setup(
             "run_scenario = scenario_runner.run_scenario:main",
             "replay = scenario_runner.replay:main",
             "analyze = scenario_runner.analysis:main",
+            "autopilot = scenario_runner.autopilot:main",
         ],
     },
 )

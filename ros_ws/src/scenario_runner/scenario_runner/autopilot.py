@@ -21,7 +21,8 @@ free-running (lockstep:=false, default)
 
 lockstep (lockstep:=true)
     At start-up the node waits for the vessel's step-0 odometry (and status), publishes the
-    command stamped 0 computed from it, then reports ready (StepDone(0)). On SimStep(k) it
+    command stamped 0 computed from it once the vessel's command subscription is matched, then
+    reports ready (StepDone(0)). On SimStep(k) it
     takes the odometry stamped k, publishes the command stamped k+1 (the vessel applies it
     from step k+1) and StepDone(k+1). The scenario runner lists the vessel in
     SimStep.ordered at every step, so the vessel waits for that command: runs are
@@ -39,6 +40,7 @@ from typing import List, Optional
 
 import rclpy
 from nav_msgs.msg import Odometry
+from rclpy.duration import Duration
 from rcl_interfaces.msg import ParameterDescriptor
 from tug_msgs.msg import VesselCommand, VesselStatus
 
@@ -200,8 +202,9 @@ class AutopilotNode(SteppedNode):
     def accept_input(self, spec: StepInput, msg) -> bool:
         if not self._finite(spec, msg):
             self.inputs_rejected += 1
+            t = rc.time_to_ns(msg.header.stamp) * 1e-9
             self.get_logger().error(
-                f"{spec.topic}: non-finite or invalid values at stamp {rc.time_to_ns(msg.header.stamp) * 1e-9:.3f} s ignored"
+                f"{spec.topic}: non-finite or invalid values at stamp {t:.3f} s ignored"
                 + (", holding the last command for that step" if self.lockstep else ""),
                 throttle_duration_sec=1.0)
             # Lockstep: the step must still complete, compute_step holds the last command.
@@ -250,12 +253,23 @@ class AutopilotNode(SteppedNode):
         return False
 
     def _send_first_command(self) -> None:
-        if self.ready_to_step or not self._vessel_listens():
+        """Timer (0.05 s) until the first SimStep: send the step-0 command once the vessel listens,
+        then ready; send it again if it is not acknowledged within 1 s (the vessel waits for it)."""
+        if self._triggered:
+            self._start_timer.cancel()
             return
-        self._start_timer.cancel()
-        self._publish()
-        self.ready_to_step = True  # StepDone(0) follows from the stepping machinery
-        self.get_logger().info("step-0 state received, command stamped 0 sent: ready")
+        if not self.ready_to_step:
+            if not self._vessel_listens():
+                return
+            self._publish()
+            self._sent_wall = time.monotonic()
+            self.ready_to_step = True  # StepDone(0) follows from the stepping machinery
+            self.get_logger().info("step-0 state received, command stamped 0 sent: ready")
+        elif time.monotonic() - self._sent_wall > 1.0:
+            if not self.cmd_pub.wait_for_all_acked(Duration(seconds=0)):
+                self.get_logger().warning("step-0 command not acknowledged within 1 s: sending it again")
+                self._publish()
+            self._sent_wall = time.monotonic()
 
     # -- the law ---------------------------------------------------------------------------
     def _measurement(self, inputs) -> Optional[Measurement]:
@@ -344,7 +358,7 @@ class AutopilotNode(SteppedNode):
             self._publish()
 
     def _publish(self) -> None:
-        if self.command is None:
+        if self.command is None or not self.context.ok():  # Ctrl-C shuts the context down under us
             return
         self.command.header.stamp = self._out_stamp
         self.cmd_pub.publish(self.command)
@@ -364,6 +378,10 @@ def main(args: Optional[List[str]] = None) -> int:
         rc.spin_forever(executor)
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
+    except Exception:
+        if node.context.ok():
+            raise
+        # a callback that ran into the shutdown (Ctrl-C) while publishing: a clean exit
     finally:
         executor.shutdown()
         node.destroy_node()

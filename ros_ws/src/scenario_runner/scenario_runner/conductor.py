@@ -115,6 +115,13 @@ def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
         if r.n_elements:
             params["n_elements"] = int(r.n_elements)
         specs.append(NodeSpec(f"/{r.name}", "rope", "rope_model", "rope_node", {**params, **common}))
+    for a in sc.autopilots:
+        # YAML 90 is an int; ROS would refuse it for a double parameter: numbers go as floats.
+        params = {k: (list(v) if isinstance(v, tuple) else
+                      float(v) if isinstance(v, int) and not isinstance(v, bool) else v)
+                  for k, v in a.params.items()}
+        params.update(vessel=a.vessel, exchange_rate=float(sc.exchange_rate), lockstep=True, use_sim_time=True)
+        specs.append(NodeSpec(f"/{a.name}", "autopilot", a.package, a.executable, params))
     return specs
 
 
@@ -198,6 +205,8 @@ class Conductor(Node):
                            for r in sc.ropes if r.layout == "winch"}
         self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done, rc.PROTOCOL_QOS)
         self.orders = self._orders_by_step()
+        # Vessels steered by a lockstep autopilot get its order stamped k at every step k.
+        self.piloted = sorted(a.vessel for a in sc.autopilots)
 
     def _on_done(self, msg: StepDone) -> None:
         if msg.node not in self.expected:
@@ -251,7 +260,7 @@ class Conductor(Node):
             ordered.append(target)
             self.event(k, "order", target, self._describe(order))
         self.clock_pub.publish(Clock(clock=stamp))
-        msg = SimStep(step=k, time=stamp, period=self.period_ns * 1e-9, ordered=ordered)
+        msg = SimStep(step=k, time=stamp, period=self.period_ns * 1e-9, ordered=sorted(set(ordered + self.piloted)))
         msg.header.stamp = stamp
         self.step_pub.publish(msg)
         if self.recorder:
@@ -301,8 +310,13 @@ LAYOUTS = ("processes", "one_process")
 def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
     """The same nodes as the executables start, constructed in this process."""
     from rope_model.rope_node import RopeNode
+    from scenario_runner.autopilot import AutopilotNode
     from tug_dynamics.vessel_node import VesselNode
-    classes = {("tug_dynamics", "vessel_node"): VesselNode, ("rope_model", "rope_node"): RopeNode}
+    classes = {("tug_dynamics", "vessel_node"): VesselNode, ("rope_model", "rope_node"): RopeNode,
+               ("scenario_runner", "autopilot"): AutopilotNode}
+    unknown = [s.name for s in specs if (s.package, s.executable) not in classes]
+    if unknown:
+        raise RunError(f"node(s) {unknown} can only run as their own process (--layout processes)")
     return [classes[(s.package, s.executable)](s.node_name, namespace=s.namespace,
                                                parameter_overrides=s.parameter_overrides()) for s in specs]
 
@@ -348,14 +362,18 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     try:
         procs.start()
         wait_for(0, ready_timeout, "starting up")
-        # Orders are volatile: every order topic must reach its node (and the recorder) first.
+        # Triggers and orders are volatile: every participant (and the recorder) must have
+        # matched them before step 0 goes out.
         want = 2 if recorder else 1
+        needs = [(p, want) for p in conductor.order_publishers()]
+        needs.append((conductor.step_pub, len(specs) + (1 if recorder else 0)))
         deadline = time.monotonic() + ready_timeout
-        while any(p.get_subscription_count() < want for p in conductor.order_publishers()):
+        while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
             executor.spin_once(timeout_sec=0.01)
             if time.monotonic() > deadline:
-                late = [p.topic_name for p in conductor.order_publishers() if p.get_subscription_count() < want]
-                raise RunError(f"no subscriber matched order topic(s) {late} within {ready_timeout:g} s")
+                late = [p.topic_name for p, n in needs if p.get_subscription_count() < n]
+                late += recorder.unmatched_topics() if recorder else []
+                raise RunError(f"no subscriber matched topic(s) {late} within {ready_timeout:g} s")
         conductor.event(0, "scenario_started", "", f"scenario '{sc.name}': {n_steps} steps at "
                         f"{sc.exchange_rate:g} Hz, {sc.mode}")
         t_start = time.monotonic()

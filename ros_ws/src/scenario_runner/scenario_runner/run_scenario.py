@@ -17,9 +17,10 @@ from typing import Dict, List, Optional
 
 import numpy as np
 import rclpy
+from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
-from tug_msgs.msg import RopeState
+from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
 from scenario_runner.recorder import McapRecorder
@@ -33,23 +34,41 @@ def scenario_path(name: str) -> str:
 
 
 class Monitor(Node):
-    """Collects what the summary needs: rope end tensions and final vessel states."""
+    """Collects what the summary needs: towline end tensions, partings and final vessel states.
 
-    def __init__(self, vessels: List[str], ropes: List[str]):
+    It listens to the small end-wrench messages (not the full rope state) so that it costs the
+    runner's process little per step."""
+
+    def __init__(self, sc):
         super().__init__("scenario_monitor")
-        self.tension: Dict[str, List[float]] = {r: [] for r in ropes}
-        self.broken: Dict[str, bool] = {r: False for r in ropes}
+        self.tension: Dict[str, List[float]] = {}
+        self.broken: Dict[str, bool] = {r.name: False for r in sc.ropes}
         self.odom: Dict[str, Odometry] = {}
-        for r in ropes:
-            self.create_subscription(RopeState, f"/{r}/state", lambda m, r=r: self._rope(r, m), rc.LATCHED_STATE_QOS)
-        for v in vessels:
-            self.create_subscription(Odometry, f"/{v}/odom", lambda m, v=v: self.odom.__setitem__(v, m),
+        for r in sc.ropes:
+            end = next((e for e in ("a", "b") if "/" in getattr(r, f"end_{e}")), None)
+            self.tension[r.name] = []
+            if end is not None:
+                self.create_subscription(WrenchStamped, f"/{r.name}/end_{end}/wrench",
+                                         lambda m, r=r.name: self._wrench(r, m), rc.LATCHED_STATE_QOS)
+            else:  # both ends fixed or free: the rope state's end a force
+                self.create_subscription(RopeState, f"/{r.name}/state", lambda m, r=r.name: self._rope(r, m),
+                                         rc.LATCHED_STATE_QOS)
+        for v in sc.vessels:
+            self.create_subscription(Odometry, f"/{v.name}/odom", lambda m, v=v.name: self.odom.__setitem__(v, m),
                                      rc.LATCHED_STATE_QOS)
+        self.create_subscription(ScenarioEvent, rc.EVENTS_TOPIC, self._event, rc.EVENTS_QOS)
+
+    def _wrench(self, name: str, msg: WrenchStamped) -> None:
+        f = msg.wrench.force
+        self.tension[name].append(math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2))
 
     def _rope(self, name: str, msg: RopeState) -> None:
-        fa = msg.end_a_force
-        self.tension[name].append(math.sqrt(fa.x ** 2 + fa.y ** 2 + fa.z ** 2))
-        self.broken[name] = msg.broken
+        f = msg.end_a_force
+        self.tension[name].append(math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2))
+
+    def _event(self, msg: ScenarioEvent) -> None:
+        if msg.kind == "rope_parted" and msg.target in self.broken:
+            self.broken[msg.target] = True
 
 
 def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
@@ -69,7 +88,7 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
     for rope, values in mon.tension.items():
         if values:
             t = np.asarray(values)
-            lines.append(f"  rope {rope}: towline tension at end a peak {t.max() / 1e3:.1f} kN, "
+            lines.append(f"  rope {rope}: towline tension peak {t.max() / 1e3:.1f} kN, "
                          f"mean {t.mean() / 1e3:.1f} kN{', PARTED' if mon.broken[rope] else ''}")
     for vessel, od in sorted(mon.odom.items()):
         p = od.pose.pose.position
@@ -103,7 +122,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{sc.name}_logs")
 
     rclpy.init(args=argv)
-    mon = Monitor([v.name for v in sc.vessels], [r.name for r in sc.ropes])
+    mon = Monitor(sc)
     recorder = McapRecorder(output, cd.contract_topics(sc)) if sc.recording.enabled and not args.no_record else None
     progress = None
     if not args.quiet:

@@ -121,6 +121,17 @@ class Event(_Strict):
         return self
 
 
+class AutopilotSpec(_Strict):
+    """An outside controller as a lockstep participant (scenario_runner autopilot, or another
+    executable speaking the step protocol): it reads the vessel's state of step k and sends
+    the command the vessel applies from step k+1."""
+    name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")  # ROS namespace of the controller
+    vessel: str
+    package: str = "scenario_runner"
+    executable: str = "autopilot"
+    params: Dict[str, Any] = Field(default_factory=dict)  # ROS parameters of the controller
+
+
 class Recording(_Strict):
     enabled: bool = True
     path: Optional[str] = None  # default: output/<scenario name>.mcap; the command line wins
@@ -135,6 +146,7 @@ class Scenario(_Strict):
     environment: Environment = Environment()
     vessels: List[VesselSpec] = Field(default_factory=list)
     ropes: List[RopeSpec] = Field(default_factory=list)
+    autopilots: List[AutopilotSpec] = Field(default_factory=list)
     events: List[Event] = Field(default_factory=list)
     recording: Recording = Recording()
 
@@ -199,7 +211,10 @@ def _check_references(path: str, sc: Scenario) -> None:
         dup = {n for n in names if names.count(n) > 1}
         if dup:
             raise ScenarioError(f"{path}: key '{kind}': duplicate name(s) {sorted(dup)}")
-    clash = set(vessels) & set(ropes)
+    pilots = [a.name for a in sc.autopilots]
+    if len(set(pilots)) != len(pilots):
+        raise ScenarioError(f"{path}: key 'autopilots': duplicate name(s)")
+    clash = set(vessels) & set(ropes) | (set(pilots) & (set(vessels) | set(ropes)))
     if clash:
         raise ScenarioError(f"{path}: names {sorted(clash)} are used by a vessel and a rope (namespaces must differ)")
     for i, r in enumerate(sc.ropes):
@@ -218,9 +233,19 @@ def _check_references(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key '{key}': vessel '{parts[0]}' is not in 'vessels' ({vessels})")
         if r.layout == "winch" and r.end_a == "free":
             raise ScenarioError(f"{path}: key 'ropes[{i}].layout': a winch layout needs end a attached")
+    driven = {}
+    for i, a in enumerate(sc.autopilots):
+        if a.vessel not in vessels:
+            raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' is not in 'vessels' ({vessels})")
+        if a.vessel in driven:
+            raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' already has an autopilot")
+        driven[a.vessel] = a.name
     for i, ev in enumerate(sc.events):
         if ev.vessel is not None and ev.vessel not in vessels:
             raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is not in 'vessels' ({vessels})")
+        if ev.vessel in driven:
+            raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is steered by autopilot "
+                                f"'{driven[ev.vessel]}'; give its orders as the autopilot's params")
         if ev.rope is not None:
             if ev.rope not in ropes:
                 raise ScenarioError(f"{path}: key 'events[{i}].rope': '{ev.rope}' is not in 'ropes' ({ropes})")

@@ -101,8 +101,11 @@ STEP_DONE_TOPIC = "/sim/step_done"
 LATCHED_STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
                                reliability=ReliabilityPolicy.RELIABLE,
                                durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# Volatile on purpose: a trigger or answer of an earlier run in the same domain must never reach
+# a later one. Nothing is lost at start-up: nodes repeat StepDone(0) until triggered, and the
+# runner sends SimStep(0) only once every participant's subscription has matched.
 PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+                          durability=DurabilityPolicy.VOLATILE)
 
 
 EXECUTORS = ("events", "single")
@@ -127,4 +130,9 @@ def spin_forever(executor) -> None:
     fire timers (measured here), spin_once does."""
     import rclpy
     while rclpy.ok(context=executor.context):
-        executor.spin_once(timeout_sec=0.1)
+        try:
+            executor.spin_once(timeout_sec=0.1)
+        except Exception:
+            if rclpy.ok(context=executor.context):
+                raise
+            return  # a callback ran into the shutdown (Ctrl-C / SIGTERM): not an error
