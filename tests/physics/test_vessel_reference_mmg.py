@@ -2,7 +2,6 @@
 2015): seed 003's propeller (Eq 4 with the wake law w_P0 exp(-4 (beta - x_P r')^2)),
 thrust deduction, hull resistance X'uu and surge added mass are the MMG surge model, so
 the S-175's straight acceleration must agree with shipmmg fed the same numbers."""
-import math
 
 import numpy as np
 import pytest

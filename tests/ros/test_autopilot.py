@@ -323,12 +323,16 @@ def _lockstep_steps(obs, start_node, start_autopilot, n_steps, autopilot_first):
     commands = {}
     for c in obs.commands:
         k = _stamp_ns(c.header.stamp) // PERIOD_NS
-        assert k not in commands, f"two commands stamped step {k}"
+        # The step-0 command is re-sent if not acknowledged within 1 s (start-up on a busy machine):
+        # a repeat must be identical; any other step has exactly one command.
+        assert k not in commands or (k == 0 and (commands[k].engine_order, commands[k].steering_angle) ==
+                                     (c.engine_order, c.steering_angle)), f"two commands stamped step {k}"
         commands[k] = c
     vessel.stop()
     pilot.stop()
     log = vessel.log()
-    assert "second order" not in log and "rejected" not in log
+    assert "rejected" not in log
+    assert all("second order for step 0" in line for line in log.splitlines() if "second order" in line)
     return odom, commands, wall
 
 

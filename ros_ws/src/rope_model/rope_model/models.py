@@ -6,7 +6,6 @@ world frame (ENU, m, m/s, N).
 """
 from __future__ import annotations
 
-import math
 from typing import List, Optional
 
 import numpy as np

@@ -21,7 +21,6 @@ import sys
 from typing import Dict, List, Optional
 
 import numpy as np
-import rclpy
 from geometry_msgs.msg import Point, Pose, Twist, WrenchStamped
 from std_msgs.msg import ColorRGBA
 from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
@@ -276,27 +275,7 @@ class RopeNode(SteppedNode):
 
 
 def main(args: Optional[List[str]] = None) -> int:
-    rclpy.init(args=args)
-    try:
-        node = RopeNode()
-    except (ValueError, KeyError, FileNotFoundError) as exc:
-        sys.stderr.write(f"rope_node: {exc}\n")
-        rclpy.try_shutdown()
-        return 2
-    executor = rc.make_executor()
-    executor.add_node(node)
-    try:
-        rc.spin_forever(executor)
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        pass
-    except ModelFailure as exc:
-        sys.stderr.write(f"rope_node: {exc}\n")
-        return 3
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return rc.run_node(RopeNode, "rope_node", args, failures=ModelFailure)
 
 
 if __name__ == "__main__":

@@ -38,7 +38,6 @@ import sys
 import time
 from typing import List, Optional
 
-import rclpy
 from nav_msgs.msg import Odometry
 from rclpy.duration import Duration
 from rcl_interfaces.msg import ParameterDescriptor
@@ -365,28 +364,7 @@ class AutopilotNode(SteppedNode):
 
 
 def main(args: Optional[List[str]] = None) -> int:
-    rclpy.init(args=args)
-    try:
-        node = AutopilotNode()
-    except (ValueError, KeyError, rclpy.exceptions.ParameterException) as exc:
-        sys.stderr.write(f"autopilot: {exc}\n")
-        rclpy.try_shutdown()
-        return 2
-    executor = rc.make_executor()
-    executor.add_node(node)
-    try:
-        rc.spin_forever(executor)
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        pass
-    except Exception:
-        if node.context.ok():
-            raise
-        # a callback that ran into the shutdown (Ctrl-C) while publishing: a clean exit
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return rc.run_node(AutopilotNode, "autopilot", args)
 
 
 if __name__ == "__main__":

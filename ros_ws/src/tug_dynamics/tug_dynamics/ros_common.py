@@ -136,3 +136,36 @@ def spin_forever(executor) -> None:
             if rclpy.ok(context=executor.context):
                 raise
             return  # a callback ran into the shutdown (Ctrl-C / SIGTERM): not an error
+
+
+def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError, FileNotFoundError),
+             failures=()) -> int:
+    """main() of a simulator node: construct, spin until Ctrl-C / SIGTERM, clean up.
+
+    Exit status: 0 stopped, 2 bad parameters or files (bad_input, message on stderr), 3 the
+    model failed (failures, e.g. a diverged rope; message on stderr)."""
+    import sys
+
+    import rclpy
+    from rclpy.exceptions import ParameterException
+    rclpy.init(args=args)
+    try:
+        node = make_node()
+    except (*bad_input, ParameterException) as exc:
+        sys.stderr.write(f"{program}: {exc}\n")
+        rclpy.try_shutdown()
+        return 2
+    executor = make_executor()
+    executor.add_node(node)
+    try:
+        spin_forever(executor)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+    except failures as exc:
+        sys.stderr.write(f"{program}: {exc}\n")
+        return 3
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

@@ -16,7 +16,6 @@ import sys
 from typing import List, Optional
 
 import numpy as np
-import rclpy
 import yaml
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
@@ -250,24 +249,7 @@ class VesselNode(SteppedNode):
 
 
 def main(args: Optional[List[str]] = None) -> int:
-    rclpy.init(args=args)
-    try:
-        node = VesselNode()
-    except (ValueError, KeyError, FileNotFoundError) as exc:
-        sys.stderr.write(f"vessel_node: {exc}\n")
-        rclpy.try_shutdown()
-        return 2
-    executor = rc.make_executor()
-    executor.add_node(node)
-    try:
-        rc.spin_forever(executor)
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        pass
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return rc.run_node(VesselNode, "vessel_node", args)
 
 
 if __name__ == "__main__":
