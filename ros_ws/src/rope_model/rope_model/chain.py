@@ -12,7 +12,7 @@ import numpy as np
 from . import kernels as K
 from .layout import (catenary_curve, close_with_fabrik, close_with_triangle, elements_from_joints,
                      joints_on_curve, polygon_on_catenary, straight_joints)
-from .params import RopeParams
+from .params import RopeParams, finite_vec3
 
 END_MODES = ("pinned", "fixed", "free")
 
@@ -40,13 +40,7 @@ class PartingEvent:
     tension: float
 
 
-def _vec3(v, what):
-    a = np.asarray(v, dtype=float)
-    if a.shape != (3,):
-        raise ValueError(f"{what}: expected 3 numbers, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{what}: must be finite, got {a.tolist()}")
-    return a.copy()
+_vec3 = finite_vec3
 
 
 def _end_name(end):

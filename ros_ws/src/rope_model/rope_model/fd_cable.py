@@ -37,6 +37,7 @@ import numpy as np
 import yaml
 
 from . import fd_kernels as FK
+from .params import finite_vec3, shipped_rope_file
 
 G0 = 9.80665  # m/s^2
 
@@ -234,21 +235,10 @@ def load_cable_params(path: str | os.PathLike) -> FdCableParams:
 
 def default_cable_path() -> str:
     """Path of the shipped Table 1 cable (ropes/cable_001.yaml)."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    for cand in (os.path.join(here, "..", "ropes", "cable_001.yaml"),
-                 os.path.join(here, "ropes", "cable_001.yaml")):
-        if os.path.isfile(cand):
-            return os.path.normpath(cand)
-    return os.path.normpath(os.path.join(here, "..", "ropes", "cable_001.yaml"))
+    return shipped_rope_file("cable_001.yaml")
 
 
-def _vec3(v, what):
-    a = np.asarray(v, dtype=float)
-    if a.shape != (3,):
-        raise ValueError(f"{what}: expected 3 numbers, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{what}: must be finite, got {a.tolist()}")
-    return a.copy()
+_vec3 = finite_vec3
 
 
 def _frame(yaw):

@@ -11,6 +11,7 @@ import math
 import os
 from dataclasses import dataclass, field
 
+import numpy as np
 import yaml
 
 G0 = 9.80665  # m/s^2, standard gravity: kgf -> N and tf -> N (Table 1)
@@ -169,11 +170,25 @@ def load_rope_params(path: str | os.PathLike) -> RopeParams:
     return p
 
 
-def default_rope_path() -> str:
-    """Path of the shipped Table 1 rope (ropes/table1.yaml)."""
+def shipped_rope_file(name: str) -> str:
+    """Path of a rope file shipped in ropes/ (source tree, or next to the installed package)."""
     here = os.path.dirname(os.path.abspath(__file__))
-    for cand in (os.path.join(here, "..", "ropes", "table1.yaml"),
-                 os.path.join(here, "ropes", "table1.yaml")):
+    for cand in (os.path.join(here, "..", "ropes", name), os.path.join(here, "ropes", name)):
         if os.path.isfile(cand):
             return os.path.normpath(cand)
-    return os.path.normpath(os.path.join(here, "..", "ropes", "table1.yaml"))
+    return os.path.normpath(os.path.join(here, "..", "ropes", name))
+
+
+def default_rope_path() -> str:
+    """Path of the shipped Table 1 rope (ropes/table1.yaml)."""
+    return shipped_rope_file("table1.yaml")
+
+
+def finite_vec3(v, what):
+    """A copy of v as a float (3,) array; ValueError naming `what` if not 3 finite numbers."""
+    a = np.asarray(v, dtype=float)
+    if a.shape != (3,):
+        raise ValueError(f"{what}: expected 3 numbers, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what}: must be finite, got {a.tolist()}")
+    return a.copy()
