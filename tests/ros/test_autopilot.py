@@ -13,13 +13,11 @@ The autopilot runs as `python -m scenario_runner.autopilot` until setup.py insta
 `autopilot` executable; the installed one is used when present.
 """
 import math
-import os
-import sys
 import time
 
 import pytest
 
-from conftest import NodeProcess, executable_path, spin_until
+from conftest import spin_until
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
@@ -32,26 +30,9 @@ HEADING_TOL_DEG = 3.0
 
 
 @pytest.fixture
-def start_autopilot(ros_domain, tmp_path, request):
-    """start_autopilot(*ros_args) -> NodeProcess of the autopilot in this test's domain."""
-    started = []
-
-    def _start(*ros_args: str) -> NodeProcess:
-        try:
-            cmd = [executable_path("scenario_runner", "autopilot")]
-        except FileNotFoundError:
-            cmd = [sys.executable, "-m", "scenario_runner.autopilot"]
-        env = dict(os.environ, ROS_DOMAIN_ID=str(ros_domain), PYTHONUNBUFFERED="1")
-        node = NodeProcess(cmd + ["--ros-args", *ros_args], env, str(tmp_path / f"autopilot-{len(started)}.log"))
-        started.append(node)
-        return node
-
-    yield _start
-    failed = getattr(request.node, "rep_call", None) is not None and request.node.rep_call.failed
-    for node in started:
-        node.stop()
-        if failed:
-            print(f"----- log of {' '.join(node.args)} -----\n{node.log()}")
+def start_autopilot(start_node):
+    """start_autopilot(*ros_args) -> NodeProcess of the installed autopilot in this test's domain."""
+    return lambda *ros_args: start_node("scenario_runner", "autopilot", "--ros-args", *ros_args)
 
 
 def _stamp_ns(stamp) -> int:

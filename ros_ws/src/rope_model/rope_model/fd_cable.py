@@ -37,7 +37,7 @@ import numpy as np
 import yaml
 
 from . import fd_kernels as FK
-from .params import finite_vec3, shipped_rope_file
+from .params import check_numbers, finite_vec3, shipped_rope_file
 
 G0 = 9.80665  # m/s^2
 
@@ -158,18 +158,7 @@ def _validate(p: FdCableParams, src: str) -> None:
         bad("model", "'fd_cable'", p.model)
     if not isinstance(p.name, str):
         bad("name", "a string", p.name)
-    for k in _POSITIVE:
-        v = getattr(p, k)
-        if not _is_number(v) or v <= 0:
-            bad(k, "a positive number", v)
-    for k in _NONNEG:
-        v = getattr(p, k)
-        if not _is_number(v) or v < 0:
-            bad(k, "a non-negative number", v)
-    for k in _OPTIONAL_POSITIVE:
-        v = getattr(p, k)
-        if v is not None and (not _is_number(v) or v <= 0):
-            bad(k, "a positive number or null", v)
+    check_numbers(p, bad, _POSITIVE, _NONNEG, _OPTIONAL_POSITIVE)
     for k in _ANY:
         if not _is_number(getattr(p, k)):
             bad(k, "a number", getattr(p, k))

@@ -100,22 +100,27 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def check_numbers(p, bad, positive=(), nonneg=(), optional_positive=()) -> None:
+    """Call bad(key, expected, got) for the first attribute of p outside its group's range."""
+    for k in positive:
+        v = getattr(p, k)
+        if not _is_number(v) or v <= 0:
+            bad(k, "a positive number", v)
+    for k in nonneg:
+        v = getattr(p, k)
+        if not _is_number(v) or v < 0:
+            bad(k, "a non-negative number", v)
+    for k in optional_positive:
+        v = getattr(p, k)
+        if v is not None and (not _is_number(v) or v <= 0):
+            bad(k, "a positive number or null", v)
+
+
 def _validate(p: RopeParams, src: str) -> None:
     def bad(key, what, got):
         raise RopeParamsError(f"{src}: key '{key}': expected {what}, got {got!r}")
 
-    for k in _POSITIVE:
-        v = getattr(p, k)
-        if not _is_number(v) or v <= 0:
-            bad(k, "a positive number", v)
-    for k in _NONNEG:
-        v = getattr(p, k)
-        if not _is_number(v) or v < 0:
-            bad(k, "a non-negative number", v)
-    for k in _OPTIONAL_POSITIVE:
-        v = getattr(p, k)
-        if v is not None and (not _is_number(v) or v <= 0):
-            bad(k, "a positive number or null", v)
+    check_numbers(p, bad, _POSITIVE, _NONNEG, _OPTIONAL_POSITIVE)
     if not isinstance(p.n_elements, int) or isinstance(p.n_elements, bool) or p.n_elements < 1:
         bad("n_elements", "an integer >= 1", p.n_elements)
     if p.elongation_at_break >= 1.0 and p.axial_stiffness is None:
