@@ -8,8 +8,11 @@ the mid-span rise). MoorDyn's static initial-condition solver does not converge 
 line in air at N = 200, hence submerged. End a
 fixed, end b moved by the "tug": x_b = 98 + 2 cos(2 pi t / 10) (a 2 m surge, slackening and
 re-tensioning the rope). Exchange period 0.02 s for both (the rope node's period). MoorDyn
-runs RK2 (its default) with the largest step from a ladder that stays finite for the whole
-run; rope_model runs its default sub-step (0.01 s, two per exchange).
+runs RK2 (its default) with the largest step from a ladder (0.02 s down, steps that divide
+the exchange period) that stays finite for the whole run; rope_model runs its default
+sub-step (0.01 s, two per exchange) and 0.02 s (one), or the --substep values. Both timed
+loops do the same per exchange step: set the moving end, step, read the end force (norm
+with math, not numpy) and the mid-span height.
 
 Reported per N = 11, 50, 200: static mid-span sag of each (matched accuracy = within 1 %
 of each other), simulated seconds per wall second over 60 s, the RMS difference of the
@@ -17,7 +20,8 @@ mid-span height histories between the two codes and against rope_model with a 10
 step, the peak end tension, and the warm-start time to the first step
 (fresh interpreter, numba cache present). Rates use the process CPU time (best of
 --repeat runs), which equals wall time on an idle core and is robust on a shared machine.
-Prints a markdown table. --stability prints rope_model's stability map instead.
+Prints a markdown table per rope_model sub-step (the MoorDyn runs are shared).
+--stability prints rope_model's stability map instead.
 
 Usage: PYTHONPATH=ros_ws/src/rope_model python benchmarks/bench_rope.py [--seconds 60]
 """
@@ -136,7 +140,7 @@ def md_run(n, dt, seconds, folder):
                 if t_first is None:
                     t_first = time.perf_counter() - t0
                 t += DT_X
-                tens.append(math.sqrt(f[0] ** 2 + f[1] ** 2 + f[2] ** 2))
+                tens.append(math.hypot(f[0], f[1], f[2]))  # no overflow when diverging
                 if n % 2:
                     zm = 0.5 * (moordyn.GetLineNodePos(line, n // 2)[2]
                                 + moordyn.GetLineNodePos(line, n // 2 + 1)[2])
@@ -146,7 +150,7 @@ def md_run(n, dt, seconds, folder):
                 if not all(math.isfinite(c) for c in f):
                     ok = False
                     break
-    except RuntimeError:
+    except (RuntimeError, OverflowError):
         ok = False
     wall = time.process_time() - wall0
     with quiet():
@@ -155,7 +159,9 @@ def md_run(n, dt, seconds, folder):
 
 
 def md_best(n, seconds, folder):
-    for dt in (0.005, 0.004, 0.0025, 0.002, 0.001, 5e-4, 4e-4, 2.5e-4, 2e-4, 1e-4, 5e-5):
+    # largest step first; every step divides the exchange period
+    for dt in (0.02, 0.01, 0.005, 0.004, 0.0025, 0.002, 0.001, 5e-4, 4e-4, 2.5e-4, 2e-4, 1e-4,
+               5e-5):
         ok, *_ = md_run(n, dt, seconds, folder)
         if ok:
             return dt, md_run(n, dt, seconds, folder)  # timed again, clean
@@ -190,7 +196,7 @@ def rope_run(n, seconds, max_substep=0.01):
         rope.set_end_kinematics("b", x, v)
         rope.step(DT_X)
         t += DT_X
-        tens.append(np.linalg.norm(rope.end_force("b")))
+        tens.append(math.hypot(*rope.end_force("b").tolist()))  # as MoorDyn's
         if n % 2:
             mids.append(X[n // 2, 2])
         else:  # joint between elements n/2-1 and n/2
@@ -264,39 +270,47 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--n", type=int, nargs="*", default=[11, 50, 200])
-    ap.add_argument("--substep", type=float, default=0.01, help="rope_model max sub-step (s)")
+    ap.add_argument("--substep", type=float, nargs="*", default=[0.01, 0.02],
+                    help="rope_model max sub-step(s) (s), one table each")
     ap.add_argument("--repeat", type=int, default=3, help="timing repeats (best is kept)")
     ap.add_argument("--stability", action="store_true", help="print the rope_model stability map")
     a = ap.parse_args()
     if a.stability:
         stability_map(a.seconds)
         return
-    rows = []
+    rows = {h: [] for h in a.substep}
     with tempfile.TemporaryDirectory() as folder:
         for n in a.n:
             dt_md, (ok, sag_md, rate_md, t_md, z_md, first_md) = md_best(n, a.seconds, folder)
-            sag_r, rate_r, t_r, z_r = rope_run(n, a.seconds, max_substep=a.substep)
+            runs = {h: rope_run(n, a.seconds, max_substep=h) for h in a.substep}
+            rate_r = {h: runs[h][1] for h in a.substep}
             for _ in range(a.repeat - 1):  # best of: the machine is shared
                 rate_md = max(rate_md, md_run(n, dt_md, a.seconds, folder)[2])
-                rate_r = max(rate_r, rope_run(n, a.seconds, max_substep=a.substep)[1])
+                for h in a.substep:
+                    rate_r[h] = max(rate_r[h], rope_run(n, a.seconds, max_substep=h)[1])
             _, _, t_ref, z_ref = rope_run(n, a.seconds, max_substep=0.001)  # own step error
             warm = rope_warm_start(n)
-            m = min(len(z_md), len(z_r))
-            # mid-span height histories, RMS difference relative to the static sag
-            rms = float(np.sqrt(np.mean((z_md[:m] - z_r[:m]) ** 2)) / abs(sag_md))
-            rms_ref = float(np.sqrt(np.mean((z_ref - z_r) ** 2)) / abs(sag_md))
-            rows.append((n, sag_r, sag_md, rate_r, rate_md, dt_md, rms, rms_ref, warm, first_md,
-                         t_r.max(), t_md.max()))
+            for h in a.substep:
+                sag_r, _, t_r, z_r = runs[h]
+                m = min(len(z_md), len(z_r))
+                # mid-span height histories, RMS difference relative to the static sag
+                rms = float(np.sqrt(np.mean((z_md[:m] - z_r[:m]) ** 2)) / abs(sag_md))
+                rms_ref = float(np.sqrt(np.mean((z_ref - z_r) ** 2)) / abs(sag_md))
+                rows[h].append((n, sag_r, sag_md, rate_r[h], rate_md, dt_md, rms, rms_ref, warm,
+                                first_md, t_r.max(), t_md.max()))
             print(f"N={n} done", file=sys.stderr, flush=True)
-    print("| N | mid-span rise rope_model (m) | rise MoorDyn (m) | difference | rope_model sim-s/wall-s "
-          f"(sub-step {a.substep:g} s) | MoorDyn sim-s/wall-s (RK2, dt) | speed ratio | mid-span height "
-          f"RMS diff between codes (/sag) | rope_model step error ({a.substep:g} vs 0.001 s, /sag) | peak tension "
-          "rope_model / MoorDyn (kN) | warm start to first step: rope_model / MoorDyn (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for (n, sr, sm, rr, rm, dtm, rms, rref, warm, fm, pr, pm) in rows:
-        print(f"| {n} | {sr:.4f} | {sm:.4f} | {100 * (sr - sm) / sm:+.2f} % | {rr:.0f} | "
-              f"{rm:.0f} (dt {dtm:g} s) | {rr / rm:.2f} | {100 * rms:.1f} % | {100 * rref:.1f} % | "
-              f"{pr / 1e3:.1f} / {pm / 1e3:.1f} | {warm:.2f} / {fm:.2f} |")
+    for h in a.substep:
+        print(f"\nrope_model sub-step {h:g} s:\n")
+        print("| N | mid-span rise rope_model (m) | rise MoorDyn (m) | difference | rope_model "
+              f"sim-s/wall-s (sub-step {h:g} s) | MoorDyn sim-s/wall-s (RK2, dt) | speed ratio | "
+              "mid-span height RMS diff between codes (/sag) | rope_model step error "
+              f"({h:g} vs 0.001 s, /sag) | peak tension rope_model / MoorDyn (kN) | warm start "
+              "to first step: rope_model / MoorDyn (s) |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|")
+        for (n, sr, sm, rr, rm, dtm, rms, rref, warm, fm, pr, pm) in rows[h]:
+            print(f"| {n} | {sr:.4f} | {sm:.4f} | {100 * (sr - sm) / sm:+.2f} % | {rr:.0f} | "
+                  f"{rm:.0f} (dt {dtm:g} s) | {rr / rm:.2f} | {100 * rms:.1f} % | "
+                  f"{100 * rref:.1f} % | {pr / 1e3:.1f} / {pm / 1e3:.1f} | {warm:.2f} / {fm:.2f} |")
 
 
 if __name__ == "__main__":

@@ -43,10 +43,30 @@ class PartingEvent:
 _vec3 = finite_vec3
 
 
+def _state_array(name, doc):
+    """A RopeChain state array: normally a view into the packed kernel arrays; assigning
+    a new array (the winch's split / merge / drop, _restore) marks them for repacking."""
+    key = "_" + name
+
+    def get(self):
+        try:
+            return self.__dict__[key]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def set(self, value):
+        self.__dict__[key] = value
+        self._packed = False
+
+    return property(get, set, doc=doc)
+
+
 def _end_name(end):
-    if end not in ("a", "b"):
-        raise ValueError(f"end must be 'a' or 'b', got {end!r}")
-    return 0 if end == "a" else 1
+    if end == "a":
+        return 0
+    if end == "b":
+        return 1
+    raise ValueError(f"end must be 'a' or 'b', got {end!r}")
 
 
 class RopeChain:
@@ -59,6 +79,18 @@ class RopeChain:
     VMAX = 2000.0  # m/s: beyond this the state is called diverged
     WMAX = 1.0e5  # rad/s
     PMAX = 1.0e7  # m from the origin
+
+    # state, (N, 3) per element, (N,) or (N + 1,) per connection; views into the packed
+    # kernel arrays (see _pack)
+    X = _state_array("X", "element centres (N, 3)")
+    E = _state_array("E", "element axes (N, 3), unit, towards end a")
+    V = _state_array("V", "element velocities (N, 3)")
+    W = _state_array("W", "element angular velocities (N, 3), perpendicular to E")
+    L = _state_array("L", "element lengths (N,)")
+    breaking_load = _state_array("breaking_load", "per-connection strength (N + 1,), N")
+    tensions = _state_array("tensions", "connection tensions (N + 1,), N")
+    conn_ok = _state_array("conn_ok", "connection intact (N + 1,), 0 / 1")
+    armed = _state_array("armed", "parting armed (N + 1,), 0 / 1 (re-armed once unloaded)")
 
     def __init__(self, params: RopeParams, X, E, lengths, *, end_a="pinned", end_b="pinned",
                  p_a=None, p_b=None, winch=False, max_substep=0.01, theta=0.55,
@@ -88,20 +120,26 @@ class RopeChain:
         if not (math.isfinite(relaxation) and relaxation >= 0):
             raise ValueError(f"relaxation must be >= 0, got {relaxation}")
         self.params = params
-        p = params  # scalar kernel arguments, fixed for the rope's life (params is frozen)
-        self._pargs = (
-            float(p.mass_per_length), float(p.radius), float(p.ea), float(p.drag_normal),
-            float(p.drag_tangential), float(p.tangential_area_factor),
-            float(p.added_mass_coefficient), float(p.water_density), float(p.air_density),
-            float(p.gravity), float(p.damping_ratio_axial), float(p.damping_ratio_transverse),
-            float(p.damping_ratio_rotational), float(p.breaking_load))
+        p = params  # scalar kernel parameters, fixed for the rope's life (params is frozen)
+        # the kernel's parameters, attachment data, flags and outputs in one array (one
+        # dispatch argument); theta, relaxation and current are properties writing into it,
+        # att_pos, att_vel, att_on etc. are views into it
+        io = self._io = np.zeros((K.IO_ROWS, 3))
+        for key, v in ((K.P_MU, p.mass_per_length), (K.P_RADIUS, p.radius), (K.P_EA, p.ea),
+                       (K.P_CD, p.drag_normal), (K.P_CF, p.drag_tangential),
+                       (K.P_TFAC, p.tangential_area_factor), (K.P_CA, p.added_mass_coefficient),
+                       (K.P_RHO_W, p.water_density), (K.P_RHO_A, p.air_density),
+                       (K.P_G, p.gravity), (K.P_Z_AX, p.damping_ratio_axial),
+                       (K.P_Z_TR, p.damping_ratio_transverse),
+                       (K.P_Z_ROT, p.damping_ratio_rotational), (K.P_P_ROT, p.breaking_load),
+                       (K.P_VMAX, self.VMAX), (K.P_WMAX, self.WMAX), (K.P_PMAX, self.PMAX)):
+            io[key] = v
         self.X, self.E, self.L = X, E, L
         self.V = np.zeros((n, 3))
         self.W = np.zeros((n, 3))
         self.end_modes = [end_a, end_b]
-        self.att_on = np.array([m != "free" for m in self.end_modes], dtype=np.int64)
-        self.att_pos = np.zeros((2, 3))
-        self.att_vel = np.zeros((2, 3))
+        self._bind_io()
+        self.att_on[:] = [m != "free" for m in self.end_modes]
         # default attachment points: the rope ends of the layout
         front = X[0] + 0.5 * L[0] * E[0]
         aft = X[-1] - 0.5 * L[-1] * E[-1]
@@ -124,17 +162,68 @@ class RopeChain:
         self.step_count = 0
         self.events: list[PartingEvent] = []
         self.tensions = np.zeros(n + 1)
-        self._end_force = np.zeros((2, 3))
-        self._mean_end_force = np.zeros((2, 3))
-        self._ev_buf = np.zeros((64, 3))
-        self._info = np.zeros(2, dtype=np.int64)
-        self._ws = None
-        self._imp = np.zeros((2, 3))
-        self._nev = np.zeros(1, dtype=np.int64)
+        self._ws = K.new_workspace(n)
+        self._split = (0.0, 0.0, 1, 0.0)
+        self._pack()
         total = float(L.sum())
         if total > params.length * (1 + 1e-9):
             raise ValueError(f"deployed length {total:.3f} m exceeds rope length {params.length} m")
         self._refresh()
+
+    _IO_VIEWS = ("att_on", "att_pos", "att_vel", "_io_flat", "_end_force", "_imp",
+                 "_mean_end_force", "_end_views", "_ev_buf", "_info", "_nev")
+
+    def _bind_io(self):
+        """The attributes that are views into the kernel's io array."""
+        io = self._io
+        self.att_on = io[K.IO_ATT, 1:3]  # 1.0 / 0.0
+        self.att_pos = io[K.IO_POS:K.IO_POS + 2]
+        self.att_vel = io[K.IO_VEL:K.IO_VEL + 2]
+        # set_end_kinematics writes through a memoryview (faster than numpy item access)
+        self._io_flat = memoryview(io.reshape(-1))
+        self._end_force = io[K.IO_FORCE:K.IO_FORCE + 2]
+        self._imp = io[K.IO_IMPULSE:K.IO_IMPULSE + 2]
+        self._mean_end_force = io[K.IO_MEAN:K.IO_MEAN + 2]
+        self._end_views = tuple(io[r] for r in (K.IO_FORCE, K.IO_FORCE + 1, K.IO_MEAN,
+                                                K.IO_MEAN + 1))
+        self._ev_buf = io[K.IO_EVENTS:]
+        self._info = io[K.IO_INFO, 0:2]  # divergence: sub-step, element
+        self._nev = io[K.IO_INFO, 2:3]  # parting events recorded by the kernel
+
+    def __getstate__(self):  # copy / pickle: views are rebuilt, the state repacked
+        state = {k: v for k, v in self.__dict__.items() if k not in self._IO_VIEWS}
+        state["_packed"] = False
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._bind_io()
+
+    # kernel parameters that may be changed between steps
+    @property
+    def theta(self):
+        return float(self._io[K.P_THETA])
+
+    @theta.setter
+    def theta(self, value):
+        self._io[K.P_THETA] = value
+
+    @property
+    def relaxation(self):
+        return float(self._io[K.P_RELAX])
+
+    @relaxation.setter
+    def relaxation(self, value):
+        self._io[K.P_RELAX] = value
+
+    @property
+    def current(self):
+        """Uniform current (3,), m/s, world (a view: writing into it changes the current)."""
+        return self._io[K.IO_CUR]
+
+    @current.setter
+    def current(self, value):
+        self._io[K.IO_CUR] = _vec3(value, "current")
 
     # ------------------------------------------------------------------ factories
     @classmethod
@@ -236,21 +325,23 @@ class RopeChain:
         try:  # fast path: called every exchange step
             px, py, pz = position
             vx, vy, vz = velocity
-            vals = (float(px), float(py), float(pz), float(vx), float(vy), float(vz))
+            px, py, pz = float(px), float(py), float(pz)
+            vx, vy, vz = float(vx), float(vy), float(vz)
         except (TypeError, ValueError):
             _vec3(position, f"end {end} position")
             _vec3(velocity, f"end {end} velocity")
             raise
-        for k, v in enumerate(vals):
-            if not math.isfinite(v):
-                what = "position" if k < 3 else "velocity"
-                got = list(vals[:3] if k < 3 else vals[3:])
-                raise ValueError(f"end {end} {what}: must be finite, got {got}")
+        if not (math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)):
+            raise ValueError(f"end {end} position: must be finite, got {[px, py, pz]}")
+        if not (math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)):
+            raise ValueError(f"end {end} velocity: must be finite, got {[vx, vy, vz]}")
         if self.end_modes[i] != "pinned":
             raise ValueError(f"end {end} is '{self.end_modes[i]}', only a pinned end can move")
-        ap, av = self.att_pos[i], self.att_vel[i]
-        ap[0], ap[1], ap[2] = vals[0], vals[1], vals[2]
-        av[0], av[1], av[2] = vals[3], vals[4], vals[5]
+        io = self._io_flat  # att_pos[i] at 3 (IO_POS + i), att_vel[i] at 3 (IO_VEL + i)
+        o = 3 * (K.IO_POS + i)
+        io[o], io[o + 1], io[o + 2] = px, py, pz
+        o = 3 * (K.IO_VEL + i)
+        io[o], io[o + 1], io[o + 2] = vx, vy, vz
 
     def set_payout_rate(self, rate_m_per_s):
         """Winch at end a: positive pays out, negative heaves in (m/s). Length stays within
@@ -263,26 +354,41 @@ class RopeChain:
         self.payout_rate = r
 
     # ------------------------------------------------------------------ stepping
-    def _kernel(self, h, n_sub, impulse, info):
-        return K.run_substeps(
-            self.X, self.E, self.V, self.W, self.L, self.conn_ok, self.breaking_load,
-            self.armed, self.att_on, self.att_pos, self.att_vel, *self._pargs,
-            self.current, self.relaxation, h, self.theta, n_sub,
-            self.payout_rate if self._paying else 0.0, self.VMAX, self.WMAX,
-            self.PMAX, self.tensions, self._end_force, impulse, self._ev_buf, self._nev, info,
-            self._workspace())
+    def _pack(self):
+        """Copy the state arrays into the kernel's packed arrays (S float, F int, see
+        kernels.py) and make the attributes views into them: the kernel then takes 4 array
+        arguments instead of 11 (numba's dispatch costs about 50 ns per array)."""
+        d = self.__dict__
+        L = d["_L"]
+        n = L.shape[0]
+        S = np.zeros((n + 1, K.S_COLS))
+        F = np.zeros((n + 1, 2), dtype=np.int64)
+        for key, col in (("_X", K.SX), ("_E", K.SE), ("_V", K.SV), ("_W", K.SW)):
+            S[:n, col:col + 3] = d[key]
+            d[key] = S[:n, col:col + 3]
+        S[:n, K.SL] = L
+        d["_L"] = S[:n, K.SL]
+        for key, col in (("_breaking_load", K.SB), ("_tensions", K.ST)):
+            S[:, col] = d[key]
+            d[key] = S[:, col]
+        for key, col in (("_conn_ok", 0), ("_armed", 1)):
+            F[:, col] = d[key]
+            d[key] = F[:, col]
+        self._S, self._F = S, F
+        if self._ws.shape[1] < n + 1:
+            self._ws = K.new_workspace(n)
+        self._packed = True
 
-    def _workspace(self):
-        need = K.workspace_size(self.L.shape[0])
-        if self._ws is None or self._ws.shape[0] != need:
-            self._ws = np.zeros(need)
-        return self._ws
+    def _kernel(self, h, n_sub, payout, dt):
+        """One run_substeps call (see kernels.run_substeps; dt > 0: a whole exchange step,
+        the kernel also moves the attachments on and writes the mean end force)."""
+        if not self._packed:
+            self._pack()
+        return K.run_substeps(self._S, self._F, self._io, self._ws, h, n_sub, payout, dt)
 
     def _refresh(self, t=None):
         """Recompute tensions and end forces for the current state (no time advance)."""
-        imp = np.zeros((2, 3))
-        info = np.zeros(2, dtype=np.int64)
-        self._kernel(0.0, 0, imp, info)
+        self._kernel(0.0, 0, 0.0, 0.0)
         self._collect_events(self.time if t is None else t)
 
     def _collect_events(self, t0):
@@ -300,7 +406,9 @@ class RopeChain:
 
     def _restore(self, s):
         (self.X, self.E, self.V, self.W, self.L, self.conn_ok, self.armed,
-         self.breaking_load, self.att_pos, self.tensions, self._end_force, nev) = s
+         self.breaking_load, att_pos, self.tensions, end_force, nev) = s
+        self.att_pos[:] = att_pos  # views into the kernel's io array
+        self._end_force[:] = end_force
         del self.events[nev:]
         self._nev[0] = 0
 
@@ -310,53 +418,63 @@ class RopeChain:
         dt = float(dt)
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be positive and finite, got {dt}")
-        n_sub = max(1, int(math.ceil(dt / self.max_substep - 1e-9)))
-        h = dt / n_sub
-        info = self._info
-        imp = self._imp
+        split = self._split  # sub-steps of the last dt (the exchange period rarely changes)
+        if split[0] == dt and split[1] == self.max_substep:
+            n_sub, h = split[2], split[3]
+        else:
+            n_sub = max(1, int(math.ceil(dt / self.max_substep - 1e-9)))
+            h = dt / n_sub
+            self._split = (dt, self.max_substep, n_sub, h)
         if self.winch and self.payout_rate != 0.0:
-            snap = self._snapshot()  # the winch changes arrays between sub-steps
-            imp_total = np.zeros((2, 3))
-            pos0 = self.att_pos.copy()
-            st = K.OK
-            for k in range(n_sub):
-                self.att_pos = pos0 + self.att_vel * (k * h)
-                dep = float(self.L.sum())
-                self._paying = bool(self.conn_ok[0]) and (
-                    (self.payout_rate > 0 and dep < self.params.length) or
-                    (self.payout_rate < 0 and dep > self.params.min_deployed_length))
-                st = self._kernel(h, 1, imp, info)
-                self._collect_events(self.time + k * h)
-                if st != K.OK:
-                    info[0] = k
-                    self._restore(snap)
-                    break
-                imp_total += imp
-                self._winch(self.payout_rate * h, h)
-            self.att_pos = pos0
-            self._paying = False
-            if st == K.OK:
-                self._refresh(self.time + dt)
-        else:  # the kernel restores the last good state itself on divergence
-            n_ev = len(self.events)
-            st = self._kernel(h, n_sub, imp, info)
-            if st == K.OK:
+            st = self._step_winch(dt, n_sub, h)
+        else:  # the kernel restores the last good state itself on divergence, moves the
+            # attachments on and writes the mean end force (impulse / dt)
+            if not self._packed:
+                self._pack()
+            st = K.run_substeps(self._S, self._F, self._io, self._ws, h, n_sub, 0.0, dt)
+            if st == K.PARTED:
                 self._collect_events(self.time)
-            else:
-                del self.events[n_ev:]
-                self._nev[0] = 0
-            imp_total = imp
+                st = K.OK
         if st != K.OK:
+            info = self._info
             k, j = int(info[0]), int(info[1])
             t_fail = self.time + (k + 1) * h
             raise RopeDivergedError(
                 f"rope diverged at exchange step {self.step_count + 1}, sub-step {k + 1}/{n_sub} "
                 f"(t = {t_fail:.6f} s), element {j}: non-finite or absurd state; "
                 f"state left at t = {self.time:.6f} s", self.step_count + 1, t_fail, j)
-        self.att_pos = self.att_pos + self.att_vel * dt
         self.time += dt
         self.step_count += 1
-        self._mean_end_force = imp_total * (1.0 / dt)
+
+    def _step_winch(self, dt, n_sub, h):
+        """step() with the winch running: one kernel call per sub-step, the winch changes
+        the arrays in between."""
+        info = self._info
+        snap = self._snapshot()
+        imp_total = np.zeros((2, 3))
+        pos0 = self.att_pos.copy()
+        st = K.OK
+        for k in range(n_sub):
+            self.att_pos[:] = pos0 + self.att_vel * (k * h)
+            dep = float(self.L.sum())
+            self._paying = bool(self.conn_ok[0]) and (
+                (self.payout_rate > 0 and dep < self.params.length) or
+                (self.payout_rate < 0 and dep > self.params.min_deployed_length))
+            st = self._kernel(h, 1, self.payout_rate if self._paying else 0.0, 0.0) & ~K.PARTED
+            self._collect_events(self.time + k * h)
+            if st != K.OK:
+                info[0] = k
+                self._restore(snap)
+                break
+            imp_total += self._imp
+            self._winch(self.payout_rate * h, h)
+        self.att_pos[:] = pos0
+        self._paying = False
+        if st == K.OK:
+            self._refresh(self.time + dt)
+            self.att_pos += self.att_vel * dt
+            self._mean_end_force[:] = imp_total * (1.0 / dt)
+        return st
 
     # ------------------------------------------------------------------ winch
     TINY = 1e-3  # element 0 is wound in completely below this fraction of a nominal length
@@ -532,14 +650,12 @@ class RopeChain:
 
     def end_force(self, end):
         """Force (3,) the rope exerts ON attachment a or b at the current state, N, world."""
-        i = _end_name(end)
-        return self._end_force[i].copy()
+        return self._end_views[_end_name(end)].copy()
 
     def mean_end_force(self, end):
         """Force on the attachment averaged over the last step(dt) (impulse / dt): apply
         this to the vessel for momentum-consistent coupling."""
-        i = _end_name(end)
-        return self._mean_end_force[i].copy()
+        return self._end_views[2 + _end_name(end)].copy()
 
     def attachment_position(self, end):
         return self.att_pos[_end_name(end)].copy()

@@ -4,26 +4,82 @@ State per element j (world frame ENU, z up, water surface z = 0):
   X[j]  centre of mass (R of Eq 5)            V[j]  its velocity
   E[j]  unit axis = body x, pointing to end a  W[j]  angular velocity, kept perpendicular to E
 The paper's 5 DOF (u, v, w, q, r) are (V, W) seen in the yaw-pitch body frame; storing
-the axis vector instead of (theta, psi) removes the 1/cos(theta) singularity of Eq (6)
-for hanging (vertical) elements. Generalised velocity per element for the implicit
-solve: nu = (V, W.b1, W.b2) with (E, b1, b2) a right-handed basis: 5 DOF as in Eq (2).
+the axis vector instead of (theta, psi) removes the 1/cos(theta) singularity of Eq (6) for
+hanging (vertical) elements. Generalised velocity per element for the implicit solve:
+nu = (V, W.b1, W.b2) with (E, b1, b2) a right-handed basis: 5 DOF as in Eq (2).
 
 Connections c = 0..N: c joins the aft point of element c-1 (or attachment a when c = 0)
 to the front point of element c (or attachment b when c = N).
 
 Integrator: linearly implicit theta-method (theta = 1/2: trapezoidal / Newmark average
 acceleration) with the exact Jacobian of the connection springs (incl. geometric
-stiffness), of the connection dampers, of drag and of the water-entry term; the system is
-block tri-diagonal (5x5 blocks) and solved in O(N) by block Thomas elimination.
+stiffness), of the connection dampers, of drag and of the water-entry term; the system
+
+    (M - h theta C - h^2 theta^2 K) dnu = h f + h^2 theta K nu + attachment terms
+
+is block tri-diagonal (5x5 blocks) and solved in O(N) by block Thomas elimination.
+
+Everything runs in one call per exchange step, run_substeps(): per sub-step it writes the
+system directly (diagonal blocks Ad, upper blocks Ao, lower = Ao^T; the spring part of
+h^2 theta K nu + attachment terms is -h^2 theta k J^T times the relative velocity of the
+two connection points, so no K blocks are stored), eliminates, and advances the state; at
+the end only the connections are evaluated (tensions, end forces and the parting check do
+not depend on the element forces). The arguments are few and packed (numba's dispatch costs
+about 50 ns per array argument, and every array handed to a called function costs atomic
+reference counting, which is why the kernel is one function whose helpers take scalars):
+the state S and flags F (RopeChain's X, E, V, W, ... are views into them), one float array
+io for parameters, attachment data and outputs, and the work space ws.
 """
 import math
 
+import numpy as np
 from numba import njit
 
 # status codes returned by run_substeps
 OK = 0
-STRICT_EQ25 = False  # compile-time switch, see evaluate()
 DIVERGED = 1
+NEED_WS = 2  # ws holds fewer than N + 1 element slots: pass new_workspace(N)
+PARTED = 4  # flag or-ed into OK: parting events were recorded (io[IO_NEV] of them)
+STRICT_EQ25 = False  # compile-time switch, see the connections in run_substeps()
+# fused multiply-add allowed (results change at the round-off level only); no other
+# fast-math assumption: NaN and inf keep their meaning for the divergence check
+FMA = {"contract"}
+
+# S: float64 (N + 1, S_COLS), the state: per element j (rows 0..N-1) centre X, axis E,
+# velocity V, angular velocity W (3 columns each from SX, SE, SV, SW) and length (SL); per
+# connection c (rows 0..N) breaking load (SB) and tension (ST). RopeChain's X, E, ... are
+# views into it. F: int64 (N + 1, 2): connection intact (column 0), parting armed (1).
+SX, SE, SV, SW, SL, SB, ST = 0, 3, 6, 9, 12, 13, 14
+S_COLS = 16
+# io: float64 (IO_ROWS, 3), RopeChain._io; the attributes att_pos, att_vel etc. are views
+IO_POS, IO_VEL, IO_FORCE, IO_IMPULSE, IO_MEAN = 0, 2, 4, 6, 8  # rows (end a, end b):
+# attachment position and velocity, force on the attachment, impulse over the call,
+# impulse / dt
+P_MU, P_RADIUS, P_EA = (10, 0), (10, 1), (10, 2)  # scalar parameters (row, column)
+P_CD, P_CF, P_TFAC = (11, 0), (11, 1), (11, 2)
+P_CA, P_RHO_W, P_RHO_A = (12, 0), (12, 1), (12, 2)
+P_G, P_Z_AX, P_Z_TR = (13, 0), (13, 1), (13, 2)  # gravity, damping ratios
+P_Z_ROT, P_P_ROT, P_RELAX = (14, 0), (14, 1), (14, 2)  # bending reference load P_ROT
+IO_CUR = 15  # row: uniform current (m/s)
+P_THETA, P_VMAX, P_WMAX = (16, 0), (16, 1), (16, 2)
+P_PMAX = (17, 0)
+IO_ATT = 17  # columns 1, 2: attachment a, b on (1.0) or not (0.0)
+IO_INFO = 18  # columns 0, 1: divergence (sub-step, element); column 2: events recorded
+IO_NEV = (18, 2)
+IO_EVENTS = 19  # rows: parting events (t, c, T)
+N_EVENTS_MAX = 64
+IO_ROWS = IO_EVENTS + N_EVENTS_MAX
+# ws: float64 (6, cap, 5, 5), cap >= N + 1: 0 Ad, 1 Ao, 2 Wm (= D^-1 Ao), 3 per-element
+# vectors (row 0 rhs / y, row 1 dnu, row 2 b1, row 3 b2, row 4 (I_y, backup of tension,
+# conn_ok, armed)), 4 backup of X, E, V, W (rows 0-3) and connection constants (row 4:
+# k, c_x, c_t, c_m, element length they were computed for), 5 backup of the end forces
+# (slot 0, rows 0-1) and the element count of the constants (slot 1, [0, 0])
+WS_SLOTS = 6
+
+
+def new_workspace(n):
+    """Work space for n elements (a few spare slots for winch splits)."""
+    return np.zeros((WS_SLOTS, n + 5, 5, 5))
 
 
 @njit(cache=True)
@@ -43,7 +99,7 @@ _GX = (-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.861136311
 _GW = (0.1739274225687269, 0.3260725774312731, 0.3260725774312731, 0.1739274225687269)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FMA)
 def immersion(z, ez, half_len, r):
     """Immersed fraction f of an element (centre height z, axis z-component ez), df/dz and
     m1 = mean of f(s) * s along the axis (s from the centre, m).
@@ -53,6 +109,13 @@ def immersion(z, ez, half_len, r):
     for): smooth (C1) in z, and a half-immersed inclined element gets the righting moment
     rho Vol g m1 (e x z) that keeps the paper's floating elements level (section 4.3)."""
     rs = r * math.sqrt(max(0.0, 1.0 - ez * ez))
+    if z - half_len * abs(ez) >= rs + half_len * abs(ez):  # all 4 pieces out of the water
+        return 0.0, 0.0, 0.0
+    if z + half_len * abs(ez) <= -(rs + half_len * abs(ez)):  # all 4 pieces submerged
+        m1 = 0.0
+        for k in range(4):
+            m1 += _GW[k] * (half_len * _GX[k])
+        return 1.0, 0.0, m1
     f = 0.0
     df = 0.0
     m1 = 0.0
@@ -66,700 +129,932 @@ def immersion(z, ez, half_len, r):
     return f, df, m1
 
 
-@njit(cache=True)
-def basis(e, b1, b2):
-    """Right-handed (e, b1, b2), deterministic; written into b1, b2."""
-    if abs(e[2]) < 0.9:
+# The kernel below is one function on purpose: numba counts references (atomic increments
+# and decrements) of every array passed to a called function, even an inlined one, which
+# costs more than the work of a connection. The helpers it calls take scalars only.
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _basis(ex, ey, ez):
+    """Right-handed (e, b1, b2) as basis(): returns b1, b2 (6 scalars)."""
+    if abs(ez) < 0.9:
         hx, hy, hz = 0.0, 0.0, 1.0
     else:
         hx, hy, hz = 1.0, 0.0, 0.0
-    d = hx * e[0] + hy * e[1] + hz * e[2]
-    b1[0] = hx - d * e[0]
-    b1[1] = hy - d * e[1]
-    b1[2] = hz - d * e[2]
-    nb = math.sqrt(b1[0] ** 2 + b1[1] ** 2 + b1[2] ** 2)
-    b1[0] /= nb
-    b1[1] /= nb
-    b1[2] /= nb
-    b2[0] = e[1] * b1[2] - e[2] * b1[1]
-    b2[1] = e[2] * b1[0] - e[0] * b1[2]
-    b2[2] = e[0] * b1[1] - e[1] * b1[0]
+    d = hx * ex + hy * ey + hz * ez
+    p0 = hx - d * ex
+    p1 = hy - d * ey
+    p2 = hz - d * ez
+    nb = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    p0 /= nb
+    p1 /= nb
+    p2 /= nb
+    return p0, p1, p2, ey * p2 - ez * p1, ez * p0 - ex * p2, ex * p1 - ey * p0
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _jsj(s, b10, b11, b12, b20, b21, b22, beta, gamma, n0, n1, n2):
+    """Upper triangle (row by row) of J^T S J for a connection point at lever s on an
+    element with basis (b1, b2): J = [I | -s b2 | s b1] (dP = J dq), S = beta I + gamma n n^T."""
+    nb1 = n0 * b10 + n1 * b11 + n2 * b12
+    nb2 = n0 * b20 + n1 * b21 + n2 * b22
+    ss = s * s
+    return (beta + gamma * n0 * n0, gamma * n0 * n1, gamma * n0 * n2,
+            -s * (beta * b20 + gamma * n0 * nb2), s * (beta * b10 + gamma * n0 * nb1),
+            beta + gamma * n1 * n1, gamma * n1 * n2,
+            -s * (beta * b21 + gamma * n1 * nb2), s * (beta * b11 + gamma * n1 * nb1),
+            beta + gamma * n2 * n2,
+            -s * (beta * b22 + gamma * n2 * nb2), s * (beta * b12 + gamma * n2 * nb1),
+            ss * (beta + gamma * nb2 * nb2), -ss * gamma * nb2 * nb1,
+            ss * (beta + gamma * nb1 * nb1))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _ldl5(a00, a01, a02, a03, a04, a11, a12, a13, a14, a22, a23, a24, a33, a34, a44):
+    """L diag L^T of a symmetric 5x5 (upper triangle a). Returns ok (every pivot > 0: the
+    matrix is positive definite and the factorisation needs no pivoting), the inverse
+    pivots and the factors below the unit diagonal."""
+    i0 = i1 = i2 = i3 = i4 = 0.0
+    l10 = l20 = l30 = l40 = l21 = l31 = l41 = l32 = l42 = l43 = 0.0
+    ok = a00 > 0.0
+    if ok:
+        i0 = 1.0 / a00
+        l10 = a01 * i0
+        l20 = a02 * i0
+        l30 = a03 * i0
+        l40 = a04 * i0
+        u11 = a11 - l10 * a01
+        ok = u11 > 0.0
+        if ok:
+            i1 = 1.0 / u11
+            u12 = a12 - l10 * a02
+            u13 = a13 - l10 * a03
+            u14 = a14 - l10 * a04
+            l21 = u12 * i1
+            l31 = u13 * i1
+            l41 = u14 * i1
+            u22 = a22 - l20 * a02 - l21 * u12
+            ok = u22 > 0.0
+            if ok:
+                i2 = 1.0 / u22
+                u23 = a23 - l20 * a03 - l21 * u13
+                u24 = a24 - l20 * a04 - l21 * u14
+                l32 = u23 * i2
+                l42 = u24 * i2
+                u33 = a33 - l30 * a03 - l31 * u13 - l32 * u23
+                ok = u33 > 0.0
+                if ok:
+                    i3 = 1.0 / u33
+                    u34 = a34 - l30 * a04 - l31 * u14 - l32 * u24
+                    l43 = u34 * i3
+                    u44 = a44 - l40 * a04 - l41 * u14 - l42 * u24 - l43 * u34
+                    ok = u44 > 0.0
+                    if ok:
+                        i4 = 1.0 / u44
+    return ok, i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _ldl5_solve(i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
+                b0, b1, b2, b3, b4):
+    """x = D^-1 b with the factors of _ldl5()."""
+    z1 = b1 - l10 * b0
+    z2 = b2 - l20 * b0 - l21 * z1
+    z3 = b3 - l30 * b0 - l31 * z1 - l32 * z2
+    z4 = b4 - l40 * b0 - l41 * z1 - l42 * z2 - l43 * z3
+    x4 = z4 * i4
+    x3 = z3 * i3 - l43 * x4
+    x2 = z2 * i2 - l32 * x3 - l42 * x4
+    x1 = z1 * i1 - l21 * x2 - l31 * x3 - l41 * x4
+    x0 = b0 * i0 - l10 * x1 - l20 * x2 - l30 * x3 - l40 * x4
+    return x0, x1, x2, x3, x4
 
 
 @njit(cache=True)
-def _cross(a, b, out):
-    x = a[1] * b[2] - a[2] * b[1]
-    y = a[2] * b[0] - a[0] * b[2]
-    z = a[0] * b[1] - a[1] * b[0]
-    out[0] = x
-    out[1] = y
-    out[2] = z
-
-
-@njit(cache=True)
-def _jac(J, s_half, b1, b2):
-    """J (3x5): dP = J dq for the point P = X + s_half*E (s_half = +-l/2)."""
-    for r in range(3):
-        for c in range(3):
-            J[r, c] = 1.0 if r == c else 0.0
-        J[r, 3] = -s_half * b2[r]  # dE = a1*(-b2) + a2*b1
-        J[r, 4] = s_half * b1[r]
-
-
-@njit(cache=True)
-def _add_pair(out, ha, b1a, b2a, hb, b1b, b2b, S, coef):
-    """out (5x5) += coef * Ja^T S Jb for J = [I | h*(-b2) | h*b1] (see _jac), using the
-    structure (about 45 multiply-adds instead of 120)."""
-    # S g1b, S g2b with g1 = -h b2, g2 = h b1
-    u0 = -hb * (S[0, 0] * b2b[0] + S[0, 1] * b2b[1] + S[0, 2] * b2b[2])
-    u1 = -hb * (S[1, 0] * b2b[0] + S[1, 1] * b2b[1] + S[1, 2] * b2b[2])
-    u2 = -hb * (S[2, 0] * b2b[0] + S[2, 1] * b2b[1] + S[2, 2] * b2b[2])
-    w0 = hb * (S[0, 0] * b1b[0] + S[0, 1] * b1b[1] + S[0, 2] * b1b[2])
-    w1 = hb * (S[1, 0] * b1b[0] + S[1, 1] * b1b[1] + S[1, 2] * b1b[2])
-    w2 = hb * (S[2, 0] * b1b[0] + S[2, 1] * b1b[1] + S[2, 2] * b1b[2])
-    for r in range(3):
-        for c in range(3):
-            out[r, c] += coef * S[r, c]
-    out[0, 3] += coef * u0
-    out[1, 3] += coef * u1
-    out[2, 3] += coef * u2
-    out[0, 4] += coef * w0
-    out[1, 4] += coef * w1
-    out[2, 4] += coef * w2
-    for c in range(3):
-        out[3, c] += -coef * ha * (b2a[0] * S[0, c] + b2a[1] * S[1, c] + b2a[2] * S[2, c])
-        out[4, c] += coef * ha * (b1a[0] * S[0, c] + b1a[1] * S[1, c] + b1a[2] * S[2, c])
-    out[3, 3] += -coef * ha * (b2a[0] * u0 + b2a[1] * u1 + b2a[2] * u2)
-    out[3, 4] += -coef * ha * (b2a[0] * w0 + b2a[1] * w1 + b2a[2] * w2)
-    out[4, 3] += coef * ha * (b1a[0] * u0 + b1a[1] * u1 + b1a[2] * u2)
-    out[4, 4] += coef * ha * (b1a[0] * w0 + b1a[1] * w1 + b1a[2] * w2)
-
-
-@njit(cache=True)
-def _add_Jt_vec(out, J, F, coef):
-    for r in range(5):
-        acc = 0.0
-        for k in range(3):
-            acc += J[k, r] * F[k]
-        out[r] += coef * acc
-
-
-@njit(cache=True)
-def evaluate(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
-             mu, radius, EA, Cd, Cf, tfac, Ca, rho_w, rho_a, g,
-             z_ax, z_tr, z_rot, P_rot, cur, relax, h, theta, t, payout_a,
-             f, Md, Kd, Ko, Cdd, Cdo, rhs_att, tension, end_force, events, n_events, B1, B2,
-             need_jac, Iy, sv, sJ, S):
-    """Forces f (N,5) at the current state, mass blocks Md, stiffness (Kd, Ko) and damping
-    (Cdd, Cdo) Jacobian blocks (diagonal and upper off-diagonal), attachment terms,
-    connection tensions and the forces on the two attachments. Parts the most overloaded
-    armed connection (records (t, c, T) in events) and returns True if it did."""
-    N = X.shape[0]
-    pi = math.pi
-    D = 2.0 * radius
-    r2 = radius * radius
-    f[:] = 0.0
-    Md[:] = 0.0
-    Kd[:] = 0.0
-    Ko[:] = 0.0
-    Cdd[:] = 0.0
-    Cdo[:] = 0.0
-    rhs_att[:] = 0.0
-    tension[:] = 0.0
-    end_force[:] = 0.0
-    vr = sv[0]
-    F = sv[1]
-    tau = sv[2]
-    vn = sv[3]
-    edot = sv[4]
-    vxe = sv[5]
-    for j in range(N):
-        l = L[j]
-        e = E[j]
-        b1 = B1[j]
-        b2 = B2[j]
-        basis(e, b1, b2)
-        m = mu * l
-        vol = pi * r2 * l
-        fr, dfr, m1 = immersion(X[j, 2], e[2], 0.5 * l, radius)
-        ma = Ca * rho_w * vol * fr  # Eq (9), scaled by the immersed fraction
-        rot_fac = (l * l + 3.0 * r2) / 12.0  # Eq (4)
-        Iy[j] = m * rot_fac
-        Ip = m * rot_fac + Ca * rho_w * vol * rot_fac * fr  # I_y + J_y, Eq (4), (9)
-        # mass matrix, Eq (3), in world axes: m*I + m_y*(I - e e^T), m_x ~ 0
-        for a in range(3):
-            for b in range(3):
-                Md[j, a, b] = (m + ma if a == b else 0.0) - ma * e[a] * e[b]
-        Md[j, 3, 3] = Ip
-        Md[j, 4, 4] = Ip
-        F[:] = 0.0
-        tau[:] = 0.0
-        # gravity Eq (13) and buoyancy Eq (12) (distributed immersion, see immersion())
-        F[2] += -m * g + rho_w * vol * g * fr
-        tau[0] += rho_w * vol * g * m1 * e[1]  # moment of the buoyancy: m1 (e x z)
-        tau[1] -= rho_w * vol * g * m1 * e[0]
-        # drag Eq (10): water part on velocity relative to current, air part on V
-        for part in range(2):
-            if part == 0:
-                rho = rho_w * fr
-                for a in range(3):
-                    vr[a] = V[j, a] - cur[a]
-            else:
-                rho = rho_a * (1.0 - fr)
-                for a in range(3):
-                    vr[a] = V[j, a]
-            if rho <= 0.0:
-                continue
-            u = vr[0] * e[0] + vr[1] * e[1] + vr[2] * e[2]
-            for a in range(3):
-                vn[a] = vr[a] - u * e[a]
-            sn = math.sqrt(vn[0] ** 2 + vn[1] ** 2 + vn[2] ** 2)
-            cn = 0.5 * rho * D * l * Cd
-            ct = 0.5 * rho * D * l * Cf * tfac
-            for a in range(3):
-                F[a] += -cn * sn * vn[a] - ct * abs(u) * u * e[a]
-            # drag Jacobian dF/dV (treated implicitly)
-            for a in range(3):
-                for b in range(3):
-                    pa = (1.0 if a == b else 0.0) - e[a] * e[b]
-                    dd = -cn * sn * pa - 2.0 * ct * abs(u) * e[a] * e[b]
-                    if sn > 1e-12:
-                        dd += -cn * vn[a] * vn[b] / sn
-                    Cdd[j, a, b] += dd
-        # fluid Coriolis, Eq (8) C_A, in world form: -(dM_A/dt) V_r, dE/dt = W x E
-        for a in range(3):
-            vr[a] = V[j, a] - cur[a]
-        _cross(W[j], e, edot)
-        ue = vr[0] * e[0] + vr[1] * e[1] + vr[2] * e[2]
-        ued = vr[0] * edot[0] + vr[1] * edot[1] + vr[2] * edot[2]
-        for a in range(3):
-            F[a] += ma * (edot[a] * ue + e[a] * ued)
-        # Munk moment, Eq (8) rows 4-5: (m_z - m_x) w u, (m_x - m_y) u v
-        _cross(vr, e, vxe)
-        for a in range(3):
-            tau[a] += ma * ue * vxe[a]
-        # water entry, Eq (14): H = -dm_a/dt * v_normal, only while entering
-        mdot = Ca * rho_w * vol * dfr * V[j, 2]
-        if mdot > 0.0:
-            for a in range(3):
-                F[a] += -mdot * (vr[a] - ue * e[a])
-                for b in range(3):
-                    Cdd[j, a, b] += -mdot * ((1.0 if a == b else 0.0) - e[a] * e[b])
-            jdot = mdot * rot_fac
-            for a in range(3):
-                tau[a] += -jdot * W[j, a]
-            Cdd[j, 3, 3] += -jdot
-            Cdd[j, 4, 4] += -jdot
-        # numerical relaxation (0 in normal use): -relax * M nu
-        if relax > 0.0:
-            for a in range(3):
-                acc = 0.0
-                for b in range(3):
-                    acc += Md[j, a, b] * V[j, b]
-                    Cdd[j, a, b] += -relax * Md[j, a, b]
-                F[a] += -relax * acc
-            for a in range(3):
-                tau[a] += -relax * Ip * W[j, a]
-            Cdd[j, 3, 3] += -relax * Ip
-            Cdd[j, 4, 4] += -relax * Ip
-        for a in range(3):
-            f[j, a] += F[a]
-        f[j, 3] += tau[0] * b1[0] + tau[1] * b1[1] + tau[2] * b1[2]
-        f[j, 4] += tau[0] * b2[0] + tau[1] * b2[1] + tau[2] * b2[2]
-
-    # connections: tension-only springs (Eq 20-26) with dampers (Eq 15-19)
-    Jp = sJ[0]
-    Jn = sJ[1]
-    I3 = sJ[2, :, 0:3]
-    Pp = sv[6]
-    Pn = sv[7]
-    Vp = sv[8]
-    Vn = sv[9]
-    d = sv[10]
-    dv = sv[11]
-    nax = sv[12]
-    Fc = sv[13]
-    arm = sv[14]
-    wa = sv[15]
-    dw = sv[16]
-    best_c = -1
-    best_ratio = 1.0
-    best_T = 0.0
-    for c in range(N + 1):
-        if conn_ok[c] == 0:
-            continue
-        hp = c > 0
-        hn = c < N
-        if (not hp and att_on[0] == 0) or (not hn and att_on[1] == 0):
-            continue
-        i = c - 1
-        k = c
-        if hp:
-            half = 0.5 * L[i]
-            for a in range(3):
-                arm[a] = -half * E[i, a]
-                Pp[a] = X[i, a] + arm[a]
-            _cross(W[i], arm, wa)
-            for a in range(3):
-                Vp[a] = V[i, a] + wa[a]
-            _jac(Jp, -half, B1[i], B2[i])
-        else:
-            for a in range(3):
-                Pp[a] = att_pos[0, a] + att_vel[0, a] * t
-                Vp[a] = att_vel[0, a]
-        if hn:
-            half = 0.5 * L[k]
-            for a in range(3):
-                arm[a] = half * E[k, a]
-                Pn[a] = X[k, a] + arm[a]
-            _cross(W[k], arm, wa)
-            for a in range(3):
-                Vn[a] = V[k, a] + wa[a]
-            if c == 0:  # winch at end a: rope slides out of the drum at the pay-out rate
-                for a in range(3):
-                    Vn[a] += payout_a * E[k, a]
-            _jac(Jn, half, B1[k], B2[k])
-        else:
-            for a in range(3):
-                Pn[a] = att_pos[1, a] + att_vel[1, a] * t
-                Vn[a] = att_vel[1, a]
-        # Eq (25) switches a connection off when one point enters the neighbour's half
-        # length (|d|^2 + l d.e <= 0, i.e. axial compression). Done continuously below:
-        # only the compressive axial part of the connection force is removed (STRICT_EQ25
-        # = True restores the paper's all-or-nothing switch).
-        active = True
-        if STRICT_EQ25:
-            if hp:
-                q = 0.0
-                for a in range(3):
-                    q += (Pn[a] - X[i, a]) ** 2
-                if math.sqrt(q) <= 0.5 * L[i]:
-                    active = False
-            if hn:
-                q = 0.0
-                for a in range(3):
-                    q += (Pp[a] - X[k, a]) ** 2
-                if math.sqrt(q) <= 0.5 * L[k]:
-                    active = False
-        if hp and hn:  # bending damping, Eq (18)-(19), on the relative angular velocity
-            cm = 2.0 * z_rot * math.sqrt(P_rot * 0.5 * (Iy[i] + Iy[k]))
-            if cm > 0.0:
-                for a in range(3):
-                    dw[a] = W[i, a] - W[k, a]
-                f[k, 3] += cm * (dw[0] * B1[k, 0] + dw[1] * B1[k, 1] + dw[2] * B1[k, 2])
-                f[k, 4] += cm * (dw[0] * B2[k, 0] + dw[1] * B2[k, 1] + dw[2] * B2[k, 2])
-                f[i, 3] -= cm * (dw[0] * B1[i, 0] + dw[1] * B1[i, 1] + dw[2] * B1[i, 2])
-                f[i, 4] -= cm * (dw[0] * B2[i, 0] + dw[1] * B2[i, 1] + dw[2] * B2[i, 2])
-                Cdd[k, 3, 3] -= cm
-                Cdd[k, 4, 4] -= cm
-                Cdd[i, 3, 3] -= cm
-                Cdd[i, 4, 4] -= cm
-                for a in range(3):  # d torque_i / d w_k = cm B_i^T B_k
-                    Cdo[i, 3, 3] += cm * B1[i, a] * B1[k, a]
-                    Cdo[i, 3, 4] += cm * B1[i, a] * B2[k, a]
-                    Cdo[i, 4, 3] += cm * B2[i, a] * B1[k, a]
-                    Cdo[i, 4, 4] += cm * B2[i, a] * B2[k, a]
-        if not active:
-            continue
-        # spring: stiffness equivalent to EA over the rope length it represents
-        lrep = 0.0
-        msum = 0.0
-        cnt = 0.0
-        for a in range(3):
-            nax[a] = 0.0
-        if hp:
-            lrep += 0.5 * L[i]
-            msum += mu * L[i]
-            cnt += 1.0
-            for a in range(3):
-                nax[a] += E[i, a]
-        if hn:
-            lrep += 0.5 * L[k]
-            msum += mu * L[k]
-            cnt += 1.0
-            for a in range(3):
-                nax[a] += E[k, a]
-        nn = math.sqrt(nax[0] ** 2 + nax[1] ** 2 + nax[2] ** 2)
-        if nn < 1e-9:  # folded back on itself: use the gap direction
-            for a in range(3):
-                nax[a] = Pp[a] - Pn[a]
-            nn = math.sqrt(nax[0] ** 2 + nax[1] ** 2 + nax[2] ** 2) + 1e-300
-        for a in range(3):
-            nax[a] /= nn
-        kc = EA / lrep
-        mc = msum / cnt
-        cax = 2.0 * z_ax * math.sqrt(kc * mc)  # Eq (16): c_x = 2 zeta_x sqrt(k m)
-        ctr = 2.0 * z_tr * math.sqrt(kc * mc)
-        for a in range(3):
-            d[a] = Pp[a] - Pn[a]
-            dv[a] = Vp[a] - Vn[a]
-        ndv = nax[0] * dv[0] + nax[1] * dv[1] + nax[2] * dv[2]
-        for a in range(3):
-            Fc[a] = kc * d[a] + cax * nax[a] * ndv + ctr * (dv[a] - nax[a] * ndv)
-        ax = Fc[0] * nax[0] + Fc[1] * nax[1] + Fc[2] * nax[2]
-        axial_damp = cax
-        if ax < 0.0:  # a rope cannot push: drop the compressive axial part
-            for a in range(3):
-                Fc[a] -= ax * nax[a]
-            axial_damp = 0.0
-        T = math.sqrt(Fc[0] ** 2 + Fc[1] ** 2 + Fc[2] ** 2)
-        if T > brk[c]:  # parting candidate (issue 3 item 4)
-            if armed[c] != 0 and T / brk[c] > best_ratio:
-                best_ratio = T / brk[c]
-                best_c = c
-                best_T = T
-        else:
-            armed[c] = 1
-        tension[c] = T
-        # Fc acts on the 'next' point, -Fc on the 'prev' point
-        if hn:
-            _add_Jt_vec(f[k], Jn, Fc, 1.0)
-        else:
-            for a in range(3):
-                end_force[1, a] = Fc[a]
-        if hp:
-            _add_Jt_vec(f[i], Jp, Fc, -1.0)
-        else:
-            for a in range(3):
-                end_force[0, a] = -Fc[a]
-        if not need_jac:
-            continue
-        hi = -0.5 * L[i] if hp else 0.0  # lever of the aft point of i / front point of k
-        hk = 0.5 * L[k] if hn else 0.0
-        for a in range(3):
-            for b in range(3):
-                S[a, b] = (axial_damp * nax[a] * nax[b]
-                           + ctr * ((1.0 if a == b else 0.0) - nax[a] * nax[b]))
-        if hn:  # spring -kc Jn^T Jn, damper -Jn^T S Jn, geometric stiffness of the moment
-            _add_pair(Kd[k], hk, B1[k], B2[k], hk, B1[k], B2[k], I3, -kc)
-            _add_pair(Cdd[k], hk, B1[k], B2[k], hk, B1[k], B2[k], S, -1.0)
-            fe = Fc[0] * E[k, 0] + Fc[1] * E[k, 1] + Fc[2] * E[k, 2]
-            Kd[k, 3, 3] += -0.5 * L[k] * fe
-            Kd[k, 4, 4] += -0.5 * L[k] * fe
-        if hp:
-            _add_pair(Kd[i], hi, B1[i], B2[i], hi, B1[i], B2[i], I3, -kc)
-            _add_pair(Cdd[i], hi, B1[i], B2[i], hi, B1[i], B2[i], S, -1.0)
-            fe = Fc[0] * E[i, 0] + Fc[1] * E[i, 1] + Fc[2] * E[i, 2]
-            Kd[i, 3, 3] += -0.5 * L[i] * fe
-            Kd[i, 4, 4] += -0.5 * L[i] * fe
-        if hp and hn:
-            _add_pair(Ko[i], hi, B1[i], B2[i], hk, B1[k], B2[k], I3, kc)
-            _add_pair(Cdo[i], hi, B1[i], B2[i], hk, B1[k], B2[k], S, 1.0)
-        # attachment moving during the sub-step (position extrapolated with its velocity)
-        if not hp:  # (winch heave-in: the drum end also retracts along the rope; pay-out
-            # extensions are capped at the drum in chain._winch, so they are not anticipated)
-            pin = min(payout_a, 0.0)
-            for a in range(3):
-                d[a] = kc * (att_vel[0, a] - pin * E[k, a]) * h
-            _add_Jt_vec(rhs_att[k], Jn, d, h * theta)
-        if not hn:
-            for a in range(3):
-                d[a] = kc * att_vel[1, a] * h
-            _add_Jt_vec(rhs_att[i], Jp, d, h * theta)
-    if best_c >= 0:
-        # the rope parts at the most overloaded connection only; the others that carry
-        # the same overload survived it (they are disarmed until they unload)
-        conn_ok[best_c] = 0
-        ne = n_events[0]
-        if ne < events.shape[0]:
-            events[ne, 0] = t
-            events[ne, 1] = best_c
-            events[ne, 2] = best_T
-        n_events[0] = ne + 1
-        for c in range(N + 1):
-            if tension[c] > brk[c]:
-                armed[c] = 0
-        return True
-    return False
-
-
-@njit(cache=True)
-def _solve_dense(A, Bm, n, m):
-    """Solve A X = Bm in place (A n x n, Bm n x m), partial pivoting. Returns False if singular."""
-    for col in range(n):
+def _lu_solve(D, R, r, m):
+    """Solve D Z = [R[:, :m] | r] in place (D 5x5, R 5x5, r 5), Gaussian elimination with
+    partial pivoting. Returns False if D is singular or not finite."""
+    for col in range(5):
         piv = col
-        best = abs(A[col, col])
-        for r in range(col + 1, n):
-            if abs(A[r, col]) > best:
-                best = abs(A[r, col])
-                piv = r
+        best = abs(D[col, col])
+        for q in range(col + 1, 5):
+            if abs(D[q, col]) > best:
+                best = abs(D[q, col])
+                piv = q
         if best == 0.0 or not math.isfinite(best):
             return False
         if piv != col:
-            for c in range(n):
-                tmp = A[col, c]
-                A[col, c] = A[piv, c]
-                A[piv, c] = tmp
+            for c in range(col, 5):
+                tmp = D[col, c]
+                D[col, c] = D[piv, c]
+                D[piv, c] = tmp
             for c in range(m):
-                tmp = Bm[col, c]
-                Bm[col, c] = Bm[piv, c]
-                Bm[piv, c] = tmp
-        inv = 1.0 / A[col, col]
-        for r in range(col + 1, n):
-            fac = A[r, col] * inv
+                tmp = R[col, c]
+                R[col, c] = R[piv, c]
+                R[piv, c] = tmp
+            tmp = r[col]
+            r[col] = r[piv]
+            r[piv] = tmp
+        inv = 1.0 / D[col, col]
+        for q in range(col + 1, 5):
+            fac = D[q, col] * inv
             if fac != 0.0:
-                for c in range(col, n):
-                    A[r, c] -= fac * A[col, c]
+                for c in range(col + 1, 5):
+                    D[q, c] -= fac * D[col, c]
                 for c in range(m):
-                    Bm[r, c] -= fac * Bm[col, c]
-    for col in range(n - 1, -1, -1):
-        inv = 1.0 / A[col, col]
+                    R[q, c] -= fac * R[col, c]
+                r[q] -= fac * r[col]
+    for col in range(4, -1, -1):
+        inv = 1.0 / D[col, col]
         for c in range(m):
-            acc = Bm[col, c]
-            for k in range(col + 1, n):
-                acc -= A[col, k] * Bm[k, c]
-            Bm[col, c] = acc * inv
+            acc = R[col, c]
+            for q in range(col + 1, 5):
+                acc -= D[col, q] * R[q, c]
+            R[col, c] = acc * inv
+        acc = r[col]
+        for q in range(col + 1, 5):
+            acc -= D[col, q] * r[q]
+        r[col] = acc * inv
     return True
 
 
 @njit(cache=True)
-def solve_block_tridiag(Ad, Ao, b, x, Wm, y, Dp, R):
-    """Symmetric block tri-diagonal solve: diag Ad (N,5,5), upper Ao (N,5,5) (block j,j+1),
-    lower = Ao^T. Block Thomas elimination, O(N); Wm (N,5,5), y (N,5), Dp (5,5), R (5,6)
-    are scratch. Returns the index of a singular block or -1."""
-    N = Ad.shape[0]
-    for j in range(N):
-        for r in range(5):
-            for c in range(5):
-                Dp[r, c] = Ad[j, r, c]
-            R[r, 5] = b[j, r]
-        if j > 0:
-            # D'_j = A_jj - L_j W_{j-1}, L_j = Ao[j-1]^T ; rhs'_j = b_j - L_j y_{j-1}
-            for r in range(5):
-                for c in range(5):
-                    acc = 0.0
-                    for k in range(5):
-                        acc += Ao[j - 1, k, r] * Wm[j - 1, k, c]
-                    Dp[r, c] -= acc
-                acc = 0.0
-                for k in range(5):
-                    acc += Ao[j - 1, k, r] * y[j - 1, k]
-                R[r, 5] -= acc
-        for r in range(5):
-            for c in range(5):
-                R[r, c] = Ao[j, r, c] if j < N - 1 else 0.0
-        if not _solve_dense(Dp, R, 5, 6):
-            return j
-        for r in range(5):
-            for c in range(5):
-                Wm[j, r, c] = R[r, c]
-            y[j, r] = R[r, 5]
-    for r in range(5):
-        x[N - 1, r] = y[N - 1, r]
-    for j in range(N - 2, -1, -1):
-        for r in range(5):
-            acc = y[j, r]
-            for c in range(5):
-                acc -= Wm[j, r, c] * x[j + 1, c]
-            x[j, r] = acc
-    return -1
+def _part(best_c, best_T, t, N, S, F, io):
+    """The rope parts at the most overloaded connection only; the others that carry the
+    same overload survived it (they are disarmed until they unload)."""
+    F[best_c, 0] = 0
+    ne = int(io[IO_NEV])
+    if ne < N_EVENTS_MAX:
+        io[IO_EVENTS + ne, 0] = t
+        io[IO_EVENTS + ne, 1] = best_c
+        io[IO_EVENTS + ne, 2] = best_T
+    io[IO_NEV] = ne + 1
+    for c in range(N + 1):
+        if S[c, ST] > S[c, SB]:
+            F[c, 1] = 0
 
 
-@njit(cache=True)
-def _rodrigues(v, phi, out):
-    """out = rotation of v by the rotation vector phi (out may not alias v)."""
-    ang = math.sqrt(phi[0] ** 2 + phi[1] ** 2 + phi[2] ** 2)
-    if ang < 1e-300:
-        out[0] = v[0]
-        out[1] = v[1]
-        out[2] = v[2]
-        return
-    k0 = phi[0] / ang
-    k1 = phi[1] / ang
-    k2 = phi[2] / ang
-    c = math.cos(ang)
-    s = math.sin(ang)
-    kv = (k0 * v[0] + k1 * v[1] + k2 * v[2]) * (1.0 - c)
-    out[0] = v[0] * c + (k1 * v[2] - k2 * v[1]) * s + k0 * kv
-    out[1] = v[1] * c + (k2 * v[0] - k0 * v[2]) * s + k1 * kv
-    out[2] = v[2] * c + (k0 * v[1] - k1 * v[0]) * s + k2 * kv
-
-
-def workspace_size(n):
-    """Length of the work space array run_substeps needs for n elements."""
-    return 9 * 25 * n + 6 * 5 * n + 6 * 3 * n + n + (n + 1) + 6 + 63 + 45 + 9 + 25 + 30
-
-
-@njit(cache=True)
-def _restore(X, E, V, W, conn_ok, armed, tension, end_force, bX, bE, bV, bW, b_ok, b_armed,
-             b_T, b_F):
-    X[:] = bX
-    E[:] = bE
-    V[:] = bV
-    W[:] = bW
-    conn_ok[:] = b_ok
-    armed[:] = b_armed
-    tension[:] = b_T
-    end_force[:] = b_F
-
-
-@njit(cache=True)
-def run_substeps(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
-                 mu, radius, EA, Cd, Cf, tfac, Ca, rho_w, rho_a, g,
-                 z_ax, z_tr, z_rot, P_rot, cur, relax, h, theta, n_sub, payout_a,
-                 vmax, wmax, pmax,
-                 tension, end_force, impulse, events, n_events, info, ws):
+@njit(cache=True, fastmath=FMA)
+def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
     """Advance n_sub sub-steps of size h in place. Attachments move as
-    att_pos + att_vel * t (t from the call start). On divergence returns DIVERGED with
-    info = (sub-step index, element index) after restoring every array to its state at
-    the call (the last good state). impulse (2,3) accumulates the force on each attachment
-    times time (trapezoidal). ws: float64 work space of workspace_size(N) entries."""
-    N = X.shape[0]
-    o = 0
-    f = ws[o:o + 5 * N].reshape((N, 5))
-    o += 5 * N
-    Md = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Kd = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Ko = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Cdd = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Cdo = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Ad = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Ao = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    Wm = ws[o:o + 25 * N].reshape((N, 5, 5))
-    o += 25 * N
-    rhs_att = ws[o:o + 5 * N].reshape((N, 5))
-    o += 5 * N
-    b = ws[o:o + 5 * N].reshape((N, 5))
-    o += 5 * N
-    dnu = ws[o:o + 5 * N].reshape((N, 5))
-    o += 5 * N
-    nu = ws[o:o + 5 * N].reshape((N, 5))
-    o += 5 * N
-    y = ws[o:o + 5 * N].reshape((N, 5))
-    o += 5 * N
-    B1 = ws[o:o + 3 * N].reshape((N, 3))
-    o += 3 * N
-    B2 = ws[o:o + 3 * N].reshape((N, 3))
-    o += 3 * N
-    bX = ws[o:o + 3 * N].reshape((N, 3))
-    o += 3 * N
-    bE = ws[o:o + 3 * N].reshape((N, 3))
-    o += 3 * N
-    bV = ws[o:o + 3 * N].reshape((N, 3))
-    o += 3 * N
-    bW = ws[o:o + 3 * N].reshape((N, 3))
-    o += 3 * N
-    Iy = ws[o:o + N]
-    o += N
-    b_T = ws[o:o + N + 1]
-    o += N + 1
-    b_F = ws[o:o + 6].reshape((2, 3))
-    o += 6
-    sv = ws[o:o + 63].reshape((21, 3))
-    o += 63
-    sJ = ws[o:o + 45].reshape((3, 3, 5))
-    o += 45
-    S = ws[o:o + 9].reshape((3, 3))
-    o += 9
-    Dp = ws[o:o + 25].reshape((5, 5))
-    o += 25
-    R = ws[o:o + 30].reshape((5, 6))
-    o += 30
-    Wn = sv[17]
-    phi = sv[18]
-    en = sv[19]
-    wr = sv[20]
-    sJ[:] = 0.0
-    sJ[2, 0, 0] = 1.0  # identity used by evaluate()
-    sJ[2, 1, 1] = 1.0
-    sJ[2, 2, 2] = 1.0
-    impulse[:] = 0.0
-    h2 = h * h * theta * theta
+    att_pos + att_vel * t (t from the call start). Accumulates the force on each
+    attachment times time in io[IO_IMPULSE] (trapezoidal). If dt > 0 (a whole exchange step
+    dt = n_sub h), also writes the impulse / dt to io[IO_MEAN] and moves the attachments on
+    by att_vel * dt. On divergence returns DIVERGED with io[IO_INFO, :2] = (sub-step
+    index, element index) after restoring every array to its state at the call (the last good
+    state). Returns NEED_WS (nothing done) if ws has fewer than N + 1 slots, else OK, with
+    the PARTED flag if parting events were recorded (io[IO_NEV] of them).
+
+    Per sub-step: the system (M - h theta C - h^2 theta^2 K) dnu = h f + h^2 theta K nu +
+    attachment terms is written directly (diagonal blocks Ad, upper blocks Ao, lower =
+    Ao^T, right-hand side rhs); the spring part of h^2 theta K nu + attachment terms is
+    -h^2 theta k J^T g with g the velocity of the next connection point relative to the
+    previous one, so no K blocks are stored. After the last sub-step only the connections
+    are evaluated: tensions, end forces and the parting check do not depend on the
+    element forces."""
+    N = S.shape[0] - 1
+    if ws.shape[1] < N + 1:
+        return NEED_WS
+    Ad = ws[0]
+    Ao = ws[1]
+    Wm = ws[2]
+    rhs = ws[3, :, 0, :]
+    dnu = ws[3, :, 1, :]
+    B1 = ws[3, :, 2, :]
+    B2 = ws[3, :, 3, :]
+    misc = ws[3, :, 4, :]  # Iy, then backup of tension, conn_ok, armed
+    bk = ws[4]  # backup of X, E, V, W (rows 0-3)
+    cc = ws[4, :, 4, :]  # connection constants: k, c_x, c_t, c_m; element length
+    bF = ws[5, 0]  # backup of the end forces (rows 0, 1)
+    # parameters
+    mu = io[P_MU]
+    radius = io[P_RADIUS]
+    EA = io[P_EA]
+    Cd = io[P_CD]
+    Cf = io[P_CF]
+    tfac = io[P_TFAC]
+    Ca = io[P_CA]
+    rho_w = io[P_RHO_W]
+    rho_a = io[P_RHO_A]
+    g = io[P_G]
+    z_ax = io[P_Z_AX]
+    z_tr = io[P_Z_TR]
+    z_rot = io[P_Z_ROT]
+    P_rot = io[P_P_ROT]
+    cur0 = io[IO_CUR, 0]
+    cur1 = io[IO_CUR, 1]
+    cur2 = io[IO_CUR, 2]
+    relax = io[P_RELAX]
+    theta = io[P_THETA]
+    vmax2 = io[P_VMAX] ** 2
+    wmax2 = io[P_WMAX] ** 2
+    pmax2 = io[P_PMAX] ** 2
+    att_a = io[IO_ATT, 1] != 0.0
+    att_b = io[IO_ATT, 2] != 0.0
+    pi = math.pi
+    D = 2.0 * radius
+    r2 = radius * radius
+    hth = h * theta
+    h2t = h * h * theta
+    h2t2 = hth * hth
+    pin = min(payout_a, 0.0)  # winch heave-in: the drum end also retracts along the rope
     # last good state, restored on divergence
-    bX[:] = X
-    bE[:] = E
-    bV[:] = V
-    bW[:] = W
-    b_T[:] = tension
-    b_F[:] = end_force
-    b_ok = conn_ok.copy()
-    b_armed = armed.copy()
-    b_nev = n_events[0]
+    for j in range(N):
+        for a in range(3):
+            bk[j, 0, a] = S[j, SX + a]
+            bk[j, 1, a] = S[j, SE + a]
+            bk[j, 2, a] = S[j, SV + a]
+            bk[j, 3, a] = S[j, SW + a]
+    for c in range(N + 1):
+        misc[c, 1] = S[c, ST]
+        misc[c, 2] = F[c, 0]
+        misc[c, 3] = F[c, 1]
+    for s in range(2):
+        for a in range(3):
+            bF[s, a] = io[IO_FORCE + s, a]
+            io[IO_IMPULSE + s, a] = 0.0
+    b_nev = io[IO_NEV]
+    # constants of the elements and connections: they depend on the lengths only (fixed
+    # during the call, changed by the winch), recomputed when those differ from the last call
+    same = ws[5, 1, 0, 0] == N
+    for j in range(N):
+        same = same and cc[j, 4] == S[j, SL]
+    for j in range(0 if same else N):
+        l = S[j, SL]
+        cc[j, 4] = l
+        misc[j, 0] = mu * l * ((l * l + 3.0 * r2) / 12.0)  # I_y, Eq (4)
+    ws[5, 1, 0, 0] = N
+    for c in range(0 if same else N + 1):
+        # spring: stiffness equivalent to EA over the rope length it represents
+        lrep = 0.0
+        msum = 0.0
+        cnt = 0.0
+        if c > 0:
+            lrep += 0.5 * S[c - 1, SL]
+            msum += mu * S[c - 1, SL]
+            cnt += 1.0
+        if c < N:
+            lrep += 0.5 * S[c, SL]
+            msum += mu * S[c, SL]
+            cnt += 1.0
+        kc = EA / lrep
+        skm = math.sqrt(kc * (msum / cnt))
+        cc[c, 0] = kc
+        cc[c, 1] = 2.0 * z_ax * skm  # Eq (16): c_x = 2 zeta_x sqrt(k m)
+        cc[c, 2] = 2.0 * z_tr * skm
+        cc[c, 3] = 0.0
+        if 0 < c < N:  # bending damper, Eq (19)
+            cc[c, 3] = 2.0 * z_rot * math.sqrt(P_rot * 0.5 * (misc[c - 1, 0] + misc[c, 0]))
+    bad = -1
     for step in range(n_sub + 1):
         t = step * h
+        full = step < n_sub  # else: end of the call, connections only
         for _ in range(N + 2):  # re-evaluate after a parting (at most one per pass)
-            if not evaluate(X, E, V, W, L, conn_ok, brk, armed, att_on, att_pos, att_vel,
-                            mu, radius, EA, Cd, Cf, tfac, Ca, rho_w, rho_a, g,
-                            z_ax, z_tr, z_rot, P_rot, cur, relax, h, theta, t, payout_a,
-                            f, Md, Kd, Ko, Cdd, Cdo, rhs_att, tension, end_force, events,
-                            n_events, B1, B2, step < n_sub, Iy, sv, sJ, S):
+            best_c = -1
+            best_ratio = 1.0
+            best_T = 0.0
+            for a in range(3):
+                io[IO_FORCE, a] = 0.0
+                io[IO_FORCE + 1, a] = 0.0
+            bad = -1
+            # block Thomas on the symmetric system (diag Ad, upper Ao, lower Ao^T):
+            # D_j = Ad_j - Ao_{j-1}^T Wm_{j-1} (symmetric), Wm_j = D_j^-1 Ao_j,
+            # rhs_j <- D_j^-1 (rhs_j - Ao_{j-1}^T rhs_{j-1}). D_j is factored as L diag L^T
+            # when it is positive definite (the normal case), else by Gaussian elimination
+            # with partial pivoting.
+            # One pass over j = 0..N: element j, connection j (joins elements j - 1 and j),
+            # then the forward elimination of block j - 1, complete now. A parting found
+            # later in the pass discards it (the pass is repeated without that connection).
+            for jc in range(N + 1):
+                if full and jc < N:
+                    j = jc
+                    # ------------------------------------------------------------ element j
+                    # Ad = M - h theta C_el, rhs = h f_el (gravity, buoyancy Eq 12-13, drag
+                    # Eq 10, fluid Coriolis and Munk Eq 8, water entry Eq 14, relaxation)
+                    l = S[j, SL]
+                    ex = S[j, SE]
+                    ey = S[j, SE + 1]
+                    ez = S[j, SE + 2]
+                    vx = S[j, SV]
+                    vy = S[j, SV + 1]
+                    vz = S[j, SV + 2]
+                    wx = S[j, SW]
+                    wy = S[j, SW + 1]
+                    wz = S[j, SW + 2]
+                    p0, p1, p2, q0, q1, q2 = _basis(ex, ey, ez)
+                    B1[j, 0] = p0
+                    B1[j, 1] = p1
+                    B1[j, 2] = p2
+                    B2[j, 0] = q0
+                    B2[j, 1] = q1
+                    B2[j, 2] = q2
+                    m = mu * l
+                    vol = pi * r2 * l
+                    fr, dfr, m1 = immersion(S[j, SX + 2], ez, 0.5 * l, radius)
+                    ma = Ca * rho_w * vol * fr  # Eq (9), scaled by the immersed fraction
+                    rot_fac = (l * l + 3.0 * r2) / 12.0  # Eq (4)
+                    Ip = m * rot_fac + Ca * rho_w * vol * rot_fac * fr  # I_y + J_y, Eq (4), (9)
+                    # mass matrix, Eq (3), in world axes: m*I + m_y*(I - e e^T), m_x ~ 0
+                    m00 = (m + ma) - ma * ex * ex
+                    m11 = (m + ma) - ma * ey * ey
+                    m22 = (m + ma) - ma * ez * ez
+                    m01 = -(ma * ex * ey)
+                    m02 = -(ma * ex * ez)
+                    m12 = -(ma * ey * ez)
+                    # velocity Jacobian C (symmetric) of the element forces
+                    c00 = c01 = c02 = c11 = c12 = c22 = crot = 0.0
+                    # gravity Eq (13) and buoyancy Eq (12) (distributed immersion)
+                    F0 = 0.0
+                    F1 = 0.0
+                    F2 = -m * g + rho_w * vol * g * fr
+                    t0 = rho_w * vol * g * m1 * ey  # moment of the buoyancy: m1 (e x z)
+                    t1 = -(rho_w * vol * g * m1 * ex)
+                    t2 = 0.0
+                    # drag Eq (10): water part on velocity relative to current, air part on V
+                    for part in range(2):
+                        if part == 0:
+                            rho = rho_w * fr
+                            r0 = vx - cur0
+                            r1 = vy - cur1
+                            rz = vz - cur2
+                        else:
+                            rho = rho_a * (1.0 - fr)
+                            r0 = vx
+                            r1 = vy
+                            rz = vz
+                        if rho <= 0.0:
+                            continue
+                        u = r0 * ex + r1 * ey + rz * ez
+                        n0 = r0 - u * ex
+                        n1 = r1 - u * ey
+                        n2 = rz - u * ez
+                        sn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+                        cn = 0.5 * rho * D * l * Cd
+                        ct = 0.5 * rho * D * l * Cf * tfac
+                        cs = cn * sn
+                        ca = ct * abs(u)
+                        F0 += -cs * n0 - ca * u * ex
+                        F1 += -cs * n1 - ca * u * ey
+                        F2 += -cs * n2 - ca * u * ez
+                        # drag Jacobian dF/dV (treated implicitly)
+                        k2 = 2.0 * ca
+                        k3 = cn / sn if sn > 1e-12 else 0.0
+                        c00 += -cs * (1.0 - ex * ex) - k2 * ex * ex - k3 * n0 * n0
+                        c11 += -cs * (1.0 - ey * ey) - k2 * ey * ey - k3 * n1 * n1
+                        c22 += -cs * (1.0 - ez * ez) - k2 * ez * ez - k3 * n2 * n2
+                        c01 += cs * ex * ey - k2 * ex * ey - k3 * n0 * n1
+                        c02 += cs * ex * ez - k2 * ex * ez - k3 * n0 * n2
+                        c12 += cs * ey * ez - k2 * ey * ez - k3 * n1 * n2
+                    # fluid Coriolis, Eq (8) C_A, in world form: -(dM_A/dt) V_r, dE/dt = W x E
+                    r0 = vx - cur0
+                    r1 = vy - cur1
+                    rz = vz - cur2
+                    ed0 = wy * ez - wz * ey
+                    ed1 = wz * ex - wx * ez
+                    ed2 = wx * ey - wy * ex
+                    ue = r0 * ex + r1 * ey + rz * ez
+                    ued = r0 * ed0 + r1 * ed1 + rz * ed2
+                    F0 += ma * (ed0 * ue + ex * ued)
+                    F1 += ma * (ed1 * ue + ey * ued)
+                    F2 += ma * (ed2 * ue + ez * ued)
+                    # Munk moment, Eq (8) rows 4-5: (m_z - m_x) w u, (m_x - m_y) u v
+                    t0 += ma * ue * (r1 * ez - rz * ey)
+                    t1 += ma * ue * (rz * ex - r0 * ez)
+                    t2 += ma * ue * (r0 * ey - r1 * ex)
+                    # water entry, Eq (14): H = -dm_a/dt * v_normal, only while entering
+                    mdot = Ca * rho_w * vol * dfr * vz
+                    if mdot > 0.0:
+                        F0 += -mdot * (r0 - ue * ex)
+                        F1 += -mdot * (r1 - ue * ey)
+                        F2 += -mdot * (rz - ue * ez)
+                        c00 += -mdot * (1.0 - ex * ex)
+                        c11 += -mdot * (1.0 - ey * ey)
+                        c22 += -mdot * (1.0 - ez * ez)
+                        c01 += mdot * ex * ey
+                        c02 += mdot * ex * ez
+                        c12 += mdot * ey * ez
+                        jdot = mdot * rot_fac
+                        t0 += -jdot * wx
+                        t1 += -jdot * wy
+                        t2 += -jdot * wz
+                        crot += -jdot
+                    # numerical relaxation (0 in normal use): -relax * M nu
+                    if relax > 0.0:
+                        F0 += -relax * (m00 * vx + m01 * vy + m02 * vz)
+                        F1 += -relax * (m01 * vx + m11 * vy + m12 * vz)
+                        F2 += -relax * (m02 * vx + m12 * vy + m22 * vz)
+                        c00 += -relax * m00
+                        c01 += -relax * m01
+                        c02 += -relax * m02
+                        c11 += -relax * m11
+                        c12 += -relax * m12
+                        c22 += -relax * m22
+                        t0 += -relax * Ip * wx
+                        t1 += -relax * Ip * wy
+                        t2 += -relax * Ip * wz
+                        crot += -relax * Ip
+                    rhs[j, 0] = h * F0
+                    rhs[j, 1] = h * F1
+                    rhs[j, 2] = h * F2
+                    rhs[j, 3] = h * (t0 * p0 + t1 * p1 + t2 * p2)
+                    rhs[j, 4] = h * (t0 * q0 + t1 * q1 + t2 * q2)
+                    # (Ad is symmetric: only its upper triangle is written and read)
+                    Ad[j, 0, 0] = m00 - hth * c00
+                    Ad[j, 1, 1] = m11 - hth * c11
+                    Ad[j, 2, 2] = m22 - hth * c22
+                    Ad[j, 0, 1] = m01 - hth * c01
+                    Ad[j, 0, 2] = m02 - hth * c02
+                    Ad[j, 1, 2] = m12 - hth * c12
+                    Ad[j, 3, 3] = Ad[j, 4, 4] = Ip - hth * crot
+                    Ad[j, 3, 4] = 0.0
+                    for a in range(3):
+                        Ad[j, a, 3] = 0.0
+                        Ad[j, a, 4] = 0.0
+                # ------------------------------------------------------------ connection c
+                # tension-only spring (Eq 20-26) with damper (Eq 15-19); c joins the aft
+                # point of element i = c - 1 (prev) and the front point of element k = c
+                # (next)
+                c = jc
+                S[c, ST] = 0.0
+                hp = c > 0
+                hn = c < N
+                on = F[c, 0] != 0 and (hp or att_a) and (hn or att_b)
+                if full and hp and hn and not on:  # parted: no coupling block
+                    for a in range(5):
+                        for q in range(5):
+                            Ao[c - 1, a, q] = 0.0
+                for _once in range(1 if on else 0):  # ('continue' ends the connection)
+                    i = c - 1
+                    k = c
+                    si = 0.0  # lever of the aft point of i / front point of k
+                    sk = 0.0
+                    if hp:
+                        si = -0.5 * S[i, SL]
+                        a0 = si * S[i, SE]
+                        a1 = si * S[i, SE + 1]
+                        a2 = si * S[i, SE + 2]
+                        Pp0 = S[i, SX] + a0
+                        Pp1 = S[i, SX + 1] + a1
+                        Pp2 = S[i, SX + 2] + a2
+                        Vp0 = S[i, SV] + (S[i, SW + 1] * a2 - S[i, SW + 2] * a1)
+                        Vp1 = S[i, SV + 1] + (S[i, SW + 2] * a0 - S[i, SW] * a2)
+                        Vp2 = S[i, SV + 2] + (S[i, SW] * a1 - S[i, SW + 1] * a0)
+                    else:
+                        Vp0 = io[IO_VEL, 0]
+                        Vp1 = io[IO_VEL, 1]
+                        Vp2 = io[IO_VEL, 2]
+                        Pp0 = io[IO_POS, 0] + Vp0 * t
+                        Pp1 = io[IO_POS, 1] + Vp1 * t
+                        Pp2 = io[IO_POS, 2] + Vp2 * t
+                    if hn:
+                        sk = 0.5 * S[k, SL]
+                        a0 = sk * S[k, SE]
+                        a1 = sk * S[k, SE + 1]
+                        a2 = sk * S[k, SE + 2]
+                        Pn0 = S[k, SX] + a0
+                        Pn1 = S[k, SX + 1] + a1
+                        Pn2 = S[k, SX + 2] + a2
+                        Vn0 = S[k, SV] + (S[k, SW + 1] * a2 - S[k, SW + 2] * a1)
+                        Vn1 = S[k, SV + 1] + (S[k, SW + 2] * a0 - S[k, SW] * a2)
+                        Vn2 = S[k, SV + 2] + (S[k, SW] * a1 - S[k, SW + 1] * a0)
+                    else:
+                        Vn0 = io[IO_VEL + 1, 0]
+                        Vn1 = io[IO_VEL + 1, 1]
+                        Vn2 = io[IO_VEL + 1, 2]
+                        Pn0 = io[IO_POS + 1, 0] + Vn0 * t
+                        Pn1 = io[IO_POS + 1, 1] + Vn1 * t
+                        Pn2 = io[IO_POS + 1, 2] + Vn2 * t
+                    # g: velocity of the next point minus the prev one without the pay-out
+                    # sliding (J nu), an attachment a with the heave-in retraction (pay-out
+                    # extensions are capped at the drum in chain._winch, not anticipated)
+                    if hp:
+                        g0 = Vn0 - Vp0
+                        g1 = Vn1 - Vp1
+                        g2 = Vn2 - Vp2
+                    else:
+                        g0 = Vn0 - (Vp0 - pin * S[k, SE])
+                        g1 = Vn1 - (Vp1 - pin * S[k, SE + 1])
+                        g2 = Vn2 - (Vp2 - pin * S[k, SE + 2])
+                        # winch at end a: rope slides out of the drum at the pay-out rate
+                        Vn0 += payout_a * S[k, SE]
+                        Vn1 += payout_a * S[k, SE + 1]
+                        Vn2 += payout_a * S[k, SE + 2]
+                    if full:
+                        if hp:
+                            i10 = B1[i, 0]
+                            i11 = B1[i, 1]
+                            i12 = B1[i, 2]
+                            i20 = B2[i, 0]
+                            i21 = B2[i, 1]
+                            i22 = B2[i, 2]
+                        else:
+                            i10 = i11 = i12 = i20 = i21 = i22 = 0.0
+                        if hn:
+                            k10 = B1[k, 0]
+                            k11 = B1[k, 1]
+                            k12 = B1[k, 2]
+                            k20 = B2[k, 0]
+                            k21 = B2[k, 1]
+                            k22 = B2[k, 2]
+                        else:
+                            k10 = k11 = k12 = k20 = k21 = k22 = 0.0
+                        bo33 = bo34 = bo43 = bo44 = 0.0  # bending part of Ao[i]
+                        if hp and hn:  # bending damping, Eq (18)-(19), relative angular velocity
+                            cm = cc[c, 3]
+                            if cm > 0.0:
+                                dw0 = S[i, SW] - S[k, SW]
+                                dw1 = S[i, SW + 1] - S[k, SW + 1]
+                                dw2 = S[i, SW + 2] - S[k, SW + 2]
+                                v = h * cm
+                                rhs[k, 3] += v * (dw0 * k10 + dw1 * k11 + dw2 * k12)
+                                rhs[k, 4] += v * (dw0 * k20 + dw1 * k21 + dw2 * k22)
+                                rhs[i, 3] -= v * (dw0 * i10 + dw1 * i11 + dw2 * i12)
+                                rhs[i, 4] -= v * (dw0 * i20 + dw1 * i21 + dw2 * i22)
+                                v = hth * cm
+                                Ad[k, 3, 3] += v
+                                Ad[k, 4, 4] += v
+                                Ad[i, 3, 3] += v
+                                Ad[i, 4, 4] += v
+                                # d torque_i / d w_k = cm B_i^T B_k
+                                bo33 = -v * (i10 * k10 + i11 * k11 + i12 * k12)
+                                bo34 = -v * (i10 * k20 + i11 * k21 + i12 * k22)
+                                bo43 = -v * (i20 * k10 + i21 * k11 + i22 * k12)
+                                bo44 = -v * (i20 * k20 + i21 * k21 + i22 * k22)
+                    # Eq (25) switches a connection off when one point enters the neighbour's
+                    # half length (|d|^2 + l d.e <= 0, i.e. axial compression). Done
+                    # continuously below: only the compressive axial part of the connection
+                    # force is removed (STRICT_EQ25 = True restores the all-or-nothing switch).
+                    if STRICT_EQ25 and (
+                            (hp and math.sqrt((Pn0 - S[i, SX]) ** 2 + (Pn1 - S[i, SX + 1]) ** 2
+                                              + (Pn2 - S[i, SX + 2]) ** 2) <= 0.5 * S[i, SL])
+                            or (hn and math.sqrt((Pp0 - S[k, SX]) ** 2 + (Pp1 - S[k, SX + 1]) ** 2
+                                                 + (Pp2 - S[k, SX + 2]) ** 2) <= 0.5 * S[k, SL])):
+                        if full and hp and hn:  # coupling by the bending damper only
+                            for a in range(5):
+                                for q in range(5):
+                                    Ao[i, a, q] = 0.0
+                            Ao[i, 3, 3] = bo33
+                            Ao[i, 3, 4] = bo34
+                            Ao[i, 4, 3] = bo43
+                            Ao[i, 4, 4] = bo44
+                        continue
+                    # local rope axis
+                    n0 = 0.0
+                    n1 = 0.0
+                    n2 = 0.0
+                    if hp:
+                        n0 += S[i, SE]
+                        n1 += S[i, SE + 1]
+                        n2 += S[i, SE + 2]
+                    if hn:
+                        n0 += S[k, SE]
+                        n1 += S[k, SE + 1]
+                        n2 += S[k, SE + 2]
+                    nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+                    if nn < 1e-9:  # folded back on itself: use the gap direction
+                        n0 = Pp0 - Pn0
+                        n1 = Pp1 - Pn1
+                        n2 = Pp2 - Pn2
+                        nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) + 1e-300
+                    n0 /= nn
+                    n1 /= nn
+                    n2 /= nn
+                    kc = cc[c, 0]
+                    cax = cc[c, 1]
+                    ctr = cc[c, 2]
+                    dv0 = Vp0 - Vn0
+                    dv1 = Vp1 - Vn1
+                    dv2 = Vp2 - Vn2
+                    ndv = n0 * dv0 + n1 * dv1 + n2 * dv2
+                    F0 = kc * (Pp0 - Pn0) + cax * n0 * ndv + ctr * (dv0 - n0 * ndv)
+                    F1 = kc * (Pp1 - Pn1) + cax * n1 * ndv + ctr * (dv1 - n1 * ndv)
+                    F2 = kc * (Pp2 - Pn2) + cax * n2 * ndv + ctr * (dv2 - n2 * ndv)
+                    ax = F0 * n0 + F1 * n1 + F2 * n2
+                    axd = cax
+                    if ax < 0.0:  # a rope cannot push: drop the compressive axial part
+                        F0 -= ax * n0
+                        F1 -= ax * n1
+                        F2 -= ax * n2
+                        axd = 0.0
+                    T = math.sqrt(F0 * F0 + F1 * F1 + F2 * F2)
+                    if T > S[c, SB]:  # parting candidate (issue 3 item 4)
+                        if F[c, 1] != 0 and T / S[c, SB] > best_ratio:
+                            best_ratio = T / S[c, SB]
+                            best_c = c
+                            best_T = T
+                    else:
+                        F[c, 1] = 1
+                    S[c, ST] = T
+                    # F acts on the next point, -F on the prev point
+                    if not hn:
+                        io[IO_FORCE + 1, 0] = F0
+                        io[IO_FORCE + 1, 1] = F1
+                        io[IO_FORCE + 1, 2] = F2
+                    if not hp:
+                        io[IO_FORCE, 0] = -F0
+                        io[IO_FORCE, 1] = -F1
+                        io[IO_FORCE, 2] = -F2
+                    if not full:
+                        continue
+                    # rhs += J^T (h F - h^2 theta k g) on the next point, minus on the prev one
+                    Q0 = h * F0 - h2t * kc * g0
+                    Q1 = h * F1 - h2t * kc * g1
+                    Q2 = h * F2 - h2t * kc * g2
+                    # Jacobian of spring and damper: J^T S J with
+                    # S = h theta (c_x n n^T + c_t (I - n n^T)) + h^2 theta^2 k I
+                    beta = hth * ctr + h2t2 * kc
+                    gamma = hth * (axd - ctr)
+                    for side in range(2):
+                        if side == 0:
+                            if not hn:
+                                continue
+                            j = k
+                            s = sk
+                            sg = 1.0
+                            b10, b11, b12, b20, b21, b22 = k10, k11, k12, k20, k21, k22
+                        else:
+                            if not hp:
+                                continue
+                            j = i
+                            s = si
+                            sg = -1.0
+                            b10, b11, b12, b20, b21, b22 = i10, i11, i12, i20, i21, i22
+                        # geometric stiffness of the moment of the end force: -l/2 F.e on both
+                        # rotations (K), entering rhs with the angular velocity (nu) and Ad
+                        geo = -0.5 * S[j, SL] * (F0 * S[j, SE] + F1 * S[j, SE + 1]
+                                                 + F2 * S[j, SE + 2])
+                        rhs[j, 0] += sg * Q0
+                        rhs[j, 1] += sg * Q1
+                        rhs[j, 2] += sg * Q2
+                        rhs[j, 3] += sg * (-s * (b20 * Q0 + b21 * Q1 + b22 * Q2)) + h2t * geo * (
+                            S[j, SW] * b10 + S[j, SW + 1] * b11 + S[j, SW + 2] * b12)
+                        rhs[j, 4] += sg * (s * (b10 * Q0 + b11 * Q1 + b12 * Q2)) + h2t * geo * (
+                            S[j, SW] * b20 + S[j, SW + 1] * b21 + S[j, SW + 2] * b22)
+                        (v00, v01, v02, v03, v04, v11, v12, v13, v14, v22, v23, v24, v33, v34,
+                         v44) = _jsj(s, b10, b11, b12, b20, b21, b22, beta, gamma, n0, n1, n2)
+                        Ad[j, 0, 0] += v00
+                        Ad[j, 0, 1] += v01
+                        Ad[j, 0, 2] += v02
+                        Ad[j, 0, 3] += v03
+                        Ad[j, 0, 4] += v04
+                        Ad[j, 1, 1] += v11
+                        Ad[j, 1, 2] += v12
+                        Ad[j, 1, 3] += v13
+                        Ad[j, 1, 4] += v14
+                        Ad[j, 2, 2] += v22
+                        Ad[j, 2, 3] += v23
+                        Ad[j, 2, 4] += v24
+                        Ad[j, 3, 3] += v33 - h2t2 * geo
+                        Ad[j, 3, 4] += v34
+                        Ad[j, 4, 4] += v44 - h2t2 * geo
+                    if hp and hn:  # coupling block: Ao[i] = bending part - Jp^T S Jn
+                        nk1 = n0 * k10 + n1 * k11 + n2 * k12
+                        nk2 = n0 * k20 + n1 * k21 + n2 * k22
+                        ni1 = n0 * i10 + n1 * i11 + n2 * i12
+                        ni2 = n0 * i20 + n1 * i21 + n2 * i22
+                        Ao[i, 0, 0] = -(beta + gamma * n0 * n0)
+                        Ao[i, 1, 1] = -(beta + gamma * n1 * n1)
+                        Ao[i, 2, 2] = -(beta + gamma * n2 * n2)
+                        Ao[i, 0, 1] = Ao[i, 1, 0] = -(gamma * n0 * n1)
+                        Ao[i, 0, 2] = Ao[i, 2, 0] = -(gamma * n0 * n2)
+                        Ao[i, 1, 2] = Ao[i, 2, 1] = -(gamma * n1 * n2)
+                        Ao[i, 0, 3] = sk * (beta * k20 + gamma * n0 * nk2)
+                        Ao[i, 1, 3] = sk * (beta * k21 + gamma * n1 * nk2)
+                        Ao[i, 2, 3] = sk * (beta * k22 + gamma * n2 * nk2)
+                        Ao[i, 0, 4] = -sk * (beta * k10 + gamma * n0 * nk1)
+                        Ao[i, 1, 4] = -sk * (beta * k11 + gamma * n1 * nk1)
+                        Ao[i, 2, 4] = -sk * (beta * k12 + gamma * n2 * nk1)
+                        Ao[i, 3, 0] = si * (beta * i20 + gamma * ni2 * n0)
+                        Ao[i, 3, 1] = si * (beta * i21 + gamma * ni2 * n1)
+                        Ao[i, 3, 2] = si * (beta * i22 + gamma * ni2 * n2)
+                        Ao[i, 4, 0] = -si * (beta * i10 + gamma * ni1 * n0)
+                        Ao[i, 4, 1] = -si * (beta * i11 + gamma * ni1 * n1)
+                        Ao[i, 4, 2] = -si * (beta * i12 + gamma * ni1 * n2)
+                        ss = si * sk
+                        d11 = i10 * k10 + i11 * k11 + i12 * k12  # b_x of i . b_y of k
+                        d12 = i10 * k20 + i11 * k21 + i12 * k22
+                        d21 = i20 * k10 + i21 * k11 + i22 * k12
+                        d22 = i20 * k20 + i21 * k21 + i22 * k22
+                        Ao[i, 3, 3] = bo33 - ss * (beta * d22 + gamma * ni2 * nk2)
+                        Ao[i, 3, 4] = bo34 + ss * (beta * d21 + gamma * ni2 * nk1)
+                        Ao[i, 4, 3] = bo43 + ss * (beta * d12 + gamma * ni1 * nk2)
+                        Ao[i, 4, 4] = bo44 - ss * (beta * d11 + gamma * ni1 * nk1)
+                if not full or jc == 0 or bad >= 0:
+                    continue
+                # ----------------------------------------- forward elimination of block j - 1
+                j = jc - 1
+                a00 = Ad[j, 0, 0]
+                a01 = Ad[j, 0, 1]
+                a02 = Ad[j, 0, 2]
+                a03 = Ad[j, 0, 3]
+                a04 = Ad[j, 0, 4]
+                a11 = Ad[j, 1, 1]
+                a12 = Ad[j, 1, 2]
+                a13 = Ad[j, 1, 3]
+                a14 = Ad[j, 1, 4]
+                a22 = Ad[j, 2, 2]
+                a23 = Ad[j, 2, 3]
+                a24 = Ad[j, 2, 4]
+                a33 = Ad[j, 3, 3]
+                a34 = Ad[j, 3, 4]
+                a44 = Ad[j, 4, 4]
+                y0 = rhs[j, 0]
+                y1 = rhs[j, 1]
+                y2 = rhs[j, 2]
+                y3 = rhs[j, 3]
+                y4 = rhs[j, 4]
+                if j > 0:
+                    i = j - 1
+                    for q in range(5):
+                        o0 = Ao[i, q, 0]
+                        o1 = Ao[i, q, 1]
+                        o2 = Ao[i, q, 2]
+                        o3 = Ao[i, q, 3]
+                        o4 = Ao[i, q, 4]
+                        w0 = Wm[i, q, 0]
+                        w1 = Wm[i, q, 1]
+                        w2 = Wm[i, q, 2]
+                        w3 = Wm[i, q, 3]
+                        w4 = Wm[i, q, 4]
+                        a00 -= o0 * w0
+                        a01 -= o0 * w1
+                        a02 -= o0 * w2
+                        a03 -= o0 * w3
+                        a04 -= o0 * w4
+                        a11 -= o1 * w1
+                        a12 -= o1 * w2
+                        a13 -= o1 * w3
+                        a14 -= o1 * w4
+                        a22 -= o2 * w2
+                        a23 -= o2 * w3
+                        a24 -= o2 * w4
+                        a33 -= o3 * w3
+                        a34 -= o3 * w4
+                        a44 -= o4 * w4
+                        yq = rhs[i, q]
+                        y0 -= o0 * yq
+                        y1 -= o1 * yq
+                        y2 -= o2 * yq
+                        y3 -= o3 * yq
+                        y4 -= o4 * yq
+                m = 5 if j < N - 1 else 0
+                (ok, i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42,
+                 l43) = _ldl5(a00, a01, a02, a03, a04, a11, a12, a13, a14, a22, a23, a24, a33,
+                              a34, a44)
+                if ok:
+                    for c in range(m):
+                        x0, x1, x2, x3, x4 = _ldl5_solve(
+                            i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
+                            Ao[j, 0, c], Ao[j, 1, c], Ao[j, 2, c], Ao[j, 3, c], Ao[j, 4, c])
+                        Wm[j, 0, c] = x0
+                        Wm[j, 1, c] = x1
+                        Wm[j, 2, c] = x2
+                        Wm[j, 3, c] = x3
+                        Wm[j, 4, c] = x4
+                    x0, x1, x2, x3, x4 = _ldl5_solve(
+                        i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
+                        y0, y1, y2, y3, y4)
+                    rhs[j, 0] = x0
+                    rhs[j, 1] = x1
+                    rhs[j, 2] = x2
+                    rhs[j, 3] = x3
+                    rhs[j, 4] = x4
+                    continue
+                # not positive definite: Gaussian elimination with partial pivoting
+                Ad[j, 0, 0] = a00
+                Ad[j, 0, 1] = Ad[j, 1, 0] = a01
+                Ad[j, 0, 2] = Ad[j, 2, 0] = a02
+                Ad[j, 0, 3] = Ad[j, 3, 0] = a03
+                Ad[j, 0, 4] = Ad[j, 4, 0] = a04
+                Ad[j, 1, 1] = a11
+                Ad[j, 1, 2] = Ad[j, 2, 1] = a12
+                Ad[j, 1, 3] = Ad[j, 3, 1] = a13
+                Ad[j, 1, 4] = Ad[j, 4, 1] = a14
+                Ad[j, 2, 2] = a22
+                Ad[j, 2, 3] = Ad[j, 3, 2] = a23
+                Ad[j, 2, 4] = Ad[j, 4, 2] = a24
+                Ad[j, 3, 3] = a33
+                Ad[j, 3, 4] = Ad[j, 4, 3] = a34
+                Ad[j, 4, 4] = a44
+                rhs[j, 0] = y0
+                rhs[j, 1] = y1
+                rhs[j, 2] = y2
+                rhs[j, 3] = y3
+                rhs[j, 4] = y4
+                for r in range(5):
+                    for c in range(m):
+                        Wm[j, r, c] = Ao[j, r, c]
+                if not _lu_solve(Ad[j], Wm[j], rhs[j], m):
+                    bad = j  # singular: diverged unless a parting changes the system
+            if best_c < 0:
                 break
+            _part(best_c, best_T, t, N, S, F, io)
         w8 = 0.5 * h if (step == 0 or step == n_sub) else h
         for s in range(2):
             for a in range(3):
-                impulse[s, a] += w8 * end_force[s, a]
-        if step == n_sub:
+                io[IO_IMPULSE + s, a] += w8 * io[IO_FORCE + s, a]
+        if not full:
             break
-        for j in range(N):
-            b1 = B1[j]
-            b2 = B2[j]
-            for a in range(3):
-                nu[j, a] = V[j, a]
-            nu[j, 3] = W[j, 0] * b1[0] + W[j, 1] * b1[1] + W[j, 2] * b1[2]
-            nu[j, 4] = W[j, 0] * b2[0] + W[j, 1] * b2[1] + W[j, 2] * b2[2]
-        # (M - h theta C - h^2 theta^2 K) dnu = h f + h^2 theta K nu + attachment terms
-        for j in range(N):
-            for r in range(5):
-                acc = 0.0
-                for c in range(5):
-                    Ad[j, r, c] = Md[j, r, c] - h * theta * Cdd[j, r, c] - h2 * Kd[j, r, c]
-                    Ao[j, r, c] = -h * theta * Cdo[j, r, c] - h2 * Ko[j, r, c]
-                    acc += Kd[j, r, c] * nu[j, c]
-                    if j < N - 1:
-                        acc += Ko[j, r, c] * nu[j + 1, c]
-                    if j > 0:
-                        acc += Ko[j - 1, c, r] * nu[j - 1, c]
-                b[j, r] = h * f[j, r] + h * h * theta * acc + rhs_att[j, r]
-        bad = solve_block_tridiag(Ad, Ao, b, dnu, Wm, y, Dp, R)
+        if bad < 0:
+            # -------------------------------------------- back substitution and update
+            # dnu_j = y_j - Wm_j dnu_{j+1}; each element is advanced as soon as its dnu is
+            # known: X, V, and e and W rotated (Rodrigues) by h ((1 - theta) W +
+            # theta W_new), W kept perpendicular to e
+            for j in range(N - 1, -1, -1):
+                d0 = rhs[j, 0]
+                d1 = rhs[j, 1]
+                d2 = rhs[j, 2]
+                d3 = rhs[j, 3]
+                d4 = rhs[j, 4]
+                if j < N - 1:
+                    for q in range(5):
+                        xq = dnu[j + 1, q]
+                        d0 -= Wm[j, 0, q] * xq
+                        d1 -= Wm[j, 1, q] * xq
+                        d2 -= Wm[j, 2, q] * xq
+                        d3 -= Wm[j, 3, q] * xq
+                        d4 -= Wm[j, 4, q] * xq
+                dnu[j, 0] = d0
+                dnu[j, 1] = d1
+                dnu[j, 2] = d2
+                dnu[j, 3] = d3
+                dnu[j, 4] = d4
+                Vn0 = S[j, SV] + d0
+                Vn1 = S[j, SV + 1] + d1
+                Vn2 = S[j, SV + 2] + d2
+                S[j, SX] += h * ((1.0 - theta) * S[j, SV] + theta * Vn0)
+                S[j, SX + 1] += h * ((1.0 - theta) * S[j, SV + 1] + theta * Vn1)
+                S[j, SX + 2] += h * ((1.0 - theta) * S[j, SV + 2] + theta * Vn2)
+                S[j, SV] = Vn0
+                S[j, SV + 1] = Vn1
+                S[j, SV + 2] = Vn2
+                Wn0 = S[j, SW] + d3 * B1[j, 0] + d4 * B2[j, 0]
+                Wn1 = S[j, SW + 1] + d3 * B1[j, 1] + d4 * B2[j, 1]
+                Wn2 = S[j, SW + 2] + d3 * B1[j, 2] + d4 * B2[j, 2]
+                f0 = h * ((1.0 - theta) * S[j, SW] + theta * Wn0)
+                f1 = h * ((1.0 - theta) * S[j, SW + 1] + theta * Wn1)
+                f2 = h * ((1.0 - theta) * S[j, SW + 2] + theta * Wn2)
+                e0 = S[j, SE]
+                e1 = S[j, SE + 1]
+                e2 = S[j, SE + 2]
+                ang = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+                if ang < 1e-300:
+                    en0, en1, en2 = e0, e1, e2
+                    wr0, wr1, wr2 = Wn0, Wn1, Wn2
+                else:
+                    k0 = f0 / ang
+                    k1 = f1 / ang
+                    k2 = f2 / ang
+                    co = math.cos(ang)
+                    sa = math.sin(ang)
+                    kv = (k0 * e0 + k1 * e1 + k2 * e2) * (1.0 - co)
+                    en0 = e0 * co + (k1 * e2 - k2 * e1) * sa + k0 * kv
+                    en1 = e1 * co + (k2 * e0 - k0 * e2) * sa + k1 * kv
+                    en2 = e2 * co + (k0 * e1 - k1 * e0) * sa + k2 * kv
+                    kv = (k0 * Wn0 + k1 * Wn1 + k2 * Wn2) * (1.0 - co)
+                    wr0 = Wn0 * co + (k1 * Wn2 - k2 * Wn1) * sa + k0 * kv
+                    wr1 = Wn1 * co + (k2 * Wn0 - k0 * Wn2) * sa + k1 * kv
+                    wr2 = Wn2 * co + (k0 * Wn1 - k1 * Wn0) * sa + k2 * kv
+                nrm = math.sqrt(en0 * en0 + en1 * en1 + en2 * en2)
+                en0 /= nrm
+                en1 /= nrm
+                en2 /= nrm
+                we = wr0 * en0 + wr1 * en1 + wr2 * en2
+                S[j, SE] = en0
+                S[j, SE + 1] = en1
+                S[j, SE + 2] = en2
+                S[j, SW] = wr0 - we * en0
+                S[j, SW + 1] = wr1 - we * en1
+                S[j, SW + 2] = wr2 - we * en2
+                # divergence: non-finite or absurd values (NaN fails every comparison)
+                sv = Vn0 * Vn0 + Vn1 * Vn1 + Vn2 * Vn2
+                sw = S[j, SW] * S[j, SW] + S[j, SW + 1] * S[j, SW + 1] + S[j, SW + 2] * S[j, SW + 2]
+                sx = S[j, SX] * S[j, SX] + S[j, SX + 1] * S[j, SX + 1] + S[j, SX + 2] * S[j, SX + 2]
+                se = en0 * en0 + en1 * en1 + en2 * en2
+                if not (sv <= vmax2 and sw <= wmax2 and sx <= pmax2 and se <= 2.0):
+                    bad = j  # the lowest bad element is reported
         if bad >= 0:
-            info[0] = step
-            info[1] = bad
-            _restore(X, E, V, W, conn_ok, armed, tension, end_force, bX, bE, bV, bW,
-                     b_ok, b_armed, b_T, b_F)
-            n_events[0] = b_nev
+            io[IO_INFO, 0] = step
+            io[IO_INFO, 1] = bad
+            for j in range(N):
+                for a in range(3):
+                    S[j, SX + a] = bk[j, 0, a]
+                    S[j, SE + a] = bk[j, 1, a]
+                    S[j, SV + a] = bk[j, 2, a]
+                    S[j, SW + a] = bk[j, 3, a]
+            for c in range(N + 1):
+                S[c, ST] = misc[c, 1]
+                F[c, 0] = np.int64(misc[c, 2])
+                F[c, 1] = np.int64(misc[c, 3])
+            for s in range(2):
+                for a in range(3):
+                    io[IO_FORCE + s, a] = bF[s, a]
+            io[IO_NEV] = b_nev
             return DIVERGED
-        for j in range(N):
-            b1 = B1[j]
-            b2 = B2[j]
+    if dt > 0.0:
+        inv = 1.0 / dt
+        for s in range(2):
             for a in range(3):
-                Vn_a = V[j, a] + dnu[j, a]
-                X[j, a] += h * ((1.0 - theta) * V[j, a] + theta * Vn_a)
-                V[j, a] = Vn_a
-                Wn[a] = W[j, a] + dnu[j, 3] * b1[a] + dnu[j, 4] * b2[a]
-                phi[a] = h * ((1.0 - theta) * W[j, a] + theta * Wn[a])
-            _rodrigues(E[j], phi, en)
-            nrm = math.sqrt(en[0] ** 2 + en[1] ** 2 + en[2] ** 2)
-            for a in range(3):
-                en[a] /= nrm
-            _rodrigues(Wn, phi, wr)
-            we = wr[0] * en[0] + wr[1] * en[1] + wr[2] * en[2]
-            for a in range(3):
-                E[j, a] = en[a]
-                W[j, a] = wr[a] - we * en[a]
-            # divergence: non-finite or absurd values
-            ok = True
-            for a in range(3):
-                if not (math.isfinite(X[j, a]) and math.isfinite(V[j, a]) and math.isfinite(W[j, a])
-                        and math.isfinite(E[j, a])):
-                    ok = False
-            if ok:
-                spd = math.sqrt(V[j, 0] ** 2 + V[j, 1] ** 2 + V[j, 2] ** 2)
-                sw = math.sqrt(W[j, 0] ** 2 + W[j, 1] ** 2 + W[j, 2] ** 2)
-                sx = math.sqrt(X[j, 0] ** 2 + X[j, 1] ** 2 + X[j, 2] ** 2)
-                if spd > vmax or sw > wmax or sx > pmax:
-                    ok = False
-            if not ok:
-                info[0] = step
-                info[1] = j
-                _restore(X, E, V, W, conn_ok, armed, tension, end_force, bX, bE, bV, bW,
-                         b_ok, b_armed, b_T, b_F)
-                n_events[0] = b_nev
-                return DIVERGED
-    return OK
+                io[IO_MEAN + s, a] = io[IO_IMPULSE + s, a] * inv
+                io[IO_POS + s, a] = io[IO_POS + s, a] + io[IO_VEL + s, a] * dt
+    return PARTED if io[IO_NEV] > b_nev else OK
