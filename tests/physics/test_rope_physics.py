@@ -269,6 +269,60 @@ def test_payout_conserves_mass_section_4_6():
     assert not rope.events
 
 
+@pytest.mark.parametrize("n", [11, 50])
+def test_payout_at_tug_speed_lays_the_rope_at_rest(n):
+    """Section 4.6: the winch pays out at the tug's 5 kn, so the rope leaves the drum at rest
+    in the water and carries no momentum away. What is laid out must stay where it was laid,
+    (its mean speed over time stays below 5 % of the tug's), and the bollards carry only the
+    weight of the rope hanging from them: at most one element (plus the bollard height) at
+    the barge, two elements at the tug. (A drum end that drags the rope along shows up as a
+    steady pull of 0.6-1.2 kN at the barge.)"""
+    p = TABLE1
+    tug0, barge = np.array([0.0, 0.0, 2.0]), np.array([0.0, 0.0, 1.0])
+    rope = RopeChain.wound_on_winch(p, tug0, barge, n_elements=n)
+    rope.set_end_kinematics("b", barge, (0, 0, 0))
+    speed = 5.0 * KNOT
+    rope.set_payout_rate(speed)
+    weight = p.mass_per_length * p.gravity
+    l_el = p.length / n
+    f_a, f_b, v_laid = [], [], []
+    for k in range(1500):  # 30 s: 80 m paid out, still below the 100 m limit
+        t = 0.02 * k
+        rope.set_end_kinematics("a", tug0 + np.array([speed * t, 0, 0]), (speed, 0, 0))
+        rope.step(0.02)
+        if rope.time > 15.0:  # the initial loop has fallen and settled
+            laid = rope.positions[:, 0] < tug0[0] + speed * rope.time - 30.0
+            v_laid.append(np.linalg.norm(rope.velocities[laid], axis=1).mean())
+            f_a.append(np.linalg.norm(rope.mean_end_force("a")))
+            f_b.append(np.linalg.norm(rope.mean_end_force("b")))
+    assert rope.unstretched_length < p.length
+    assert np.mean(v_laid) < 0.05 * speed
+    assert max(f_b) < weight * (l_el + 1.0)
+    assert max(f_a) < weight * 2.0 * l_el
+    assert not rope.events
+
+
+def test_fast_heave_in_keeps_enough_links_and_no_snap_load():
+    """Heave in 35 m of slack rope at 2 m/s with the tug lying 3 m from the barge (N = 50):
+    the links shrink with the deployed length (at least MIN_WINCH_ELEMENTS, none longer
+    than 1.25 x their share), mass stays length x mass per metre, nothing parts, and the
+    end tension stays below 10 % of the breaking load (slack rope accelerated to 2 m/s:
+    the longitudinal wave load mu v c is 2.7 kN)."""
+    p = TABLE1
+    rope = RopeChain.wound_on_winch(p, (3.0, 0.0, 2.0), (0.0, 0.0, 1.0), deployed_length=40.0, n_elements=50)
+    rope.set_payout_rate(-2.0)
+    peak = 0.0
+    for _ in range(1000):  # 20 s: down to the lower limit
+        rope.step(0.02)
+        peak = max(peak, np.linalg.norm(rope.mean_end_force("a")))
+        assert rope.total_mass == pytest.approx(p.mass_per_length * rope.unstretched_length, rel=1e-12)
+        assert rope.n_elements >= RopeChain.MIN_WINCH_ELEMENTS
+    assert rope.unstretched_length == pytest.approx(p.min_deployed_length, rel=1e-9)
+    assert rope.lengths.max() <= 1.25 * rope.unstretched_length / RopeChain.MIN_WINCH_ELEMENTS + 1e-9
+    assert not rope.events
+    assert peak < 0.1 * p.breaking_load
+
+
 def test_payout_clamped_to_full_length():
     p = TABLE1
     rope = RopeChain.wound_on_winch(p, (0, 0, 2), (95, 0, 1), deployed_length=97.0)

@@ -386,9 +386,10 @@ class RopeChain:
             self._pack()
         return K.run_substeps(self._S, self._F, self._io, self._ws, h, n_sub, payout, dt)
 
-    def _refresh(self, t=None):
-        """Recompute tensions and end forces for the current state (no time advance)."""
-        self._kernel(0.0, 0, 0.0, 0.0)
+    def _refresh(self, t=None, payout=0.0):
+        """Recompute tensions and end forces for the current state (no time advance;
+        payout: rope sliding through the drum at this rate)."""
+        self._kernel(0.0, 0, payout, 0.0)
         self._collect_events(self.time if t is None else t)
 
     def _collect_events(self, t0):
@@ -456,10 +457,7 @@ class RopeChain:
         st = K.OK
         for k in range(n_sub):
             self.att_pos[:] = pos0 + self.att_vel * (k * h)
-            dep = float(self.L.sum())
-            self._paying = bool(self.conn_ok[0]) and (
-                (self.payout_rate > 0 and dep < self.params.length) or
-                (self.payout_rate < 0 and dep > self.params.min_deployed_length))
+            self._paying = self._winch_running()
             st = self._kernel(h, 1, self.payout_rate if self._paying else 0.0, 0.0) & ~K.PARTED
             self._collect_events(self.time + k * h)
             if st != K.OK:
@@ -468,13 +466,24 @@ class RopeChain:
                 break
             imp_total += self._imp
             self._winch(self.payout_rate * h, h)
-        self.att_pos[:] = pos0
         self._paying = False
         if st == K.OK:
-            self._refresh(self.time + dt)
-            self.att_pos += self.att_vel * dt
+            # tensions at the end of the step: the attachments where they are then, the rope
+            # still sliding through the drum
+            self.att_pos[:] = pos0 + self.att_vel * dt
+            self._refresh(self.time + dt, self.payout_rate if self._winch_running() else 0.0)
             self._mean_end_force[:] = imp_total * (1.0 / dt)
+        else:
+            self.att_pos[:] = pos0
         return st
+
+    def _winch_running(self):
+        """True while the winch turns: a pay-out rate is set, the rope is whole at the drum
+        and the deployed length is inside its limits in the direction of the rate."""
+        dep = float(self.L.sum())
+        return bool(self.conn_ok[0]) and (
+            (self.payout_rate > 0 and dep < self.params.length) or
+            (self.payout_rate < 0 and dep > self.params.min_deployed_length))
 
     # ------------------------------------------------------------------ winch
     TINY = 1e-3  # element 0 is wound in completely below this fraction of a nominal length
@@ -520,8 +529,41 @@ class RopeChain:
                 # wound in completely: element 1 now hangs from the drum, its front within
                 # 'tiny' of it (merging two links at an angle would jump the geometry)
                 self._drop0()
-            elif self.L[0] < 0.5 * self.l_nom and self.E[0] @ self.E[1] > 0.98:
+            elif (self.L[0] < 0.5 * self.l_nom and self.E[0] @ self.E[1] > 0.98
+                  and self.n_elements > self.MIN_WINCH_ELEMENTS):
                 self._merge01()  # nearly straight: merging moves nothing noticeably
+            elif self.L[0] < 0.1 * self.L[1]:
+                # a link much shorter than its neighbour is stiff and light (its axial
+                # frequency grows as 1/length): merged even at an angle before it spins up
+                self._merge01()
+        if dl < 0.0:
+            # a short rope of few long rigid links cannot fold between close bollards (two
+            # 9 m links hung from bollards 3 m apart lock up and part): heave-in keeps at
+            # least MIN_WINCH_ELEMENTS links, none longer than 1.25 times their share
+            while True:
+                j = int(np.argmax(self.L))
+                dep = float(self.L.sum())
+                if self.L[j] < 4.0 * tiny or (self.n_elements >= self.MIN_WINCH_ELEMENTS
+                                              and self.L[j] <= 1.25 * dep / self.MIN_WINCH_ELEMENTS):
+                    break
+                self._halve(j)
+
+    MIN_WINCH_ELEMENTS = 4  # heave-in keeps at least this many links (see _winch)
+
+    def _halve(self, j):
+        """Split element j into two collinear halves moving as the rigid element did: mass,
+        momentum and angular momentum unchanged, the new joint whole and unloaded."""
+        l, e, x, v, w = self.L[j], self.E[j].copy(), self.X[j].copy(), self.V[j].copy(), self.W[j].copy()
+        q = 0.25 * l * e  # centre of each half from the element centre (front half towards end a)
+        self.X = np.vstack([self.X[:j], x + q, x - q, self.X[j + 1:]])
+        self.E = np.vstack([self.E[:j], e, e, self.E[j + 1:]])
+        self.V = np.vstack([self.V[:j], v + np.cross(w, q), v - np.cross(w, q), self.V[j + 1:]])
+        self.W = np.vstack([self.W[:j], w, w, self.W[j + 1:]])
+        self.L = np.concatenate([self.L[:j], [0.5 * l, 0.5 * l], self.L[j + 1:]])
+        self.conn_ok = np.insert(self.conn_ok, j + 1, 1)
+        self.armed = np.insert(self.armed, j + 1, 1)
+        self.breaking_load = np.insert(self.breaking_load, j + 1, self.params.breaking_load)
+        self.tensions = np.insert(self.tensions, j + 1, 0.0)
 
     def _drop0(self):
         self.X, self.E, self.V, self.W = self.X[1:], self.E[1:], self.V[1:], self.W[1:]

@@ -357,7 +357,6 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
     hth = h * theta
     h2t = h * h * theta
     h2t2 = hth * hth
-    pin = min(payout_a, 0.0)  # winch heave-in: the drum end also retracts along the rope
     # last good state, restored on divergence
     for j in range(N):
         for a in range(3):
@@ -625,20 +624,26 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                         Pn1 = io[IO_POS + 1, 1] + Vn1 * t
                         Pn2 = io[IO_POS + 1, 2] + Vn2 * t
                     # g: velocity of the next point minus the prev one without the pay-out
-                    # sliding (J nu), an attachment a with the heave-in retraction (pay-out
-                    # extensions are capped at the drum in chain._winch, not anticipated)
+                    # sliding (J nu); at attachment a the drum end of element 0 moves on
+                    # along the rope at the pay-out rate (out or in)
                     if hp:
                         g0 = Vn0 - Vp0
                         g1 = Vn1 - Vp1
                         g2 = Vn2 - Vp2
                     else:
-                        g0 = Vn0 - (Vp0 - pin * S[k, SE])
-                        g1 = Vn1 - (Vp1 - pin * S[k, SE + 1])
-                        g2 = Vn2 - (Vp2 - pin * S[k, SE + 2])
-                        # winch at end a: rope slides out of the drum at the pay-out rate
+                        g0 = Vn0 - (Vp0 - payout_a * S[k, SE])
+                        g1 = Vn1 - (Vp1 - payout_a * S[k, SE + 1])
+                        g2 = Vn2 - (Vp2 - payout_a * S[k, SE + 2])
+                        # winch at end a (drum element): rope slides through the drum at the
+                        # pay-out rate, and the drum end of element 0 extends (retracts) along
+                        # it during the call; chain._winch then grows (shrinks) the element
+                        # by that length, so the drum connection never sees the flow of rope
                         Vn0 += payout_a * S[k, SE]
                         Vn1 += payout_a * S[k, SE + 1]
                         Vn2 += payout_a * S[k, SE + 2]
+                        Pn0 += payout_a * t * S[k, SE]
+                        Pn1 += payout_a * t * S[k, SE + 1]
+                        Pn2 += payout_a * t * S[k, SE + 2]
                     if full:
                         if hp:
                             i10 = B1[i, 0]
