@@ -276,10 +276,12 @@ class Conductor(Node):
                 self.winch_pubs[target].publish(order)
             ordered.append(target)
             self.event(k, "order", target, self._describe(order))
-        self._publish(self.clock_pub, "/clock", Clock(clock=stamp))
         msg = SimStep(step=k, time=stamp, period=self.period_ns * 1e-9, ordered=sorted(set(ordered + self.piloted)))
         msg.header.stamp = stamp
+        # the trigger first: the nodes start computing while /clock goes out (they stamp by
+        # step number and do not read the clock to compute)
         self._publish(self.step_pub, rc.SIM_STEP_TOPIC, msg)
+        self._publish(self.clock_pub, "/clock", Clock(clock=stamp))
         if self.recorder:
             self.recorder.log_time_ns = (k + 1) * self.period_ns
 
@@ -412,6 +414,8 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
                 stats.lateness.append(late)
             t0 = time.monotonic()
             conductor.send_step(k)
+            if recorder:
+                recorder.flush()  # the previous step's messages, written while the nodes compute
             wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
             stats.round_trips.append(time.monotonic() - t0)
             conductor.done.pop(k, None)

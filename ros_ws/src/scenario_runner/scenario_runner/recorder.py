@@ -117,6 +117,7 @@ class McapRecorder(Node):
         self.log_time_ns = 0
         self.closed = False
         self.taps: Dict[str, Callable[[bytes], None]] = {}
+        self._pending: List[Tuple[str, int, int, bytes]] = []
         self.fed_topics = set(fed_topics)
         for topic, msg_class, qos in topics:
             self.add_topic(topic, msg_class, qos)
@@ -156,18 +157,27 @@ class McapRecorder(Node):
         self._write(topic, data)
 
     def _write(self, topic: str, data: bytes) -> None:
+        # Only queued here: the owner calls flush() when it has time (the scenario runner
+        # while the nodes compute the next step), so writing is off the step's critical path.
         if self.closed:
             return
-        self.writer.add_message(channel_id=self.channels[topic], log_time=self.log_time_ns, data=data,
-                                publish_time=self.log_time_ns, sequence=self.sequence)
+        self._pending.append((topic, self.log_time_ns, self.sequence, data))
         self.sequence += 1
         self.counts[topic] += 1
-        tap = self.taps.get(topic)
-        if tap is not None:
-            tap(data)
+
+    def flush(self) -> None:
+        """Write the queued messages (and hand them to the taps), in arrival order."""
+        pending, self._pending = self._pending, []
+        for topic, log_time, sequence, data in pending:
+            self.writer.add_message(channel_id=self.channels[topic], log_time=log_time, data=data,
+                                    publish_time=log_time, sequence=sequence)
+            tap = self.taps.get(topic)
+            if tap is not None:
+                tap(data)
 
     def close(self) -> None:
         if not self.closed:
+            self.flush()
             self.closed = True
             self.writer.finish()
             self._file.close()
