@@ -10,11 +10,12 @@ compare rows of one run, not runs of different days.
 import argparse
 import os
 import re
+import resource
 import subprocess
 import sys
 import tempfile
 
-ROW = re.compile(r"simulated in (?P<wall>[\d.]+) s wall \((?P<rtf>[\d.]+)x real time")
+ROW = re.compile(r"simulated in (?P<wall>[\d.]+) s wall \((?P<rtf>[\d.]+)x real time, (?P<steps>\d+) steps")
 RT = re.compile(r"round trip: p50 (?P<p50>[\d.]+) ms, p99 (?P<p99>[\d.]+) ms")
 LATE = re.compile(r"realtime: (?P<over>\d+) overrun step\(s\); lateness p99 (?P<late>[\d.]+) ms")
 
@@ -25,13 +26,29 @@ def run(scenario, duration, layout, executor, record, tmp, extra_env=None):
            "--layout", layout, "--output", os.path.join(tmp, "bench.mcap")]
     if not record:
         cmd.append("--no-record")
+    cpu0 = _children_cpu()
     out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=3600)
+    cpu = _children_cpu() - cpu0
     if out.returncode != 0:
         sys.exit(f"benchmark run failed: {' '.join(cmd)}\n{out.stderr}")
     m, r = ROW.search(out.stdout), RT.search(out.stdout)
     late = LATE.search(out.stdout)
-    return dict(rtf=float(m["rtf"]), p50=float(r["p50"]), p99=float(r["p99"]),
+    return dict(rtf=float(m["rtf"]), p50=float(r["p50"]), p99=float(r["p99"]), cpu=cpu, steps=int(m["steps"]),
                 over=int(late["over"]) if late else None, late=float(late["late"]) if late else None)
+
+
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of every finished descendant (the runner waits for its nodes)."""
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def run_cpu_per_step(scenario, duration, layout, executor, record, tmp):
+    """run() plus the CPU ms per step of all processes, start-up excluded."""
+    short = run(scenario, 2.0, layout, executor, record, tmp)
+    res = run(scenario, duration, layout, executor, record, tmp)
+    res["cpu_ms"] = 1e3 * (res["cpu"] - short["cpu"]) / (res["steps"] - short["steps"])
+    return res
 
 
 def main():
@@ -44,7 +61,7 @@ def main():
         for layout in ("processes", "one_process"):
             for executor in ("events", "single"):
                 for record in (True, False):
-                    res = run(args.scenario, args.duration, layout, executor, record, tmp)
+                    res = run_cpu_per_step(args.scenario, args.duration, layout, executor, record, tmp)
                     rows.append((f"lockstep, {layout}, {executor} executor, {'recording' if record else 'no recording'}",
                                  res))
         # paced real time: a copy of the scenario with mode realtime
@@ -57,13 +74,13 @@ def main():
         with open(paced, "w") as f:
             yaml.safe_dump(sc, f)
         rows.append(("realtime (paced), processes, events executor, recording",
-                     run(paced, min(args.duration, 30.0), "processes", "events", True, tmp)))
+                     run_cpu_per_step(paced, min(args.duration, 30.0), "processes", "events", True, tmp)))
     print(f"| {args.scenario}, {args.duration:g} s simulated at 50 Hz | real-time factor | round trip p50 ms | "
-          "round trip p99 ms | realtime: overruns, lateness p99 ms |")
-    print("|---|---|---|---|---|")
+          "round trip p99 ms | CPU ms per step, all processes | realtime: overruns, lateness p99 ms |")
+    print("|---|---|---|---|---|---|")
     for label, r in rows:
         late = f"{r['over']}, {r['late']:.2f}" if r["over"] is not None else "-"
-        print(f"| {label} | {r['rtf']:.1f}x | {r['p50']:.2f} | {r['p99']:.2f} | {late} |")
+        print(f"| {label} | {r['rtf']:.1f}x | {r['p50']:.2f} | {r['p99']:.2f} | {r['cpu_ms']:.2f} | {late} |")
 
 
 if __name__ == "__main__":

@@ -21,12 +21,13 @@ import sys
 from typing import Dict, List, Optional
 
 import numpy as np
-from geometry_msgs.msg import Point, Pose, Twist, WrenchStamped
+from geometry_msgs.msg import Point, WrenchStamped
 from std_msgs.msg import ColorRGBA
 from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rope_model.models import ModelFailure, make_model, rope_file_model
+from rope_model.state_cdr import rope_state_cdr
 from tug_dynamics import ros_common as rc
 from tug_dynamics.stepping import SteppedNode, StepInput
 
@@ -95,7 +96,6 @@ class RopeNode(SteppedNode):
         self.current = (gp("current_east").value, gp("current_north").value, 0.0)
         self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
         self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
-        self._poses, self._twists = [], []
         self.reported_events = 0
 
         self.state_pub = self.create_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
@@ -206,36 +206,18 @@ class RopeNode(SteppedNode):
             return
         stamp = self.stamp()
         out = self.rope.outputs()
-        st = RopeState(step=self.step_index, rope=self.rope_name, model=self.rope.name)
-        st.header.stamp = stamp
-        st.header.frame_id = rc.WORLD_FRAME
-        n = len(out["positions"])
-        if len(self._poses) != n:  # element objects are reused while the count stays (cheaper)
-            self._poses = [Pose() for _ in range(n)]
-            self._twists = [Twist() for _ in range(n)]
-        for pose, tw, p, q, v, w in zip(self._poses, self._twists, np.asarray(out["positions"]).tolist(),
-                                        np.asarray(out["quaternions"]).tolist(),
-                                        np.asarray(out["velocities"]).tolist(),
-                                        np.asarray(out["angular_velocities"]).tolist()):
-            pose.position.x, pose.position.y, pose.position.z = p
-            pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
-            tw.linear.x, tw.linear.y, tw.linear.z = v
-            tw.angular.x, tw.angular.y, tw.angular.z = w
-        st.element_poses = self._poses
-        st.element_velocities = self._twists
-        st.element_lengths = [float(v) for v in out["lengths"]]
-        st.connection_tensions = [float(v) for v in out["tensions"]]
-        st.piece_starts = [int(a) for a in out["piece_starts"]]
-        st.unstretched_length = float(out["unstretched_length"])
         line = np.asarray(out["line"])
-        st.stretched_length = float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum())
-        st.mass = float(out["mass"])
-        forces = {}
-        for end, vec in (("a", st.end_a_force), ("b", st.end_b_force)):
-            forces[end] = self.rope.end_force(end, averaged=self.step_index > 0)
-            vec.x, vec.y, vec.z = map(float, forces[end])
-        st.broken = bool(out["broken"])
-        self.state_pub.publish(st)
+        forces = {end: self.rope.end_force(end, averaged=self.step_index > 0) for end in ("a", "b")}
+        # written as CDR bytes from the arrays: building Pose/Twist objects per element would
+        # cost more than the rope's physics (see state_cdr.py)
+        self.state_pub.publish(rope_state_cdr(
+            stamp_ns=self.step_index * self.period_ns, frame_id=rc.WORLD_FRAME, step=self.step_index,
+            rope=self.rope_name, model=self.rope.name, positions=out["positions"],
+            quaternions=out["quaternions"], velocities=out["velocities"],
+            angular_velocities=out["angular_velocities"], lengths=out["lengths"], tensions=out["tensions"],
+            piece_starts=out["piece_starts"], unstretched_length=float(out["unstretched_length"]),
+            stretched_length=float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum()),
+            mass=float(out["mass"]), end_a_force=forces["a"], end_b_force=forces["b"], broken=bool(out["broken"])))
 
         for end in self.ends:
             if end.mode != "pinned":

@@ -23,6 +23,7 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 import rclpy
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
@@ -31,6 +32,9 @@ from tug_dynamics import ros_common as rc
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE)
+# Topics the runner itself publishes (/clock, /sim/step) or takes raw (/sim/step_done): it hands
+# their bytes to the recorder, which then needs no subscription of its own for them.
+FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
 
 
 class RunError(RuntimeError):
@@ -203,10 +207,23 @@ class Conductor(Node):
                          for v in sc.vessels}
         self.winch_pubs = {r.name: self.create_publisher(WinchCommand, f"/{r.name}/winch", rc.COMMAND_QOS)
                            for r in sc.ropes if r.layout == "winch"}
-        self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done, rc.PROTOCOL_QOS)
+        # raw: the answers are recorded as received and decoded once, here
+        self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done_raw, rc.PROTOCOL_QOS, raw=True)
         self.orders = self._orders_by_step()
         # Vessels steered by a lockstep autopilot get its order stamped k at every step k.
         self.piloted = sorted(a.vessel for a in sc.autopilots)
+
+    def _on_done_raw(self, data: bytes) -> None:
+        if self.recorder:
+            self.recorder.record(rc.STEP_DONE_TOPIC, data)
+        self._on_done(deserialize_message(data, StepDone))
+
+    def _publish(self, publisher, topic: str, msg) -> None:
+        """Serialize once: the same bytes go out and into the recording."""
+        data = serialize_message(msg)
+        publisher.publish(data)
+        if self.recorder:
+            self.recorder.record(topic, data)
 
     def _on_done(self, msg: StepDone) -> None:
         if msg.node not in self.expected:
@@ -259,10 +276,12 @@ class Conductor(Node):
                 self.winch_pubs[target].publish(order)
             ordered.append(target)
             self.event(k, "order", target, self._describe(order))
-        self.clock_pub.publish(Clock(clock=stamp))
         msg = SimStep(step=k, time=stamp, period=self.period_ns * 1e-9, ordered=sorted(set(ordered + self.piloted)))
         msg.header.stamp = stamp
-        self.step_pub.publish(msg)
+        # the trigger first: the nodes start computing while /clock goes out (they stamp by
+        # step number and do not read the clock to compute)
+        self._publish(self.step_pub, rc.SIM_STEP_TOPIC, msg)
+        self._publish(self.clock_pub, "/clock", Clock(clock=stamp))
         if self.recorder:
             self.recorder.log_time_ns = (k + 1) * self.period_ns
 
@@ -340,8 +359,12 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     n_steps = sc.steps if steps is None else steps
 
     def wait_for(step: int, timeout: float, what: str) -> None:
-        deadline = time.monotonic() + timeout
-        while conductor.done.get(step, set()) != conductor.expected:
+        now = time.monotonic()
+        deadline = now + timeout
+        next_check = now  # processes are polled every 20 ms, not after every message
+        expected = conductor.expected
+        done = conductor.done
+        while done.get(step) != expected:
             try:
                 executor.spin_once(timeout_sec=0.001)
             except rclpy.executors.ExternalShutdownException:
@@ -350,11 +373,15 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
                 raise RunError(f"a node failed while {what}: {exc!r}") from exc
             if conductor.failures:
                 raise RunError(conductor.failures[0])
+            now = time.monotonic()
+            if now < next_check:
+                continue
+            next_check = now + 0.02
             dead = procs.dead()
             if dead:
                 raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
                                f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
-            if time.monotonic() > deadline:
+            if now > deadline:
                 missing = sorted(conductor.expected - conductor.done.get(step, set()))
                 raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
                                f"{timeout:g} s while {what}")
@@ -366,7 +393,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         # matched them before step 0 goes out.
         want = 2 if recorder else 1
         needs = [(p, want) for p in conductor.order_publishers()]
-        needs.append((conductor.step_pub, len(specs) + (1 if recorder else 0)))
+        needs.append((conductor.step_pub, len(specs)))
         deadline = time.monotonic() + ready_timeout
         while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
             executor.spin_once(timeout_sec=0.01)
@@ -387,6 +414,8 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
                 stats.lateness.append(late)
             t0 = time.monotonic()
             conductor.send_step(k)
+            if recorder:
+                recorder.flush()  # the previous step's messages, written while the nodes compute
             wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
             stats.round_trips.append(time.monotonic() - t0)
             conductor.done.pop(k, None)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 import re
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 from mcap.writer import CompressionType, Writer
 from rclpy.node import Node
@@ -95,7 +95,11 @@ def type_name(msg_class) -> str:
 class McapRecorder(Node):
     """Subscribes the given topics (raw CDR) and writes them to an MCAP file."""
 
-    def __init__(self, path: str, topics: List[Tuple[str, type, QoSProfile]], period_ns: Optional[int] = None):
+    def __init__(self, path: str, topics: List[Tuple[str, type, QoSProfile]], period_ns: Optional[int] = None,
+                 fed_topics: Tuple[str, ...] = ()):
+        """fed_topics: recorded from record() calls of their owner in this process (e.g. the
+        scenario runner's /clock and /sim/step, and /sim/step_done which it takes raw anyway)
+        instead of a second subscription."""
         super().__init__("recorder")
         self.path = path
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
@@ -112,6 +116,9 @@ class McapRecorder(Node):
         # step k at k*T, the outputs of step k+1 at (k+1)*T); never goes backwards.
         self.log_time_ns = 0
         self.closed = False
+        self.taps: Dict[str, Callable[[bytes], None]] = {}
+        self._pending: List[Tuple[str, int, int, bytes]] = []
+        self.fed_topics = set(fed_topics)
         for topic, msg_class, qos in topics:
             self.add_topic(topic, msg_class, qos)
 
@@ -124,27 +131,53 @@ class McapRecorder(Node):
             topic=topic, message_encoding="cdr", schema_id=self.schemas[tname],
             metadata={"offered_qos_profiles": qos_yaml(qos)})
         self.counts[topic] = 0
+        if topic in self.fed_topics:
+            return
         # KEEP_ALL on the reader side so no message is dropped while the writer is busy.
         reader_qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=qos.reliability,
                                 durability=qos.durability)
         self.subscriptions_by_topic[topic] = self.create_subscription(
             msg_class, topic, lambda data, t=topic: self._write(t, data), reader_qos, raw=True)
 
+    def tap(self, topic: str, callback: Callable[[bytes], None]) -> bool:
+        """Hand every recorded message of topic (serialized) to callback as well; False if the
+        topic is not recorded."""
+        if topic not in self.channels:
+            return False
+        self.taps[topic] = callback
+        return True
+
     def unmatched_topics(self) -> List[str]:
         """Topics where the graph has more publishers than this recorder has matched yet."""
         return [t for t, sub in self.subscriptions_by_topic.items()
                 if sub.get_publisher_count() < self.count_publishers(t)]
 
+    def record(self, topic: str, data: bytes) -> None:
+        """Record a serialized message of a fed topic (published by this process)."""
+        self._write(topic, data)
+
     def _write(self, topic: str, data: bytes) -> None:
+        # Only queued here: the owner calls flush() when it has time (the scenario runner
+        # while the nodes compute the next step), so writing is off the step's critical path.
         if self.closed:
             return
-        self.writer.add_message(channel_id=self.channels[topic], log_time=self.log_time_ns, data=data,
-                                publish_time=self.log_time_ns, sequence=self.sequence)
+        self._pending.append((topic, self.log_time_ns, self.sequence, data))
         self.sequence += 1
         self.counts[topic] += 1
 
+    def flush(self) -> None:
+        """Write the queued messages (and hand them to the taps), in arrival order."""
+        pending, self._pending = self._pending, []
+        for topic, log_time, sequence, data in pending:
+            self.writer.add_message(channel_id=self.channels[topic], log_time=log_time, data=data,
+                                    publish_time=log_time, sequence=sequence)
+            tap = self.taps.get(topic)
+            if tap is not None:
+                tap(data)
+
     def close(self) -> None:
         if not self.closed:
+            self.flush()
             self.closed = True
             self.writer.finish()
             self._file.close()

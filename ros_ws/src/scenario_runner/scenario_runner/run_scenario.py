@@ -20,6 +20,7 @@ import rclpy
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
@@ -36,34 +37,43 @@ def scenario_path(name: str) -> str:
 class Monitor(Node):
     """Collects what the summary needs: towline end tensions, partings and final vessel states.
 
-    It listens to the small end-wrench messages (not the full rope state) so that it costs the
-    runner's process little per step."""
+    It takes the serialized bytes of the few topics it needs, from the recorder when one runs
+    (no second subscription, no second delivery per step), else from its own raw
+    subscriptions; only the small end wrench is decoded every step, odometry only at the end."""
 
-    def __init__(self, sc):
+    def __init__(self, sc, recorder: Optional[McapRecorder] = None):
         super().__init__("scenario_monitor")
         self.tension: Dict[str, List[float]] = {}
         self.broken: Dict[str, bool] = {r.name: False for r in sc.ropes}
-        self.odom: Dict[str, Odometry] = {}
+        self._odom_raw: Dict[str, bytes] = {}
+        wanted = []  # (topic, type, qos, callback on the serialized message)
         for r in sc.ropes:
             end = next((e for e in ("a", "b") if "/" in getattr(r, f"end_{e}")), None)
             self.tension[r.name] = []
             if end is not None:
-                self.create_subscription(WrenchStamped, f"/{r.name}/end_{end}/wrench",
-                                         lambda m, r=r.name: self._wrench(r, m), rc.LATCHED_STATE_QOS)
+                wanted.append((f"/{r.name}/end_{end}/wrench", WrenchStamped,
+                               lambda data, r=r.name: self._wrench(r, data)))
             else:  # both ends fixed or free: the rope state's end a force
-                self.create_subscription(RopeState, f"/{r.name}/state", lambda m, r=r.name: self._rope(r, m),
-                                         rc.LATCHED_STATE_QOS)
+                wanted.append((f"/{r.name}/state", RopeState, lambda data, r=r.name: self._rope(r, data)))
         for v in sc.vessels:
-            self.create_subscription(Odometry, f"/{v.name}/odom", lambda m, v=v.name: self.odom.__setitem__(v, m),
-                                     rc.LATCHED_STATE_QOS)
+            wanted.append((f"/{v.name}/odom", Odometry, lambda data, v=v.name: self._odom_raw.__setitem__(v, data)))
+        for topic, msg_type, callback in wanted:
+            if recorder is not None and recorder.tap(topic, callback):
+                continue
+            self.create_subscription(msg_type, topic, callback, rc.LATCHED_STATE_QOS, raw=True)
         self.create_subscription(ScenarioEvent, rc.EVENTS_TOPIC, self._event, rc.EVENTS_QOS)
 
-    def _wrench(self, name: str, msg: WrenchStamped) -> None:
-        f = msg.wrench.force
+    @property
+    def odom(self) -> Dict[str, Odometry]:
+        """The last odometry of each vessel (decoded on demand)."""
+        return {v: deserialize_message(data, Odometry) for v, data in self._odom_raw.items()}
+
+    def _wrench(self, name: str, data: bytes) -> None:
+        f = deserialize_message(data, WrenchStamped).wrench.force
         self.tension[name].append(math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2))
 
-    def _rope(self, name: str, msg: RopeState) -> None:
-        f = msg.end_a_force
+    def _rope(self, name: str, data: bytes) -> None:
+        f = deserialize_message(data, RopeState).end_a_force
         self.tension[name].append(math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2))
 
     def _event(self, msg: ScenarioEvent) -> None:
@@ -122,8 +132,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{sc.name}_logs")
 
     rclpy.init(args=argv)
-    mon = Monitor(sc)
-    recorder = McapRecorder(output, cd.contract_topics(sc)) if sc.recording.enabled and not args.no_record else None
+    recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.FED_TOPICS) if sc.recording.enabled and not args.no_record else None
+    mon = Monitor(sc, recorder)
     progress = None
     if not args.quiet:
         from tqdm import tqdm
