@@ -126,7 +126,12 @@ def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
         victim = _node_pid("__ns:=/barge", os.environ["ROS_DOMAIN_ID"])
         time.sleep(0.2)
     assert victim, "barge node never started"
-    time.sleep(3.0)  # let the run get going
+    # kill it once the run is going: the rope has been laid out between the vessels' step-0
+    # attachments (so there is something in the recording), however slow the start-up
+    rope_log = tmp_path / "seed000_straight_tow_5kn_logs" / "towline_rope.log"
+    while time.monotonic() < deadline and not (rope_log.exists() and "laid out" in rope_log.read_text()):
+        time.sleep(0.2)
+    time.sleep(1.0)
     os.kill(victim, signal.SIGKILL)
     stdout, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 3

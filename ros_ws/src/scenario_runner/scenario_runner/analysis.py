@@ -305,7 +305,6 @@ def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int
         plt.close(fig)
         files.append(path)
 
-    deg = math.degrees
     title = os.path.basename(rec.path)
     if rec.vessels or rec.ropes:
         fig, ax = plt.subplots(figsize=(8, 7))

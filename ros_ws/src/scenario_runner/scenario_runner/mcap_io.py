@@ -341,7 +341,8 @@ class McapFile:
         index loses nothing, but it means the file is damaged there."""
         c = _Cursor(buf, body, end)
         try:
-            cid, n = c.u16(), c.u32()
+            c.u16()  # channel id
+            n = c.u32()
             if n != end - c.pos or n % 16:
                 raise ValueError(f"its entries take {n} bytes of {end - c.pos}")
             if chunk is None:
