@@ -10,6 +10,7 @@ model (tug_dynamics.ship_file.load_ship); this node only converts messages.
 """
 from __future__ import annotations
 
+import copy
 import math
 import os
 import sys
@@ -118,6 +119,9 @@ class VesselNode(SteppedNode):
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self.init_stepping([StepInput("command", VesselCommand, kind="order")] +
                            [StepInput(t, WrenchStamped) for t in self.wrench_topics])
+        # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
+        # now, on a copy, not in the first step of a paced run.
+        copy.deepcopy(self.model).step(self.dt, [])
         self.publish_outputs()
         self.get_logger().info(
             f"vessel '{self.vessel_name}' from {path}: {type(self.model).__name__}, "
