@@ -15,18 +15,13 @@ import time
 from typing import Callable, List
 
 import pytest
+from scenario_runner.conductor import executable_path  # noqa: F401  (tests import it from here)
 
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.pop("ROS_STATIC_PEERS", None)
 os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; the range above replaces it
 
 
-def executable_path(package: str, executable: str) -> str:
-    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        path = os.path.join(prefix, "lib", package, executable)
-        if prefix and os.access(path, os.X_OK):
-            return path
-    raise FileNotFoundError(f"executable {package}/{executable} not found on AMENT_PREFIX_PATH")
 
 
 class NodeProcess:
@@ -109,7 +104,6 @@ def rclpy_context(ros_domain):
 
 
 def spin_until(node, predicate: Callable[[], bool], timeout: float) -> bool:
-    import rclpy
     from rclpy.executors import SingleThreadedExecutor
     executor = SingleThreadedExecutor(context=node.context)
     executor.add_node(node)

@@ -176,7 +176,7 @@ def test_truncated_recording_is_reported_and_its_readable_part_analysed(turn_rec
     tug = summary["vessels"]["tug"]
     assert 30.0 < tug["t_end"] < 110.0  # about half of the 120 s
     # what is readable gives the same early measures as the whole file
-    full = analyze(turn_recording, "-o", tmp_path / "full", "--no-figures")
+    analyze(turn_recording, "-o", tmp_path / "full", "--no-figures")
     ref = json.loads((tmp_path / "full" / "summary.json").read_text())["vessels"]["tug"]["turn"]
     assert tug["turn"]["advance"] == pytest.approx(ref["advance"], abs=1e-9)
     assert tug["turn"]["tactical_diameter"] == pytest.approx(ref["tactical_diameter"], abs=1e-9)

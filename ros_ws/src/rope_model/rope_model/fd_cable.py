@@ -34,10 +34,9 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
-import yaml
 
 from . import fd_kernels as FK
-from .params import check_numbers, finite_vec3, shipped_rope_file
+from .params import check_numbers, finite_vec3, read_mapping, shipped_rope_file
 
 G0 = 9.80665  # m/s^2
 
@@ -187,17 +186,7 @@ def load_cable_params(path: str | os.PathLike) -> FdCableParams:
 
     Raises FileNotFoundError (with the path) or FdCableParamsError (file + key).
     """
-    path = os.fspath(path)
-    src = os.path.basename(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"cable parameter file not found: {path}")
-    with open(path, encoding="utf-8") as fh:
-        try:
-            data = yaml.safe_load(fh)
-        except yaml.YAMLError as exc:
-            raise FdCableParamsError(f"{src}: not valid YAML: {exc}") from None
-    if not isinstance(data, dict):
-        raise FdCableParamsError(f"{src}: expected a mapping of keys, got {type(data).__name__}")
+    src, data = read_mapping(path, "cable", FdCableParamsError)
     if "model" not in data:
         raise FdCableParamsError(f"{src}: key 'model': missing (expected 'fd_cable')")
     kw = {}

@@ -134,26 +134,33 @@ def _validate(p: RopeParams, src: str) -> None:
 _FIELDS = {f.name for f in dataclasses.fields(RopeParams)} - {"source"}
 
 
+def read_mapping(path, what: str, error, empty_ok: bool = False):
+    """(file name, dict) of a YAML parameter file that must hold a mapping; a missing file
+    raises FileNotFoundError with the path, bad YAML or another top-level type raises
+    error naming the file. empty_ok: an empty file reads as {}."""
+    path = os.fspath(path)
+    src = os.path.basename(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"{what} parameter file not found: {path}")
+    with open(path, encoding="utf-8") as fh:
+        try:
+            data = yaml.safe_load(fh)
+        except yaml.YAMLError as exc:
+            raise error(f"{src}: not valid YAML: {exc}") from None
+    if data is None and empty_ok:
+        data = {}
+    if not isinstance(data, dict):
+        raise error(f"{src}: expected a mapping of keys, got {type(data).__name__}")
+    return src, dict(data)
+
+
 def load_rope_params(path: str | os.PathLike) -> RopeParams:
     """Read a rope YAML file (flat mapping of the RopeParams field names; an optional
     ``model: element_chain`` key, the rope node's model selector, is accepted).
 
     Raises FileNotFoundError (with the path) or RopeParamsError (file + key).
     """
-    path = os.fspath(path)
-    src = os.path.basename(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"rope parameter file not found: {path}")
-    with open(path, encoding="utf-8") as fh:
-        try:
-            data = yaml.safe_load(fh)
-        except yaml.YAMLError as exc:
-            raise RopeParamsError(f"{src}: not valid YAML: {exc}") from None
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise RopeParamsError(f"{src}: expected a mapping of keys, got {type(data).__name__}")
-    data = dict(data)
+    src, data = read_mapping(path, "rope", RopeParamsError, empty_ok=True)
     model = data.pop("model", "element_chain")  # the rope node's model selector
     if model != "element_chain":
         raise RopeParamsError(

@@ -65,7 +65,8 @@ class NodeSpec:
         return [Parameter(k, value=v) for k, v in self.params.items()]
 
 
-def _executable(package: str, executable: str) -> str:
+def executable_path(package: str, executable: str) -> str:
+    """Where `ros2 run package executable` finds the executable (lib/<package>/ of a prefix)."""
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         path = os.path.join(prefix, "lib", package, executable)
         if prefix and os.access(path, os.X_OK):
@@ -146,7 +147,7 @@ class NodeProcesses:
             self.logs[spec.name] = log
             with open(log, "wb") as out:
                 self.procs[spec.name] = subprocess.Popen(
-                    [_executable(spec.package, spec.executable), "--ros-args", *spec.ros_args()],
+                    [executable_path(spec.package, spec.executable), "--ros-args", *spec.ros_args()],
                     stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
 
     def dead(self) -> Optional[str]:
