@@ -28,6 +28,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from rope_model.models import ModelFailure, make_model, rope_file_model
 from rope_model.state_cdr import rope_state_cdr
+from tug_dynamics import cdr
 from tug_dynamics import ros_common as rc
 from tug_dynamics.stepping import SteppedNode, StepInput
 
@@ -49,7 +50,7 @@ class RopeEnd:
         if self.mode != "pinned" and self.position is None:
             raise ValueError(f"parameter end_{label}_position: end {label} is '{spec}', give its position [x, y, z] m")
         self.velocity = np.zeros(3)
-        self.orientation = None  # attachment frame orientation (quaternion msg)
+        self.orientation = None  # attachment frame orientation, quaternion (x, y, z, w)
 
     @property
     def frame(self) -> str:
@@ -102,15 +103,17 @@ class RopeNode(SteppedNode):
         self.marker_pub = self.create_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self.wrench_pubs: Dict[str, object] = {}
+        self.wrench_cdr: Dict[str, cdr.WrenchStampedEncoder] = {}
         for end in self.ends:
             if end.mode == "pinned":
                 self.wrench_pubs[end.label] = self.create_publisher(
                     WrenchStamped, f"end_{end.label}/wrench", rc.LATCHED_STATE_QOS)
+                self.wrench_cdr[end.label] = cdr.WrenchStampedEncoder(end.frame)
         self.vessel_topics = {}
         for end in self.ends:
             if end.mode == "pinned":
                 self.vessel_topics.setdefault(f"/{end.vessel}/attachments", end.vessel)
-        inputs = [StepInput(t, AttachmentArray) for t in self.vessel_topics]
+        inputs = [StepInput(t, AttachmentArray, decode=cdr.decode_attachment_array) for t in self.vessel_topics]
         if self.layout == "winch":
             inputs.append(StepInput("winch", WinchCommand, kind="order"))
         self.init_stepping(inputs, ready=False)
@@ -126,7 +129,7 @@ class RopeNode(SteppedNode):
     # -- inputs --------------------------------------------------------------------------
     def step_of(self, spec, msg) -> int:
         if spec.msg_type is AttachmentArray:
-            return int(msg.step)
+            return msg.step
         return super().step_of(spec, msg)
 
     def accept_input(self, spec: StepInput, msg) -> bool:
@@ -137,37 +140,35 @@ class RopeNode(SteppedNode):
             return True
         for end in self.ends:
             if end.mode == "pinned" and f"/{end.vessel}/attachments" == spec.topic:
-                point = next((p for p in msg.points if p.name == end.attachment), None)
+                point = msg.points.get(end.attachment)
                 if point is None:
                     self.get_logger().error(
                         f"{spec.topic} has no attachment '{end.attachment}' for end {end.label} "
-                        f"(it has {[p.name for p in msg.points]})")
+                        f"(it has {list(msg.points)})")
                     return False
-                values = [point.position.x, point.position.y, point.position.z,
-                          point.velocity.x, point.velocity.y, point.velocity.z]
-                if not all(math.isfinite(v) for v in values):
+                if not all(math.isfinite(v) for v in point.position + point.velocity + point.orientation):
                     self.get_logger().error(f"{spec.topic}: non-finite kinematics for '{end.attachment}' rejected")
                     return False
-        if self.rope is None and int(msg.step) == 0:
+        if self.rope is None and msg.step == 0:
             self._take_attachments(msg)
             if all(e.position is not None for e in self.ends):
                 self._build()
         return True
 
-    def _take_attachments(self, msg: AttachmentArray) -> None:
+    def _take_attachments(self, msg: cdr.AttachmentsIn) -> None:
         for end in self.ends:
             if end.mode == "pinned" and end.vessel == msg.vessel:
-                point = next(p for p in msg.points if p.name == end.attachment)
-                end.position = np.array([point.position.x, point.position.y, point.position.z])
-                end.velocity = np.array([point.velocity.x, point.velocity.y, point.velocity.z])
+                point = msg.points[end.attachment]
+                end.position = np.array(point.position)
+                end.velocity = np.array(point.velocity)
                 end.orientation = point.orientation
 
     def _build(self) -> None:
         a = self.ends[0]
         heading = 0.0
         if a.orientation is not None:
-            q = a.orientation
-            heading = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            x, y, z, w = a.orientation
+            heading = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
         self.rope = make_model(self.rope_path, self.layout, a.position, self.ends[1].position,
                                end_a=a.mode, end_b=self.ends[1].mode, current=self.current,
                                n_elements=self.n_elements, deployed_length=self.deployed_length,
@@ -204,14 +205,14 @@ class RopeNode(SteppedNode):
     def publish_outputs(self) -> None:
         if self.rope is None:
             return
-        stamp = self.stamp()
+        stamp_ns = self.step_index * self.period_ns
         out = self.rope.outputs()
         line = np.asarray(out["line"])
         forces = {end: self.rope.end_force(end, averaged=self.step_index > 0) for end in ("a", "b")}
         # written as CDR bytes from the arrays: building Pose/Twist objects per element would
         # cost more than the rope's physics (see state_cdr.py)
         self.state_pub.publish(rope_state_cdr(
-            stamp_ns=self.step_index * self.period_ns, frame_id=rc.WORLD_FRAME, step=self.step_index,
+            stamp_ns=stamp_ns, frame_id=rc.WORLD_FRAME, step=self.step_index,
             rope=self.rope_name, model=self.rope.name, positions=out["positions"],
             quaternions=out["quaternions"], velocities=out["velocities"],
             angular_velocities=out["angular_velocities"], lengths=out["lengths"], tensions=out["tensions"],
@@ -225,14 +226,10 @@ class RopeNode(SteppedNode):
             # Attachment frame axes are the vessel's body axes: rotate the world force into them.
             rot = rc.rotation_from_quaternion(end.orientation)
             f_body = rot.T @ forces[end.label]
-            w = WrenchStamped()
-            w.header.stamp = stamp
-            w.header.frame_id = end.frame
-            w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = map(float, f_body)
-            self.wrench_pubs[end.label].publish(w)
+            self.wrench_pubs[end.label].publish(self.wrench_cdr[end.label].encode(stamp_ns, f_body.tolist()))
 
         if self.step_index % self.marker_every == 0:
-            self.marker_pub.publish(self._markers(line, out["tensions"], stamp))
+            self.marker_pub.publish(self._markers(line, out["tensions"], self.stamp()))
 
     def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp) -> MarkerArray:
         m = Marker(ns=self.rope_name, id=0, type=Marker.LINE_STRIP, action=Marker.ADD)

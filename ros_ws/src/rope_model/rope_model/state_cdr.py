@@ -3,13 +3,10 @@
 Building the message as Python objects costs one Pose and one Twist object per element and a
 field-by-field conversion on publish: most of the rope node's step at 11 elements. The rope
 state is instead written here as the CDR bytes (XCDR1, little endian, what rmw_fastrtps sends
-for ROS 2 Jazzy) and published as a serialized message. The bytes are checked to be identical
-to rclpy's own serialization of the same message (tests/ros/test_rope_state_cdr.py).
+for ROS 2 Jazzy) and published as a serialized message. rclpy's own deserializer is checked
+to read back exactly the message built field by field (tests/ros/test_rope_state_cdr.py).
 
-CDR rules used: a 4-byte encapsulation header (0x00 0x01 = CDR little endian, options 0);
-every primitive aligned to its size counted from the end of that header; strings as uint32
-length including the terminating NUL, then the bytes; sequences as a uint32 count, then the
-elements.
+The CDR rules and the writer are those of tug_dynamics.cdr (the other per-step messages).
 """
 from __future__ import annotations
 
@@ -17,45 +14,7 @@ import struct
 
 import numpy as np
 
-_ENCAPSULATION = b"\x00\x01\x00\x00"
-
-
-class _CdrWriter:
-    def __init__(self):
-        self.parts = [_ENCAPSULATION]
-        self.size = 0  # bytes after the encapsulation header
-
-    def _align(self, n: int) -> None:
-        pad = (-self.size) % n
-        if pad:
-            self.parts.append(b"\x00" * pad)
-            self.size += pad
-
-    def raw(self, data: bytes, align: int) -> None:
-        self._align(align)
-        self.parts.append(data)
-        self.size += len(data)
-
-    def uint32(self, v: int) -> None:
-        self.raw(struct.pack("<I", v), 4)
-
-    def string(self, s: str) -> None:
-        b = s.encode() + b"\x00"
-        self.uint32(len(b))
-        self.parts.append(b)
-        self.size += len(b)
-
-    def float64s(self, a: np.ndarray) -> None:
-        """Consecutive float64 values (a struct of doubles, or the body of a sequence)."""
-        if a.size:
-            self.raw(np.ascontiguousarray(a, dtype="<f8").tobytes(), 8)
-
-    def float64_seq(self, a: np.ndarray) -> None:
-        self.uint32(a.size)
-        self.float64s(a)
-
-    def getvalue(self) -> bytes:
-        return b"".join(self.parts)
+from tug_dynamics.cdr import CdrWriter
 
 
 def rope_state_cdr(*, stamp_ns: int, frame_id: str, step: int, rope: str, model: str,
@@ -66,8 +25,8 @@ def rope_state_cdr(*, stamp_ns: int, frame_id: str, step: int, rope: str, model:
     quaternions (N,4) as (x, y, z, w); stamp in nanoseconds (>= 0)."""
     pos = np.asarray(positions, float).reshape(-1, 3)
     n = pos.shape[0]
-    w = _CdrWriter()
-    w.raw(struct.pack("<iI", stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000), 4)  # Header.stamp
+    w = CdrWriter()
+    w.stamp(stamp_ns)  # Header.stamp
     w.string(frame_id)
     w.raw(struct.pack("<Q", step), 8)
     w.string(rope)

@@ -23,11 +23,11 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 import rclpy
 from rclpy.node import Node
-from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
 from scenario_runner.scenario import Scenario, heading_rad, resolve
+from tug_dynamics import cdr
 from tug_dynamics import ros_common as rc
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
@@ -150,6 +150,18 @@ class NodeProcesses:
                     [executable_path(spec.package, spec.executable), "--ros-args", *spec.ros_args()],
                     stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
 
+    def cpu_seconds(self) -> float:
+        """CPU time (user + system, all threads) of the node processes so far; nan without /proc."""
+        total = 0.0
+        for p in self.procs.values():
+            try:
+                with open(f"/proc/{p.pid}/stat") as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+            except OSError:
+                return float("nan")
+            total += (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        return total
+
     def dead(self) -> Optional[str]:
         for name, p in self.procs.items():
             if p.poll() is not None:
@@ -187,6 +199,7 @@ class RunStats:
     lateness: List[float] = dataclasses.field(default_factory=list)  # realtime: s behind schedule per step
     round_trips: List[float] = dataclasses.field(default_factory=list)  # s from SimStep to last StepDone
     compute_times: Dict[str, List[float]] = dataclasses.field(default_factory=dict)  # node -> s per step
+    cpu_time: float = float("nan")  # s of CPU of every process of the run (runner and nodes) while stepping
 
 
 class Conductor(Node):
@@ -217,16 +230,20 @@ class Conductor(Node):
     def _on_done_raw(self, data: bytes) -> None:
         if self.recorder:
             self.recorder.record(rc.STEP_DONE_TOPIC, data)
-        self._on_done(deserialize_message(data, StepDone))
+        try:
+            msg = cdr.decode_step_done(data)
+        except (cdr.CdrError, UnicodeDecodeError) as exc:
+            self.get_logger().error(f"{rc.STEP_DONE_TOPIC}: undecodable StepDone dropped: {exc}")
+            return
+        self._on_done(msg)
 
-    def _publish(self, publisher, topic: str, msg) -> None:
-        """Serialize once: the same bytes go out and into the recording."""
-        data = serialize_message(msg)
+    def _publish(self, publisher, topic: str, data: bytes) -> None:
+        """The same bytes go out and into the recording."""
         publisher.publish(data)
         if self.recorder:
             self.recorder.record(topic, data)
 
-    def _on_done(self, msg: StepDone) -> None:
+    def _on_done(self, msg: cdr.DoneIn) -> None:
         if msg.node not in self.expected:
             return
         if not msg.ok:
@@ -277,12 +294,12 @@ class Conductor(Node):
                 self.winch_pubs[target].publish(order)
             ordered.append(target)
             self.event(k, "order", target, self._describe(order))
-        msg = SimStep(step=k, time=stamp, period=self.period_ns * 1e-9, ordered=sorted(set(ordered + self.piloted)))
-        msg.header.stamp = stamp
+        stamp_ns = k * self.period_ns
         # the trigger first: the nodes start computing while /clock goes out (they stamp by
         # step number and do not read the clock to compute)
-        self._publish(self.step_pub, rc.SIM_STEP_TOPIC, msg)
-        self._publish(self.clock_pub, "/clock", Clock(clock=stamp))
+        self._publish(self.step_pub, rc.SIM_STEP_TOPIC, cdr.sim_step_cdr(
+            stamp_ns, k, self.period_ns * 1e-9, sorted(set(ordered + self.piloted))))
+        self._publish(self.clock_pub, "/clock", cdr.clock_cdr(stamp_ns))
         if self.recorder:
             self.recorder.log_time_ns = (k + 1) * self.period_ns
 
@@ -341,11 +358,17 @@ def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
                                                parameter_overrides=s.parameter_overrides()) for s in specs]
 
 
+SPIN_TIMEOUT = float(os.environ.get("SPIN_TIMEOUT", "0.001"))
+
+
 def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float = 240.0,
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
-        on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes") -> RunStats:
+        on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes",
+        on_finished: Optional[Callable[[int], Callable[[], bool]]] = None) -> RunStats:
     """Start the nodes (each its own process, or all in this process on one executor), run the
-    scenario, stop everything. Raises RunError naming the node."""
+    scenario, stop everything. Raises RunError naming the node. on_finished(final stamp ns), called
+    after the last step while the nodes still run, returns a predicate: the run waits (up to 5 s)
+    until it holds, e.g. until a late subscriber got the final state."""
     if layout not in LAYOUTS:
         raise ValueError(f"layout {layout!r}: expected one of {LAYOUTS}")
     specs = node_specs(sc, scenario_path)
@@ -367,7 +390,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         done = conductor.done
         while done.get(step) != expected:
             try:
-                executor.spin_once(timeout_sec=0.001)
+                executor.spin_once(timeout_sec=SPIN_TIMEOUT)
             except rclpy.executors.ExternalShutdownException:
                 raise  # Ctrl-C / SIGTERM: the caller finalises the recording
             except Exception as exc:  # an in-process node failed in its callback
@@ -405,6 +428,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         conductor.event(0, "scenario_started", "", f"scenario '{sc.name}': {n_steps} steps at "
                         f"{sc.exchange_rate:g} Hz, {sc.mode}")
         t_start = time.monotonic()
+        cpu_start = time.process_time() + procs.cpu_seconds()
         period = conductor.period_ns * 1e-9
         for k in range(n_steps):
             if sc.mode == "realtime":
@@ -426,11 +450,13 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
             if on_step:
                 on_step(k + 1)
         stats.wall_time = time.monotonic() - t_start
+        stats.cpu_time = time.process_time() + procs.cpu_seconds() - cpu_start
         stats.compute_times = conductor.compute_times
         conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
         # let the last messages reach subscribers in this process (recorder, summary)
-        end = time.monotonic() + 0.3
-        while time.monotonic() < end:
+        settled = on_finished(n_steps * conductor.period_ns) if on_finished else (lambda: True)
+        start = time.monotonic()
+        while time.monotonic() < start + 0.3 or (not settled() and time.monotonic() < start + 5.0):
             executor.spin_once(timeout_sec=0.01)
         return stats
     finally:

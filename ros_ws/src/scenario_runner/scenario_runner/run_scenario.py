@@ -13,7 +13,7 @@ import argparse
 import math
 import os
 import sys
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, Optional
 
 import numpy as np
 import rclpy
@@ -26,6 +26,7 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 from scenario_runner import conductor as cd
 from scenario_runner.recorder import McapRecorder
 from scenario_runner.scenario import ScenarioError, load_scenario
+from tug_dynamics import cdr
 from tug_dynamics import ros_common as rc
 
 
@@ -39,13 +40,17 @@ class Monitor(Node):
 
     It takes the serialized bytes of the few topics it needs, from the recorder when one runs
     (no second subscription, no second delivery per step), else from its own raw
-    subscriptions; only the small end wrench is decoded every step, odometry only at the end."""
+    subscriptions; only the small end wrench is decoded every step. Without a recorder the
+    final odometry is fetched once the run is over (finish(): the odometry topics are
+    transient-local, a late subscription gets the last messages), not taken every step."""
 
     def __init__(self, sc, recorder: Optional[McapRecorder] = None):
         super().__init__("scenario_monitor")
         self.tension: Dict[str, List[float]] = {}
         self.broken: Dict[str, bool] = {r.name: False for r in sc.ropes}
         self._odom_raw: Dict[str, bytes] = {}
+        self._odom_topics: Dict[str, str] = {}  # vessel -> topic, fetched by finish()
+        self.vessels = [v.name for v in sc.vessels]
         wanted = []  # (topic, type, qos, callback on the serialized message)
         for r in sc.ropes:
             end = next((e for e in ("a", "b") if "/" in getattr(r, f"end_{e}")), None)
@@ -55,12 +60,14 @@ class Monitor(Node):
                                lambda data, r=r.name: self._wrench(r, data)))
             else:  # both ends fixed or free: the rope state's end a force
                 wanted.append((f"/{r.name}/state", RopeState, lambda data, r=r.name: self._rope(r, data)))
-        for v in sc.vessels:
-            wanted.append((f"/{v.name}/odom", Odometry, lambda data, v=v.name: self._odom_raw.__setitem__(v, data)))
         for topic, msg_type, callback in wanted:
             if recorder is not None and recorder.tap(topic, callback):
                 continue
             self.create_subscription(msg_type, topic, callback, rc.LATCHED_STATE_QOS, raw=True)
+        for v in sc.vessels:
+            topic = f"/{v.name}/odom"
+            if recorder is None or not recorder.tap(topic, lambda data, v=v.name: self._odom_raw.__setitem__(v, data)):
+                self._odom_topics[v.name] = topic
         self.create_subscription(ScenarioEvent, rc.EVENTS_TOPIC, self._event, rc.EVENTS_QOS)
 
     @property
@@ -68,9 +75,20 @@ class Monitor(Node):
         """The last odometry of each vessel (decoded on demand)."""
         return {v: deserialize_message(data, Odometry) for v, data in self._odom_raw.items()}
 
+    def finish(self, final_stamp_ns: int) -> Callable[[], bool]:
+        """After the last step: subscribe the odometry not tapped from the recorder; returns
+        whether the final step's odometry of every vessel is in."""
+        def keep_last(vessel: str, data: bytes) -> None:
+            if cdr.CdrReader(data).stamp_ns() == final_stamp_ns:
+                self._odom_raw[vessel] = data
+        for vessel, topic in self._odom_topics.items():
+            self.create_subscription(Odometry, topic, lambda data, v=vessel: keep_last(v, data),
+                                     rc.LATCHED_STATE_QOS, raw=True)
+        return lambda: all(v in self._odom_raw for v in self.vessels)
+
     def _wrench(self, name: str, data: bytes) -> None:
-        f = deserialize_message(data, WrenchStamped).wrench.force
-        self.tension[name].append(math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2))
+        f = cdr.decode_wrench_stamped(data).force
+        self.tension[name].append(math.sqrt(f[0] ** 2 + f[1] ** 2 + f[2] ** 2))
 
     def _rope(self, name: str, data: bytes) -> None:
         f = deserialize_message(data, RopeState).end_a_force
@@ -89,6 +107,8 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
     if stats.round_trips:
         lines.append(f"  step round trip: p50 {1e3 * cd.percentile(stats.round_trips, 50):.2f} ms, "
                      f"p99 {1e3 * cd.percentile(stats.round_trips, 99):.2f} ms")
+    if stats.steps_done and math.isfinite(stats.cpu_time):
+        lines.append(f"  CPU per step, all processes: {1e3 * stats.cpu_time / stats.steps_done:.2f} ms")
     if stats.compute_times:
         lines.append("  compute per step: " + ", ".join(
             f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
@@ -140,7 +160,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         progress = tqdm(total=steps, unit="step", desc=sc.name, file=sys.stderr, mininterval=0.5)
     try:
         stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder, layout=args.layout,
-                       on_step=(lambda k: progress.update(1)) if progress else None)
+                       on_step=(lambda k: progress.update(1)) if progress else None, on_finished=mon.finish)
     except cd.RunError as exc:
         if progress:
             progress.close()

@@ -11,7 +11,6 @@ from typing import Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Quaternion
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -44,17 +43,17 @@ def time_to_ns(t: Time) -> int:
     return t.sec * 1_000_000_000 + t.nanosec
 
 
-def quaternion_from_rpy(rpy: Sequence[float]) -> Quaternion:
-    """Quaternion of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103 convention)."""
-    r, p, y = (0.5 * a for a in rpy)
+def quaternion_xyzw_from_rpy(rpy: Sequence[float]) -> tuple:
+    """(x, y, z, w) of the quaternion of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103 convention)."""
+    r, p, y = (0.5 * float(a) for a in rpy)
     cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return Quaternion(w=cr * cp * cy + sr * sp * sy, x=sr * cp * cy - cr * sp * sy,
-                      y=cr * sp * cy + sr * cp * sy, z=cr * cp * sy - sr * sp * cy)
+    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy)
 
 
-def rotation_from_quaternion(q: Quaternion) -> np.ndarray:
-    """3x3 rotation matrix (frame -> world) of a unit quaternion."""
-    w, x, y, z = q.w, q.x, q.y, q.z
+def rotation_from_quaternion(q: Sequence[float]) -> np.ndarray:
+    """3x3 rotation matrix (frame -> world) of a unit quaternion (x, y, z, w)."""
+    x, y, z, w = q
     n = w * w + x * x + y * y + z * z
     if not (math.isfinite(n) and n > 1e-12):
         raise ValueError(f"quaternion ({x}, {y}, {z}, {w}) is not a rotation")

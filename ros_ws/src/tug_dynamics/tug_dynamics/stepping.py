@@ -20,12 +20,13 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from tug_msgs.msg import SimStep, StepDone
 
+from tug_dynamics import cdr
 from tug_dynamics import ros_common as rc
 
 
@@ -37,6 +38,9 @@ class StepInput:
     # otherwise applied from the step it arrives for.
     kind: str = "state"
     qos: Any = None
+    # Hot inputs are taken raw and decoded by this function (tug_dynamics.cdr) into a light
+    # tuple with a stamp_ns field; None: rclpy deserializes into the message class.
+    decode: Optional[Callable[[bytes], Any]] = None
 
 
 class SteppedNode(Node):
@@ -57,17 +61,22 @@ class SteppedNode(Node):
         self.inputs = inputs
         self._buffer: Dict[str, Dict[int, Any]] = {i.topic: {} for i in inputs}
         self._latest: Dict[str, Any] = {}
-        self._triggers: Dict[int, SimStep] = {}
+        self._triggers: Dict[int, cdr.TriggerIn] = {}
         self._triggered = False
         self.namespace_name = self.get_namespace().strip("/")
         self._wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         for spec in inputs:
             qos = spec.qos or (rc.COMMAND_QOS if spec.kind == "order" else rc.LATCHED_STATE_QOS)
-            self.create_subscription(spec.msg_type, spec.topic,
-                                     lambda msg, s=spec: self._on_input(s, msg), qos)
+            if spec.decode is None:
+                self.create_subscription(spec.msg_type, spec.topic,
+                                         lambda msg, s=spec: self._on_input(s, msg), qos)
+            else:
+                self.create_subscription(spec.msg_type, spec.topic,
+                                         lambda data, s=spec: self._on_raw_input(s, data), qos, raw=True)
         if self.lockstep:
             self.done_pub = self.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
-            self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger, rc.PROTOCOL_QOS)
+            self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name())
+            self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger_raw, rc.PROTOCOL_QOS, raw=True)
             # Wall-clock timers: with use_sim_time a ROS-time timer would wait for /clock forever.
             self._ready_timer = self.create_timer(0.2, self._announce_ready, clock=self._wall_clock)
         else:
@@ -75,8 +84,8 @@ class SteppedNode(Node):
 
     # -- to implement --------------------------------------------------------------------
     def step_of(self, spec: StepInput, msg: Any) -> int:
-        """The step a message is stamped with (default: from header.stamp)."""
-        ns = rc.time_to_ns(msg.header.stamp)
+        """The step a message is stamped with (default: from its stamp)."""
+        ns = msg.stamp_ns if spec.decode else rc.time_to_ns(msg.header.stamp)
         return ns // self.period_ns if ns % self.period_ns == 0 else -1
 
     def accept_input(self, spec: StepInput, msg: Any) -> bool:
@@ -92,6 +101,22 @@ class SteppedNode(Node):
         raise NotImplementedError
 
     # -- machinery -----------------------------------------------------------------------
+    def _on_raw_input(self, spec: StepInput, data: bytes) -> None:
+        try:
+            msg = spec.decode(data)
+        except (cdr.CdrError, UnicodeDecodeError) as exc:
+            self.get_logger().error(f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {exc}")
+            return
+        self._on_input(spec, msg)
+
+    def _on_trigger_raw(self, data: bytes) -> None:
+        try:
+            msg = cdr.decode_sim_step(data)
+        except (cdr.CdrError, UnicodeDecodeError) as exc:
+            self.get_logger().error(f"{rc.SIM_STEP_TOPIC}: undecodable SimStep dropped: {exc}")
+            return
+        self._on_trigger(msg)
+
     def _on_input(self, spec: StepInput, msg: Any) -> None:
         if not self.accept_input(spec, msg):
             return
@@ -112,7 +137,7 @@ class SteppedNode(Node):
         self._buffer[spec.topic][k] = msg
         self._advance()
 
-    def _on_trigger(self, msg: SimStep) -> None:
+    def _on_trigger(self, msg: cdr.TriggerIn) -> None:
         self._triggered = True
         if msg.step < self.step_index:
             return  # a trigger we already served (re-sent)
@@ -170,10 +195,7 @@ class SteppedNode(Node):
         self.publish_outputs()
 
     def _send_done(self, step: int, compute_time: float, error: str = "") -> None:
-        done = StepDone(node=self.get_fully_qualified_name(), step=step, compute_time=compute_time,
-                        ok=not error, error=error)
-        done.header.stamp = rc.step_time(step, self.period_ns)
-        self.done_pub.publish(done)
+        self.done_pub.publish(self._done_cdr.encode(step * self.period_ns, step, compute_time, error))
 
     def stamp(self):
         return rc.step_time(self.step_index, self.period_ns)

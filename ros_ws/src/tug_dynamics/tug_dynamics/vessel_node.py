@@ -20,8 +20,9 @@ import numpy as np
 import yaml
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
-from tug_msgs.msg import AttachmentArray, AttachmentPoint, ScenarioEvent, VesselCommand, VesselStatus
+from tug_msgs.msg import AttachmentArray, ScenarioEvent, VesselCommand, VesselStatus
 
+from tug_dynamics import cdr
 from tug_dynamics import ros_common as rc
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
 from tug_dynamics.stepping import SteppedNode, StepInput
@@ -117,8 +118,9 @@ class VesselNode(SteppedNode):
         self.attach_pub = self.create_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
         self.status_pub = self.create_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
+        self._wrench_points = {}  # frame_id -> attachment point (body), for accepted frames
         self.init_stepping([StepInput("command", VesselCommand, kind="order")] +
-                           [StepInput(t, WrenchStamped) for t in self.wrench_topics])
+                           [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics])
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
         # now, on a copy, not in the first step of a paced run.
         copy.deepcopy(self.model).step(self.dt, [])
@@ -141,22 +143,26 @@ class VesselNode(SteppedNode):
             return True
         return self._wrench_point(spec.topic, msg) is not None
 
-    def _wrench_point(self, topic: str, msg: WrenchStamped) -> Optional[np.ndarray]:
-        f, m = msg.wrench.force, msg.wrench.torque
-        values = (f.x, f.y, f.z, m.x, m.y, m.z)
-        if not all(math.isfinite(v) for v in values):
-            self.get_logger().error(f"wrench on {topic} rejected: non-finite value {values}")
+    def _wrench_point(self, topic: str, msg: cdr.WrenchIn) -> Optional[np.ndarray]:
+        if not msg.is_finite():
+            self.get_logger().error(f"wrench on {topic} rejected: non-finite value {msg.force + msg.torque}")
             return None
-        frame = msg.header.frame_id
+        frame = msg.frame_id
+        point = self._wrench_points.get(frame)
+        if point is not None:
+            return point
         prefix = self.vessel_name + "/"
         point_name = frame[len(prefix):] if frame.startswith(prefix) else None
         if point_name == "base_link":
-            return np.zeros(3)
-        if point_name in self.model.attachments:
-            return np.asarray(self.model.attachments[point_name], float)
-        self.get_logger().error(f"wrench on {topic} rejected: frame '{frame}' is neither '{self.body_frame}' nor "
-                                f"an attachment frame of this vessel ({sorted(self.model.attachments)})")
-        return None
+            point = np.zeros(3)
+        elif point_name in self.model.attachments:
+            point = np.asarray(self.model.attachments[point_name], float)
+        else:
+            self.get_logger().error(f"wrench on {topic} rejected: frame '{frame}' is neither '{self.body_frame}' "
+                                    f"nor an attachment frame of this vessel ({sorted(self.model.attachments)})")
+            return None
+        self._wrench_points[frame] = point
+        return point
 
     # -- stepping -------------------------------------------------------------------------
     def compute_step(self, inputs) -> None:
@@ -181,69 +187,44 @@ class VesselNode(SteppedNode):
             msg = inputs.get(topic)
             if msg is None:
                 continue
-            f, m = msg.wrench.force, msg.wrench.torque
-            wrenches.append(ExternalWrench(force_world=rot @ np.array([f.x, f.y, f.z]),
-                                           point_body=self._wrench_point(topic, msg),
-                                           moment_world=rot @ np.array([m.x, m.y, m.z])))
+            wrenches.append(ExternalWrench(force_world=rot @ np.array(msg.force),
+                                           point_body=self._wrench_points[msg.frame_id],
+                                           moment_world=rot @ np.array(msg.torque)))
         self.model.step(self.dt, wrenches)
 
-    def _make_messages(self) -> None:
-        """Output messages built once and refilled every step (building them is most of a step's cost)."""
+    def _make_encoders(self) -> None:
+        """Output messages as CDR templates, laid out once (building message objects every
+        step cost more than the physics, see tug_dynamics/cdr.py)."""
         self._names = sorted(self.model.attachments)
         self._points_body = np.array([self.model.attachments[n] for n in self._names], float).reshape(-1, 3)
-        self._odom = Odometry(child_frame_id=self.body_frame)
-        self._odom.header.frame_id = rc.WORLD_FRAME
-        self._attach = AttachmentArray(vessel=self.vessel_name,
-                                       points=[AttachmentPoint(name=n) for n in self._names])
-        self._attach.header.frame_id = rc.WORLD_FRAME
-        self._status = VesselStatus(vessel=self.vessel_name)
-        self._status.header.frame_id = self.body_frame
+        self._odom_cdr = cdr.OdometryEncoder(rc.WORLD_FRAME, self.body_frame)
+        self._attach_cdr = cdr.AttachmentArrayEncoder(rc.WORLD_FRAME, self.vessel_name, self._names)
+        self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name)
 
     def publish_outputs(self) -> None:
-        if not hasattr(self, "_odom"):
-            self._make_messages()
-        stamp = self.stamp()
+        if not hasattr(self, "_odom_cdr"):
+            self._make_encoders()
+        stamp_ns = self.step_index * self.period_ns
         s = self.model.state
-        q = rc.quaternion_from_rpy(s.rpy)
+        q = rc.quaternion_xyzw_from_rpy(s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
-
-        odom = self._odom
-        odom.header.stamp = stamp
-        pose, twist = odom.pose.pose, odom.twist.twist
-        pose.position.x, pose.position.y, pose.position.z = s.position.tolist()
-        pose.orientation = q
-        twist.linear.x, twist.linear.y, twist.linear.z = v.tolist()
-        twist.angular.x, twist.angular.y, twist.angular.z = w.tolist()
-        self.odom_pub.publish(odom)
+        self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, s.position.tolist(), q, v.tolist(), w.tolist()))
 
         # All attachment points at once: p = x + R r, v = R (v_b + w x r).
         rot = rotation_body_to_world(s.rpy)
         r = self._points_body
         positions = s.position + r @ rot.T
         velocities = (v + np.cross(w, r)) @ rot.T
-        arr = self._attach
-        arr.header.stamp = stamp
-        arr.step = self.step_index
-        for point, pos, vel in zip(arr.points, positions.tolist(), velocities.tolist()):
-            point.position.x, point.position.y, point.position.z = pos
-            point.velocity.x, point.velocity.y, point.velocity.z = vel
-            point.orientation = q
-        self.attach_pub.publish(arr)
+        self.attach_pub.publish(self._attach_cdr.encode(stamp_ns, self.step_index, positions, velocities, q))
 
         st = self.model.status()
-        msg = self._status
-        msg.header.stamp = stamp
-        msg.step = self.step_index
-        msg.engine_order = float(st.get("engine_order", self.command.engine_order))
-        msg.steering_angle_ordered = float(st.get("steering_angle_ordered", self.command.steering_angle))
-        for key in ("steering_angle", "shaft_speed", "thrust", "speed_through_water", "heel", "trim", "rise",
-                    "girting_ratio", "girting_threshold"):
-            setattr(msg, key, float(st.get(key, 0.0)))
-        msg.anchor_state = _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0)
-        msg.girting_warning = bool(st.get("girting_warning", False))
-        msg.commands_rejected = self.rejected
-        msg.commands_clamped = self.clamped
-        self.status_pub.publish(msg)
+        floats_a = (float(st.get("engine_order", self.command.engine_order)),
+                    float(st.get("steering_angle_ordered", self.command.steering_angle)),
+                    *(float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_A[2:]))
+        floats_b = [float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_B]
+        self.status_pub.publish(self._status_cdr.encode(
+            stamp_ns, self.step_index, floats_a, _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0),
+            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped))
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,

@@ -1,0 +1,370 @@
+"""The per-step messages of the step protocol written and read as CDR bytes (no ROS import).
+
+Why: every exchange step each node publishes 3-5 messages and takes 1-3. Building them as
+rclpy message objects, converting them field by field on publish and back on take, costs more
+CPU than the physics and, with every node in its own process, was the largest single share of
+a step (measured: the vessel node's outputs alone were a fifth of the CPU of a whole step).
+Nodes therefore publish serialized messages and take the hot topics raw. The bytes are what
+rmw_fastrtps sends for ROS 2 Jazzy and every encoder and decoder here is checked against
+rclpy's own (de)serializer (tests/ros/test_cdr.py); any ROS 2 tool sees ordinary messages.
+
+CDR rules (XCDR1, little endian): a 4-byte encapsulation header 00 01 00 00; every primitive
+aligned to its size counted from the end of that header; a string is a uint32 length that
+counts the terminating NUL, then the bytes; a sequence is a uint32 count, then the elements.
+"""
+from __future__ import annotations
+
+import math
+import struct
+from typing import Dict, List, NamedTuple, Sequence, Tuple
+
+import numpy as np
+
+ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian, no options
+_HEADER = len(ENCAPSULATION)
+_STAMP = struct.Struct("<iI")
+_U32 = struct.Struct("<I")
+_U64 = struct.Struct("<Q")
+_F64 = struct.Struct("<d")
+_V3 = struct.Struct("<3d")
+_V6 = struct.Struct("<6d")
+_V10 = struct.Struct("<10d")
+
+
+def stamp_parts(stamp_ns: int) -> Tuple[int, int]:
+    """builtin_interfaces/Time (sec, nanosec) of a time in nanoseconds (>= 0)."""
+    return stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000
+
+
+class CdrWriter:
+    """Writes a message field by field (for messages whose layout changes from call to call)."""
+
+    def __init__(self):
+        self.parts: List[bytes] = [ENCAPSULATION]
+        self.size = 0  # bytes after the encapsulation header
+
+    def align(self, n: int) -> None:
+        pad = (-self.size) % n
+        if pad:
+            self.parts.append(b"\x00" * pad)
+            self.size += pad
+
+    def raw(self, data: bytes, align: int) -> None:
+        self.align(align)
+        self.parts.append(data)
+        self.size += len(data)
+
+    def uint32(self, v: int) -> None:
+        self.raw(_U32.pack(v), 4)
+
+    def stamp(self, stamp_ns: int) -> None:
+        self.raw(_STAMP.pack(*stamp_parts(stamp_ns)), 4)
+
+    def string(self, s: str) -> None:
+        b = s.encode() + b"\x00"
+        self.uint32(len(b))
+        self.parts.append(b)
+        self.size += len(b)
+
+    def float64s(self, a) -> None:
+        """Consecutive float64 values (a struct of doubles, or the body of a sequence)."""
+        a = np.asarray(a)
+        if a.size:
+            self.raw(np.ascontiguousarray(a, dtype="<f8").tobytes(), 8)
+
+    def float64_seq(self, a) -> None:
+        a = np.asarray(a, float).ravel()
+        self.uint32(a.size)
+        self.float64s(a)
+
+    def getvalue(self) -> bytes:
+        return b"".join(self.parts)
+
+
+class Template:
+    """A message whose strings and sequence lengths never change (per publisher): its bytes
+    are laid out once; each publish copies them and packs the changing fields into slots."""
+
+    def __init__(self):
+        self._body = bytearray()
+        self.slots: List[Tuple[int, struct.Struct]] = []
+
+    def align(self, n: int) -> None:
+        self._body += b"\x00" * ((-len(self._body)) % n)
+
+    def const(self, st: struct.Struct, align: int, *values) -> None:
+        self.align(align)
+        self._body += st.pack(*values)
+
+    def string(self, s: str) -> None:
+        b = s.encode() + b"\x00"
+        self.const(_U32, 4, len(b))
+        self._body += b
+
+    def slot(self, st: struct.Struct, align: int) -> int:
+        """Reserve a changing field group (aligned to `align`, packed without inner padding)."""
+        self.align(align)
+        self.slots.append((_HEADER + len(self._body), st))
+        self._body += b"\x00" * st.size
+        return len(self.slots) - 1
+
+    def seal(self) -> None:
+        self.data = bytes(ENCAPSULATION + self._body)
+
+    def pack(self, *groups: Sequence) -> bytes:
+        """The message with slot i holding groups[i] (a tuple of its values)."""
+        buf = bytearray(self.data)
+        for (offset, st), values in zip(self.slots, groups):
+            st.pack_into(buf, offset, *values)
+        return bytes(buf)
+
+
+def _header_template(t: Template, frame_id: str) -> None:
+    t.slot(_STAMP, 4)
+    t.string(frame_id)
+
+
+class OdometryEncoder:
+    """nav_msgs/Odometry with zero covariances."""
+
+    _POSE = struct.Struct("<7d")
+
+    def __init__(self, frame_id: str, child_frame_id: str):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.string(child_frame_id)
+        t.slot(self._POSE, 8)                         # pose.pose: position, orientation (x y z w)
+        t.const(struct.Struct("<36d"), 8, *([0.0] * 36))  # pose.covariance
+        t.slot(_V6, 8)                                # twist.twist: linear, angular
+        t.const(struct.Struct("<36d"), 8, *([0.0] * 36))
+        t.seal()
+
+    def encode(self, stamp_ns: int, position, quaternion_xyzw, linear, angular) -> bytes:
+        return self.t.pack(stamp_parts(stamp_ns), (*position, *quaternion_xyzw), (*linear, *angular))
+
+
+class AttachmentArrayEncoder:
+    """tug_msgs/AttachmentArray of a fixed set of attachment points."""
+
+    def __init__(self, frame_id: str, vessel: str, names: Sequence[str]):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.slot(_U64, 8)  # step
+        t.string(vessel)
+        t.const(_U32, 4, len(names))
+        for name in names:
+            t.string(name)
+            t.slot(_V10, 8)  # position, velocity, orientation (x y z w)
+        t.seal()
+        self.n = len(names)
+
+    def encode(self, stamp_ns: int, step: int, positions, velocities, quaternion_xyzw) -> bytes:
+        """positions, velocities: (n, 3) in the order of the names; one orientation for all."""
+        q = tuple(quaternion_xyzw)
+        points = [(*p, *v, *q) for p, v in zip(np.asarray(positions).tolist(), np.asarray(velocities).tolist())]
+        return self.t.pack(stamp_parts(stamp_ns), (step,), *points)
+
+
+VESSEL_STATUS_FLOATS_A = ("engine_order", "steering_angle_ordered", "steering_angle", "shaft_speed", "thrust")
+VESSEL_STATUS_FLOATS_B = ("speed_through_water", "heel", "trim", "rise", "girting_ratio", "girting_threshold")
+
+
+class VesselStatusEncoder:
+    """tug_msgs/VesselStatus; field order of the .msg file."""
+
+    _A = struct.Struct("<5dB")
+    _B = struct.Struct("<6d?")
+    _C = struct.Struct("<II")
+
+    def __init__(self, frame_id: str, vessel: str):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.slot(_U64, 8)      # step
+        t.string(vessel)
+        t.slot(self._A, 8)   # 5 doubles, anchor_state
+        t.slot(self._B, 8)   # 6 doubles, girting_warning
+        t.slot(self._C, 4)   # commands_rejected, commands_clamped
+        t.seal()
+
+    def encode(self, stamp_ns: int, step: int, floats_a: Sequence[float], anchor_state: int,
+               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int) -> bytes:
+        return self.t.pack(stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state),
+                           (*floats_b, girting_warning), (rejected, clamped))
+
+
+class WrenchStampedEncoder:
+    def __init__(self, frame_id: str):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.slot(_V6, 8)  # force, torque
+        t.seal()
+
+    def encode(self, stamp_ns: int, force, torque=(0.0, 0.0, 0.0)) -> bytes:
+        return self.t.pack(stamp_parts(stamp_ns), (*force, *torque))
+
+
+class StepDoneEncoder:
+    """tug_msgs/StepDone of one node; a failure (with its error text) goes through CdrWriter."""
+
+    _STEP = struct.Struct("<Qd?")
+
+    def __init__(self, node: str):
+        self.node = node
+        t = self.t = Template()
+        _header_template(t, "")
+        t.string(node)
+        t.slot(self._STEP, 8)  # step, compute_time, ok
+        t.string("")           # error
+        t.seal()
+
+    def encode(self, stamp_ns: int, step: int, compute_time: float, error: str = "") -> bytes:
+        if not error:
+            return self.t.pack(stamp_parts(stamp_ns), (step, compute_time, True))
+        w = CdrWriter()
+        w.stamp(stamp_ns)
+        w.string("")
+        w.string(self.node)
+        w.raw(self._STEP.pack(step, compute_time, False), 8)
+        w.string(error)
+        return w.getvalue()
+
+
+def sim_step_cdr(stamp_ns: int, step: int, period: float, ordered: Sequence[str]) -> bytes:
+    """tug_msgs/SimStep (header stamped and timed at step * period)."""
+    w = CdrWriter()
+    w.stamp(stamp_ns)
+    w.string("")
+    w.raw(_U64.pack(step), 8)
+    w.stamp(stamp_ns)
+    w.raw(_F64.pack(period), 8)
+    w.uint32(len(ordered))
+    for name in ordered:
+        w.string(name)
+    return w.getvalue()
+
+
+def clock_cdr(stamp_ns: int) -> bytes:
+    """rosgraph_msgs/Clock."""
+    return ENCAPSULATION + _STAMP.pack(*stamp_parts(stamp_ns))
+
+
+# -- reading ------------------------------------------------------------------------------
+class CdrError(ValueError):
+    pass
+
+
+class CdrReader:
+    def __init__(self, data: bytes):
+        if len(data) < _HEADER or data[0] != 0 or data[1] != 1:
+            raise CdrError(f"not little-endian CDR (encapsulation {bytes(data[:4])!r})")
+        self.data = data
+        self.pos = _HEADER
+
+    def unpack(self, st: struct.Struct, align: int) -> tuple:
+        self.pos += (-(self.pos - _HEADER)) % align
+        end = self.pos + st.size
+        if end > len(self.data):
+            raise CdrError(f"message ends at byte {len(self.data)}, field needs {end}")
+        values = st.unpack_from(self.data, self.pos)
+        self.pos = end
+        return values
+
+    def stamp_ns(self) -> int:
+        sec, nanosec = self.unpack(_STAMP, 4)
+        return sec * 1_000_000_000 + nanosec
+
+    def uint32(self) -> int:
+        return self.unpack(_U32, 4)[0]
+
+    def string(self) -> str:
+        n = self.uint32()
+        end = self.pos + n
+        if n == 0 or end > len(self.data):
+            raise CdrError(f"string of length {n} at byte {self.pos} does not fit")
+        s = bytes(self.data[self.pos:end - 1]).decode()
+        self.pos = end
+        return s
+
+
+class WrenchIn(NamedTuple):
+    """A geometry_msgs/WrenchStamped as taken."""
+    stamp_ns: int
+    frame_id: str
+    force: Tuple[float, float, float]
+    torque: Tuple[float, float, float]
+
+    def is_finite(self) -> bool:
+        return all(math.isfinite(v) for v in self.force + self.torque)
+
+
+def decode_wrench_stamped(data: bytes) -> WrenchIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    frame = r.string()
+    v = r.unpack(_V6, 8)
+    return WrenchIn(stamp, frame, v[:3], v[3:])
+
+
+class TriggerIn(NamedTuple):
+    """A tug_msgs/SimStep as taken."""
+    stamp_ns: int
+    step: int
+    ordered: Tuple[str, ...]
+
+
+def decode_sim_step(data: bytes) -> TriggerIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    step = r.unpack(_U64, 8)[0]
+    r.stamp_ns()  # time (= header stamp)
+    r.unpack(_F64, 8)  # period
+    ordered = tuple(r.string() for _ in range(r.uint32()))
+    return TriggerIn(stamp, step, ordered)
+
+
+class PointIn(NamedTuple):
+    position: Tuple[float, float, float]
+    velocity: Tuple[float, float, float]
+    orientation: Tuple[float, float, float, float]  # x, y, z, w
+
+
+class AttachmentsIn(NamedTuple):
+    """A tug_msgs/AttachmentArray as taken: points by name."""
+    stamp_ns: int
+    step: int
+    vessel: str
+    points: Dict[str, PointIn]
+
+
+def decode_attachment_array(data: bytes) -> AttachmentsIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    step = r.unpack(_U64, 8)[0]
+    vessel = r.string()
+    points = {}
+    for _ in range(r.uint32()):
+        name = r.string()
+        v = r.unpack(_V10, 8)
+        points[name] = PointIn(v[0:3], v[3:6], v[6:10])
+    return AttachmentsIn(stamp, step, vessel, points)
+
+
+class DoneIn(NamedTuple):
+    """A tug_msgs/StepDone as taken."""
+    stamp_ns: int
+    node: str
+    step: int
+    compute_time: float
+    ok: bool
+    error: str
+
+
+def decode_step_done(data: bytes) -> DoneIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    node = r.string()
+    step, compute_time, ok = r.unpack(StepDoneEncoder._STEP, 8)
+    return DoneIn(stamp, node, step, compute_time, ok, r.string())

@@ -1,0 +1,127 @@
+"""The per-step messages written and read as CDR bytes (tug_dynamics/cdr.py). Truth: rclpy's own
+(de)serializer. Every encoder's bytes must decode (rclpy) to exactly the message built field by
+field, and every decoder must read back the fields of a message rclpy serialized. Names of
+many lengths shift every field after them across alignment boundaries. (Bytes themselves are
+not compared: rclpy's serializer leaves padding bytes uninitialised.)"""
+import numpy as np
+import pytest
+from geometry_msgs.msg import WrenchStamped
+from nav_msgs.msg import Odometry
+from rclpy.serialization import deserialize_message, serialize_message
+from rosgraph_msgs.msg import Clock
+from tug_msgs.msg import AttachmentArray, AttachmentPoint, SimStep, StepDone, VesselStatus
+
+from tug_dynamics import cdr
+
+NAMES = ["", "a", "ab", "abc", "abcd", "abcde", "abcdef", "abcdefg", "towing_hook", "bow_bollard_port"]
+STAMP_NS = 1234 * 10 ** 9 + 567891234
+
+
+def _stamp(header, ns=STAMP_NS):
+    header.stamp.sec, header.stamp.nanosec = divmod(ns, 10 ** 9)
+
+
+@pytest.mark.parametrize("frame, child", [("map", "tug/base_link"), ("", "b"), ("world", ""), ("abcdefg", "x/y")])
+def test_odometry(frame, child):
+    rng = np.random.default_rng(len(frame) + 7 * len(child))
+    p, q, v, w = rng.normal(size=3), rng.normal(size=4), rng.normal(size=3), rng.normal(size=3)
+    ref = Odometry(child_frame_id=child)
+    ref.header.frame_id = frame
+    _stamp(ref.header)
+    pose, twist = ref.pose.pose, ref.twist.twist
+    pose.position.x, pose.position.y, pose.position.z = p
+    pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
+    twist.linear.x, twist.linear.y, twist.linear.z = v
+    twist.angular.x, twist.angular.y, twist.angular.z = w
+    got = deserialize_message(cdr.OdometryEncoder(frame, child).encode(STAMP_NS, p, q, v, w), Odometry)
+    assert got == ref
+
+
+@pytest.mark.parametrize("vessel", ["tug", "", "abcdefg"])
+@pytest.mark.parametrize("n", [0, 1, 4])
+def test_attachment_array_both_ways(vessel, n):
+    rng = np.random.default_rng(n)
+    names = [NAMES[(3 * i + n) % len(NAMES)] + str(i) for i in range(n)]
+    pos, vel, q = rng.normal(size=(n, 3)), rng.normal(size=(n, 3)), rng.normal(size=4)
+    ref = AttachmentArray(vessel=vessel, step=2 ** 40 + 17)
+    ref.header.frame_id = "map"
+    _stamp(ref.header)
+    for name, p, v in zip(names, pos, vel):
+        pt = AttachmentPoint(name=name)
+        pt.position.x, pt.position.y, pt.position.z = p
+        pt.velocity.x, pt.velocity.y, pt.velocity.z = v
+        pt.orientation.x, pt.orientation.y, pt.orientation.z, pt.orientation.w = q
+        ref.points.append(pt)
+    data = cdr.AttachmentArrayEncoder("map", vessel, names).encode(STAMP_NS, ref.step, pos, vel, q)
+    assert deserialize_message(data, AttachmentArray) == ref
+    got = cdr.decode_attachment_array(serialize_message(ref))
+    assert (got.stamp_ns, got.step, got.vessel) == (STAMP_NS, ref.step, vessel)
+    assert list(got.points) == names
+    for name, p, v in zip(names, pos, vel):
+        assert got.points[name].position == tuple(p) and got.points[name].velocity == tuple(v)
+        assert got.points[name].orientation == tuple(q)
+
+
+@pytest.mark.parametrize("vessel", NAMES)
+def test_vessel_status(vessel):
+    rng = np.random.default_rng(len(vessel))
+    a, b = rng.normal(size=5), rng.normal(size=6)
+    ref = VesselStatus(vessel=vessel, step=987654321, anchor_state=3, girting_warning=True,
+                       commands_rejected=7, commands_clamped=4_000_000_000)
+    ref.header.frame_id = vessel + "/base_link"
+    _stamp(ref.header)
+    for key, value in zip(cdr.VESSEL_STATUS_FLOATS_A + cdr.VESSEL_STATUS_FLOATS_B, list(a) + list(b)):
+        setattr(ref, key, float(value))
+    data = cdr.VesselStatusEncoder(ref.header.frame_id, vessel).encode(STAMP_NS, ref.step, a, 3, b, True, 7,
+                                                                        4_000_000_000)
+    assert deserialize_message(data, VesselStatus) == ref
+
+
+@pytest.mark.parametrize("frame", NAMES)
+def test_wrench_stamped_both_ways(frame):
+    rng = np.random.default_rng(len(frame))
+    f, m = rng.normal(size=3), rng.normal(size=3)
+    ref = WrenchStamped()
+    ref.header.frame_id = frame
+    _stamp(ref.header)
+    ref.wrench.force.x, ref.wrench.force.y, ref.wrench.force.z = f
+    ref.wrench.torque.x, ref.wrench.torque.y, ref.wrench.torque.z = m
+    assert deserialize_message(cdr.WrenchStampedEncoder(frame).encode(STAMP_NS, f, m), WrenchStamped) == ref
+    got = cdr.decode_wrench_stamped(serialize_message(ref))
+    assert got == (STAMP_NS, frame, tuple(f), tuple(m)) and got.is_finite()
+    ref.wrench.torque.y = float("nan")
+    assert not cdr.decode_wrench_stamped(serialize_message(ref)).is_finite()
+
+
+@pytest.mark.parametrize("node", ["/tug/vessel", "/a", "/towline/rope_node_x"])
+@pytest.mark.parametrize("error", ["", "step 5 failed: rope diverged (tension 1e12 N)"])
+def test_step_done_both_ways(node, error):
+    ref = StepDone(node=node, step=123456789012, compute_time=0.000321, ok=not error, error=error)
+    _stamp(ref.header)
+    data = cdr.StepDoneEncoder(node).encode(STAMP_NS, ref.step, ref.compute_time, error)
+    assert deserialize_message(data, StepDone) == ref
+    got = cdr.decode_step_done(serialize_message(ref))
+    assert got == (STAMP_NS, node, ref.step, ref.compute_time, not error, error)
+
+
+@pytest.mark.parametrize("ordered", [[], ["tug"], ["barge", "tug", "towline"], NAMES[1:]])
+def test_sim_step_both_ways(ordered):
+    ref = SimStep(step=4321, period=0.02, ordered=ordered)
+    _stamp(ref.header)
+    ref.time.sec, ref.time.nanosec = divmod(STAMP_NS, 10 ** 9)
+    assert deserialize_message(cdr.sim_step_cdr(STAMP_NS, 4321, 0.02, ordered), SimStep) == ref
+    assert cdr.decode_sim_step(serialize_message(ref)) == (STAMP_NS, 4321, tuple(ordered))
+
+
+def test_clock():
+    ref = Clock()
+    ref.clock.sec, ref.clock.nanosec = divmod(STAMP_NS, 10 ** 9)
+    assert deserialize_message(cdr.clock_cdr(STAMP_NS), Clock) == ref
+
+
+def test_truncated_or_foreign_bytes_are_refused_with_a_reason():
+    data = serialize_message(WrenchStamped())
+    with pytest.raises(cdr.CdrError, match="ends at byte"):
+        cdr.decode_wrench_stamped(data[:30])
+    with pytest.raises(cdr.CdrError, match="little-endian"):
+        cdr.decode_wrench_stamped(b"\x00\x00\x00\x00" + data[4:])
