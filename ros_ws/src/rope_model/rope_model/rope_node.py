@@ -21,10 +21,9 @@ import sys
 from typing import Dict, List, Optional
 
 import numpy as np
-from geometry_msgs.msg import Point, WrenchStamped
-from std_msgs.msg import ColorRGBA
+from geometry_msgs.msg import WrenchStamped
 from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
 from rope_model.models import ModelFailure, make_model, rope_file_model
 from rope_model.state_cdr import rope_state_cdr
@@ -229,21 +228,15 @@ class RopeNode(SteppedNode):
             self.wrench_pubs[end.label].publish(self.wrench_cdr[end.label].encode(stamp_ns, f_body.tolist()))
 
         if self.step_index % self.marker_every == 0:
-            self.marker_pub.publish(self._markers(line, out["tensions"], self.stamp()))
+            self.marker_pub.publish(self._markers(line, out["tensions"], stamp_ns))
 
-    def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp) -> MarkerArray:
-        m = Marker(ns=self.rope_name, id=0, type=Marker.LINE_STRIP, action=Marker.ADD)
-        m.header.stamp = stamp
-        m.header.frame_id = rc.WORLD_FRAME
-        m.pose.orientation.w = 1.0
-        m.scale.x = max(0.1, 2.0 * self.rope.radius)
-        breaking = self.rope.breaking_load
-        for p, t in zip(joints, tensions):
-            m.points.append(Point(x=float(p[0]), y=float(p[1]), z=float(p[2])))
-            # green (slack) -> yellow (half the breaking load) -> red (breaking load)
-            s = min(max(float(t) / breaking, 0.0), 1.0)
-            m.colors.append(ColorRGBA(r=min(1.0, 2 * s), g=min(1.0, 2 * (1 - s)), b=0.0, a=1.0))
-        return MarkerArray(markers=[m])
+    def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp_ns: int) -> bytes:
+        n = min(len(joints), len(tensions))
+        # green (slack) -> yellow (half the breaking load) -> red (breaking load)
+        s = np.clip(np.asarray(tensions[:n], float) / self.rope.breaking_load, 0.0, 1.0)
+        colors = np.column_stack((np.minimum(1.0, 2 * s), np.minimum(1.0, 2 * (1 - s)), np.zeros(n), np.ones(n)))
+        return cdr.line_strip_marker_array_cdr(stamp_ns, rc.WORLD_FRAME, self.rope_name, 0,
+                                               max(0.1, 2.0 * self.rope.radius), joints[:n], colors)
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,

@@ -243,6 +243,40 @@ def sim_step_cdr(stamp_ns: int, step: int, period: float, ordered: Sequence[str]
     return w.getvalue()
 
 
+def line_strip_marker_array_cdr(stamp_ns: int, frame_id: str, ns: str, marker_id: int, width: float,
+                                points, colors_rgba) -> bytes:
+    """visualization_msgs/MarkerArray holding one LINE_STRIP marker (action ADD, identity pose,
+    scale.x = width, lifetime 0) through points (N, 3) with per-point colors (N, 4)."""
+    pts = np.ascontiguousarray(points, dtype="<f8").reshape(-1, 3)
+    cols = np.ascontiguousarray(colors_rgba, dtype="<f4").reshape(-1, 4)
+    w = CdrWriter()
+    w.uint32(1)  # markers
+    w.stamp(stamp_ns)
+    w.string(frame_id)
+    w.string(ns)
+    w.raw(struct.pack("<iii", marker_id, 4, 0), 4)  # id, type LINE_STRIP, action ADD
+    w.float64s(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, width, 0.0, 0.0]))  # pose, scale
+    w.raw(struct.pack("<4f", 0.0, 0.0, 0.0, 0.0), 4)  # color (unused: per-point colors)
+    w.raw(struct.pack("<iI?", 0, 0, False), 4)  # lifetime, frame_locked
+    w.uint32(len(pts))
+    w.float64s(pts)
+    w.uint32(len(cols))
+    if len(cols):
+        w.raw(cols.tobytes(), 4)
+    w.string("")  # texture_resource
+    w.stamp(0)  # texture: header, format, data
+    w.string("")
+    w.string("")
+    w.uint32(0)
+    w.uint32(0)  # uv_coordinates
+    w.string("")  # text
+    w.string("")  # mesh_resource
+    w.string("")  # mesh_file: filename, data
+    w.uint32(0)
+    w.raw(b"\x00", 1)  # mesh_use_embedded_materials
+    return w.getvalue()
+
+
 def clock_cdr(stamp_ns: int) -> bytes:
     """rosgraph_msgs/Clock."""
     return ENCAPSULATION + _STAMP.pack(*stamp_parts(stamp_ns))

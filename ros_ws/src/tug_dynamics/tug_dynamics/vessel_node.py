@@ -197,6 +197,9 @@ class VesselNode(SteppedNode):
         step cost more than the physics, see tug_dynamics/cdr.py)."""
         self._names = sorted(self.model.attachments)
         self._points_body = np.array([self.model.attachments[n] for n in self._names], float).reshape(-1, 3)
+        # w x r of every point as one product (_cross_r @ w): a tenth of np.cross's cost
+        self._cross_r = np.array([[[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]] for x, y, z in self._points_body],
+                                 float).reshape(-1, 3)
         self._odom_cdr = cdr.OdometryEncoder(rc.WORLD_FRAME, self.body_frame)
         self._attach_cdr = cdr.AttachmentArrayEncoder(rc.WORLD_FRAME, self.vessel_name, self._names)
         self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name)
@@ -214,7 +217,7 @@ class VesselNode(SteppedNode):
         rot = rotation_body_to_world(s.rpy)
         r = self._points_body
         positions = s.position + r @ rot.T
-        velocities = (v + np.cross(w, r)) @ rot.T
+        velocities = (v + (self._cross_r @ w).reshape(-1, 3)) @ rot.T
         self.attach_pub.publish(self._attach_cdr.encode(stamp_ns, self.step_index, positions, velocities, q))
 
         st = self.model.status()
