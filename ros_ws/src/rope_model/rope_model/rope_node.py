@@ -98,14 +98,14 @@ class RopeNode(SteppedNode):
         self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
         self.reported_events = 0
 
-        self.state_pub = self.create_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
-        self.marker_pub = self.create_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
+        self.state_pub = self.create_fed_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
+        self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self.wrench_pubs: Dict[str, object] = {}
         self.wrench_cdr: Dict[str, cdr.WrenchStampedEncoder] = {}
         for end in self.ends:
             if end.mode == "pinned":
-                self.wrench_pubs[end.label] = self.create_publisher(
+                self.wrench_pubs[end.label] = self.create_fed_publisher(
                     WrenchStamped, f"end_{end.label}/wrench", rc.LATCHED_STATE_QOS)
                 self.wrench_cdr[end.label] = cdr.WrenchStampedEncoder(end.frame)
         self.vessel_topics = {}
@@ -217,7 +217,8 @@ class RopeNode(SteppedNode):
             angular_velocities=out["angular_velocities"], lengths=out["lengths"], tensions=out["tensions"],
             piece_starts=out["piece_starts"], unstretched_length=float(out["unstretched_length"]),
             stretched_length=float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum()),
-            mass=float(out["mass"]), end_a_force=forces["a"], end_b_force=forces["b"], broken=bool(out["broken"])))
+            mass=float(out["mass"]), end_a_force=forces["a"], end_b_force=forces["b"], broken=bool(out["broken"])),
+            stamp_ns)
 
         for end in self.ends:
             if end.mode != "pinned":
@@ -225,10 +226,10 @@ class RopeNode(SteppedNode):
             # Attachment frame axes are the vessel's body axes: rotate the world force into them.
             rot = rc.rotation_from_quaternion(end.orientation)
             f_body = rot.T @ forces[end.label]
-            self.wrench_pubs[end.label].publish(self.wrench_cdr[end.label].encode(stamp_ns, f_body.tolist()))
+            self.wrench_pubs[end.label].publish(self.wrench_cdr[end.label].encode(stamp_ns, f_body.tolist()), stamp_ns)
 
         if self.step_index % self.marker_every == 0:
-            self.marker_pub.publish(self._markers(line, out["tensions"], stamp_ns))
+            self.marker_pub.publish(self._markers(line, out["tensions"], stamp_ns), stamp_ns)
 
     def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp_ns: int) -> bytes:
         n = min(len(joints), len(tensions))

@@ -18,7 +18,7 @@ import signal
 import subprocess
 import sys
 import time
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 import rclpy
@@ -28,6 +28,7 @@ from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchC
 
 from scenario_runner.scenario import Scenario, heading_rad, resolve
 from tug_dynamics import cdr
+from tug_dynamics import record_feed
 from tug_dynamics import ros_common as rc
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
@@ -35,6 +36,17 @@ CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPoli
 # Topics the runner itself publishes (/clock, /sim/step) or takes raw (/sim/step_done): it hands
 # their bytes to the recorder, which then needs no subscription of its own for them.
 FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
+
+
+def fed_topics(sc: Scenario) -> Tuple[str, ...]:
+    """Topics the recorder gets without a subscription: the runner's own (FED_TOPICS) and the
+    per-step outputs of the nodes it starts, through their feed (tug_dynamics/record_feed.py)."""
+    topics = list(FED_TOPICS)
+    for v in sc.vessels:
+        topics += [f"/{v.name}/odom", f"/{v.name}/attachments", f"/{v.name}/status"]
+    for r in sc.ropes:
+        topics += [f"/{r.name}/state", f"/{r.name}/markers", f"/{r.name}/end_a/wrench", f"/{r.name}/end_b/wrench"]
+    return tuple(topics)
 
 
 class RunError(RuntimeError):
@@ -130,12 +142,22 @@ def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
     return specs
 
 
+def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
+    """A node blocks when its feed pipe is full (64 KiB by default): give it room for many steps."""
+    try:
+        import fcntl
+        fcntl.fcntl(fd, getattr(fcntl, "F_SETPIPE_SZ", 1031), size)
+    except OSError:
+        pass  # above /proc/sys/fs/pipe-max-size: the default size still works, the runner drains every step
+
+
 class NodeProcesses:
     """The node processes of a run, each in its own process group, output to a log file."""
 
-    def __init__(self, specs: List[NodeSpec], log_dir: str):
+    def __init__(self, specs: List[NodeSpec], log_dir: str, recorder=None):
         self.specs = specs
         self.log_dir = log_dir
+        self.recorder = recorder  # gets a pipe feed from every node process
         self.procs: Dict[str, subprocess.Popen] = {}
         self.logs: Dict[str, str] = {}
 
@@ -145,10 +167,22 @@ class NodeProcesses:
         for spec in self.specs:
             log = os.path.join(self.log_dir, spec.name.strip("/").replace("/", "_") + ".log")
             self.logs[spec.name] = log
+            feed_fds = ()
+            env.pop(record_feed.ENV_FD, None)
+            if self.recorder is not None:
+                read_fd, write_fd = os.pipe()
+                _grow_pipe(write_fd)
+                self.recorder.add_pipe_feed(read_fd)
+                env[record_feed.ENV_FD] = str(write_fd)
+                feed_fds = (write_fd,)
             with open(log, "wb") as out:
-                self.procs[spec.name] = subprocess.Popen(
-                    [executable_path(spec.package, spec.executable), "--ros-args", *spec.ros_args()],
-                    stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+                try:
+                    self.procs[spec.name] = subprocess.Popen(
+                        [executable_path(spec.package, spec.executable), "--ros-args", *spec.ros_args()],
+                        stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True, pass_fds=feed_fds)
+                finally:
+                    for fd in feed_fds:
+                        os.close(fd)  # the node holds the write end: the pipe ends when it exits
 
     def cpu_seconds(self) -> float:
         """CPU time (user + system, all threads) of the node processes so far; nan without /proc."""
@@ -358,9 +392,6 @@ def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
                                                parameter_overrides=s.parameter_overrides()) for s in specs]
 
 
-SPIN_TIMEOUT = float(os.environ.get("SPIN_TIMEOUT", "0.001"))
-
-
 def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float = 240.0,
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
         on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes",
@@ -372,11 +403,16 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     if layout not in LAYOUTS:
         raise ValueError(f"layout {layout!r}: expected one of {LAYOUTS}")
     specs = node_specs(sc, scenario_path)
-    procs = NodeProcesses(specs if layout == "processes" else [], log_dir)
+    procs = NodeProcesses(specs if layout == "processes" else [], log_dir, recorder)
     conductor = Conductor(sc, [s.name for s in specs], recorder)
     executor = rc.make_executor()
     executor.add_node(conductor)
-    local_nodes = in_process_nodes(specs) if layout == "one_process" else []
+    if recorder is not None and layout == "one_process":
+        record_feed.install(recorder.feed_in_process)
+    try:
+        local_nodes = in_process_nodes(specs) if layout == "one_process" else []
+    finally:
+        record_feed.install(None)
     for node in (extra_nodes or []) + ([recorder] if recorder else []) + local_nodes:
         executor.add_node(node)
     stats = RunStats()
@@ -390,7 +426,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         done = conductor.done
         while done.get(step) != expected:
             try:
-                executor.spin_once(timeout_sec=SPIN_TIMEOUT)
+                executor.spin_once(timeout_sec=0.001)
             except rclpy.executors.ExternalShutdownException:
                 raise  # Ctrl-C / SIGTERM: the caller finalises the recording
             except Exception as exc:  # an in-process node failed in its callback

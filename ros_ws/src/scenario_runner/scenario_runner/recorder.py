@@ -7,6 +7,9 @@
   metadata key "offered_qos_profiles" (rosbag2's YAML form);
 - messages are the serialized CDR bytes as received (no re-serialisation); log time = the
   simulation time stamp of the step (receive order kept), publish time the same;
+- the per-step outputs of the nodes the scenario runner started come through their feed
+  (tug_dynamics/record_feed.py: the bytes each node publishes, handed over by a pipe or, in one
+  process, a call) instead of a second DDS delivery; every other topic by subscription;
 - chunked, with a summary section (statistics, chunk and message indexes) written on close,
   also after Ctrl-C.
 """
@@ -19,6 +22,8 @@ from typing import Callable, Dict, List, Optional, Tuple
 from mcap.writer import CompressionType, Writer
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
+
+from tug_dynamics.record_feed import PipeReader
 
 PRIMITIVES = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
               "int64", "uint64", "string", "wstring"}
@@ -97,9 +102,9 @@ class McapRecorder(Node):
 
     def __init__(self, path: str, topics: List[Tuple[str, type, QoSProfile]], period_ns: Optional[int] = None,
                  fed_topics: Tuple[str, ...] = ()):
-        """fed_topics: recorded from record() calls of their owner in this process (e.g. the
-        scenario runner's /clock and /sim/step, and /sim/step_done which it takes raw anyway)
-        instead of a second subscription."""
+        """fed_topics: not subscribed; recorded from record() calls of their owner in this
+        process (the scenario runner's /clock and /sim/step, and /sim/step_done which it takes
+        raw anyway) or from the nodes' feeds (add_pipe_feed, feed_in_process)."""
         super().__init__("recorder")
         self.path = path
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
@@ -119,6 +124,7 @@ class McapRecorder(Node):
         self.taps: Dict[str, Callable[[bytes], None]] = {}
         self._pending: List[Tuple[str, int, int, bytes]] = []
         self.fed_topics = set(fed_topics)
+        self.pipes: List[PipeReader] = []
         for topic, msg_class, qos in topics:
             self.add_topic(topic, msg_class, qos)
 
@@ -156,6 +162,18 @@ class McapRecorder(Node):
         """Record a serialized message of a fed topic (published by this process)."""
         self._write(topic, data)
 
+    def add_pipe_feed(self, fd: int) -> None:
+        """Record what a node process writes into this pipe (read end; the recorder closes it)."""
+        self.pipes.append(PipeReader(fd))
+
+    def feed_in_process(self, topic: str, log_time_ns: int, data: bytes) -> None:
+        """The feed of nodes running in this process (record_feed.install)."""
+        if self.closed or topic not in self.channels:
+            return
+        self._pending.append((topic, log_time_ns, self.sequence, data))
+        self.sequence += 1
+        self.counts[topic] += 1
+
     def _write(self, topic: str, data: bytes) -> None:
         # Only queued here: the owner calls flush() when it has time (the scenario runner
         # while the nodes compute the next step), so writing is off the step's critical path.
@@ -166,7 +184,10 @@ class McapRecorder(Node):
         self.counts[topic] += 1
 
     def flush(self) -> None:
-        """Write the queued messages (and hand them to the taps), in arrival order."""
+        """Write the queued messages and what the pipes hold (and hand them to the taps)."""
+        for pipe in self.pipes:
+            for topic, log_time, data in pipe.read():
+                self.feed_in_process(topic, log_time, data)
         pending, self._pending = self._pending, []
         for topic, log_time, sequence, data in pending:
             self.writer.add_message(channel_id=self.channels[topic], log_time=log_time, data=data,
@@ -178,6 +199,8 @@ class McapRecorder(Node):
     def close(self) -> None:
         if not self.closed:
             self.flush()
+            for pipe in self.pipes:
+                pipe.close()
             self.closed = True
             self.writer.finish()
             self._file.close()

@@ -152,7 +152,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{sc.name}_logs")
 
     rclpy.init(args=argv)
-    recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.FED_TOPICS) if sc.recording.enabled and not args.no_record else None
+    recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.fed_topics(sc)) if sc.recording.enabled and not args.no_record else None
     mon = Monitor(sc, recorder)
     progress = None
     if not args.quiet:

@@ -27,6 +27,7 @@ from rclpy.node import Node
 from tug_msgs.msg import SimStep, StepDone
 
 from tug_dynamics import cdr
+from tug_dynamics import record_feed
 from tug_dynamics import ros_common as rc
 
 
@@ -81,6 +82,11 @@ class SteppedNode(Node):
             self._ready_timer = self.create_timer(0.2, self._announce_ready, clock=self._wall_clock)
         else:
             self.timer = self.create_timer(self.dt, self._on_timer, clock=self._wall_clock)
+
+    def create_fed_publisher(self, msg_type, topic: str, qos) -> record_feed.FedPublisher:
+        """A per-step output: publishes serialized messages and hands them to the scenario
+        runner's recorder too, when the runner started this node with one."""
+        return record_feed.FedPublisher(self.create_publisher(msg_type, topic, qos), record_feed.current())
 
     # -- to implement --------------------------------------------------------------------
     def step_of(self, spec: StepInput, msg: Any) -> int:

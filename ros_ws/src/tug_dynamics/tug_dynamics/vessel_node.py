@@ -114,9 +114,9 @@ class VesselNode(SteppedNode):
         self.body_frame = f"{self.vessel_name}/base_link"
         self.wrench_topics = [t for t in self.get_parameter("wrench_topics").value if t]
 
-        self.odom_pub = self.create_publisher(Odometry, "odom", rc.LATCHED_STATE_QOS)
-        self.attach_pub = self.create_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
-        self.status_pub = self.create_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
+        self.odom_pub = self.create_fed_publisher(Odometry, "odom", rc.LATCHED_STATE_QOS)
+        self.attach_pub = self.create_fed_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
+        self.status_pub = self.create_fed_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self._wrench_points = {}  # frame_id -> attachment point (body), for accepted frames
         self.init_stepping([StepInput("command", VesselCommand, kind="order")] +
@@ -211,14 +211,16 @@ class VesselNode(SteppedNode):
         s = self.model.state
         q = rc.quaternion_xyzw_from_rpy(s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
-        self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, s.position.tolist(), q, v.tolist(), w.tolist()))
+        self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, s.position.tolist(), q, v.tolist(), w.tolist()),
+                              stamp_ns)
 
         # All attachment points at once: p = x + R r, v = R (v_b + w x r).
         rot = rotation_body_to_world(s.rpy)
         r = self._points_body
         positions = s.position + r @ rot.T
         velocities = (v + (self._cross_r @ w).reshape(-1, 3)) @ rot.T
-        self.attach_pub.publish(self._attach_cdr.encode(stamp_ns, self.step_index, positions, velocities, q))
+        self.attach_pub.publish(self._attach_cdr.encode(stamp_ns, self.step_index, positions, velocities, q),
+                                stamp_ns)
 
         st = self.model.status()
         floats_a = (float(st.get("engine_order", self.command.engine_order)),
@@ -227,7 +229,7 @@ class VesselNode(SteppedNode):
         floats_b = [float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_B]
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, floats_a, _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0),
-            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped))
+            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped), stamp_ns)
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
