@@ -189,6 +189,9 @@ class McapRecorder(Node):
             for topic, log_time, data in pipe.read():
                 self.feed_in_process(topic, log_time, data)
         pending, self._pending = self._pending, []
+        # A pipe may already hold outputs of the step now being computed: sorting each batch by
+        # log time (stable) keeps the file in time order.
+        pending.sort(key=lambda m: m[1])
         for topic, log_time, sequence, data in pending:
             self.writer.add_message(channel_id=self.channels[topic], log_time=log_time, data=data,
                                     publish_time=log_time, sequence=sequence)
