@@ -146,3 +146,13 @@ def test_line_strip_marker_array(n, ns, frame):
     got = deserialize_message(cdr.line_strip_marker_array_cdr(STAMP_NS, frame, ns, 3, 0.37, pts, cols), MarkerArray)
     assert got == ref
     assert got.markers[0].points == m.points  # float64: exact
+
+
+def test_undecodable_bytes_are_reported_and_dropped():
+    reasons = []
+    bad_name = cdr.StepDoneEncoder("/tug/vessel").encode(STAMP_NS, 1, 0.1).replace(b"/tug/vessel", b"/tug/\xffessel")
+    assert cdr.decode_or_report(cdr.decode_step_done, bad_name, reasons.append) is None
+    assert cdr.decode_or_report(cdr.decode_sim_step, b"\x00\x01\x00\x00\x01", reasons.append) is None
+    assert "not UTF-8" in reasons[0] and "ends at byte" in reasons[1]
+    good = cdr.clock_cdr(5)
+    assert cdr.decode_or_report(lambda d: cdr.CdrReader(d).stamp_ns(), good, reasons.append) == 5

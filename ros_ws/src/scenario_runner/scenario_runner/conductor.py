@@ -264,12 +264,10 @@ class Conductor(Node):
     def _on_done_raw(self, data: bytes) -> None:
         if self.recorder:
             self.recorder.record(rc.STEP_DONE_TOPIC, data)
-        try:
-            msg = cdr.decode_step_done(data)
-        except (cdr.CdrError, UnicodeDecodeError) as exc:
-            self.get_logger().error(f"{rc.STEP_DONE_TOPIC}: undecodable StepDone dropped: {exc}")
-            return
-        self._on_done(msg)
+        msg = cdr.decode_or_report(cdr.decode_step_done, data, lambda why: self.get_logger().error(
+            f"{rc.STEP_DONE_TOPIC}: undecodable StepDone dropped: {why}"))
+        if msg is not None:
+            self._on_done(msg)
 
     def _publish(self, publisher, topic: str, data: bytes) -> None:
         """The same bytes go out and into the recording."""

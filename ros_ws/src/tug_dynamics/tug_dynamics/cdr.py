@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import math
 import struct
-from typing import Dict, List, NamedTuple, Sequence, Tuple
+from typing import Callable, Dict, List, NamedTuple, Optional, Sequence, Tuple, TypeVar
 
 import numpy as np
 
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian, no options
+T = TypeVar("T")
 _HEADER = len(ENCAPSULATION)
 _STAMP = struct.Struct("<iI")
 _U32 = struct.Struct("<I")
@@ -315,9 +316,22 @@ class CdrReader:
         end = self.pos + n
         if n == 0 or end > len(self.data):
             raise CdrError(f"string of length {n} at byte {self.pos} does not fit")
-        s = bytes(self.data[self.pos:end - 1]).decode()
+        try:
+            s = bytes(self.data[self.pos:end - 1]).decode()
+        except UnicodeDecodeError as exc:
+            raise CdrError(f"string at byte {self.pos} is not UTF-8: {exc}") from None
         self.pos = end
         return s
+
+
+def decode_or_report(decode: Callable[[bytes], T], data: bytes, report: Callable[[str], None]) -> Optional[T]:
+    """decode(data); None, after report(why), for bytes that are not such a message (the
+    caller drops them and goes on)."""
+    try:
+        return decode(data)
+    except CdrError as exc:
+        report(str(exc))
+        return None
 
 
 class WrenchIn(NamedTuple):

@@ -22,7 +22,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 from numba import njit
 
-from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, Command, CommandRejected, ExternalWrench,
+from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, Command, ExternalWrench,
                      Vessel, VesselState, check_command)
 
 # ---- state vector layout -------------------------------------------------

@@ -14,7 +14,7 @@ import copy
 import glob
 import math
 import os
-from typing import Any, Dict, List, Optional
+from typing import Any, List, Optional
 
 import numpy as np
 import yaml

@@ -108,20 +108,16 @@ class SteppedNode(Node):
 
     # -- machinery -----------------------------------------------------------------------
     def _on_raw_input(self, spec: StepInput, data: bytes) -> None:
-        try:
-            msg = spec.decode(data)
-        except (cdr.CdrError, UnicodeDecodeError) as exc:
-            self.get_logger().error(f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {exc}")
-            return
-        self._on_input(spec, msg)
+        msg = cdr.decode_or_report(spec.decode, data, lambda why: self.get_logger().error(
+            f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {why}"))
+        if msg is not None:
+            self._on_input(spec, msg)
 
     def _on_trigger_raw(self, data: bytes) -> None:
-        try:
-            msg = cdr.decode_sim_step(data)
-        except (cdr.CdrError, UnicodeDecodeError) as exc:
-            self.get_logger().error(f"{rc.SIM_STEP_TOPIC}: undecodable SimStep dropped: {exc}")
-            return
-        self._on_trigger(msg)
+        msg = cdr.decode_or_report(cdr.decode_sim_step, data, lambda why: self.get_logger().error(
+            f"{rc.SIM_STEP_TOPIC}: undecodable SimStep dropped: {why}"))
+        if msg is not None:
+            self._on_trigger(msg)
 
     def _on_input(self, spec: StepInput, msg: Any) -> None:
         if not self.accept_input(spec, msg):
