@@ -101,13 +101,12 @@ class RopeNode(SteppedNode):
         self.state_pub = self.create_fed_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
         self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
-        self.wrench_pubs: Dict[str, object] = {}
-        self.wrench_cdr: Dict[str, cdr.WrenchStampedEncoder] = {}
+        self.wrench_outputs: Dict[str, tuple] = {}  # end label -> (publisher, encoder)
         for end in self.ends:
             if end.mode == "pinned":
-                self.wrench_pubs[end.label] = self.create_fed_publisher(
-                    WrenchStamped, f"end_{end.label}/wrench", rc.LATCHED_STATE_QOS)
-                self.wrench_cdr[end.label] = cdr.WrenchStampedEncoder(end.frame)
+                self.wrench_outputs[end.label] = (
+                    self.create_fed_publisher(WrenchStamped, f"end_{end.label}/wrench", rc.LATCHED_STATE_QOS),
+                    cdr.WrenchStampedEncoder(end.frame))
         self.vessel_topics = {}
         for end in self.ends:
             if end.mode == "pinned":
@@ -204,7 +203,7 @@ class RopeNode(SteppedNode):
     def publish_outputs(self) -> None:
         if self.rope is None:
             return
-        stamp_ns = self.step_index * self.period_ns
+        stamp_ns = self.stamp_ns()
         out = self.rope.outputs()
         line = np.asarray(out["line"])
         forces = {end: self.rope.end_force(end, averaged=self.step_index > 0) for end in ("a", "b")}
@@ -226,7 +225,8 @@ class RopeNode(SteppedNode):
             # Attachment frame axes are the vessel's body axes: rotate the world force into them.
             rot = rc.rotation_from_quaternion(end.orientation)
             f_body = rot.T @ forces[end.label]
-            self.wrench_pubs[end.label].publish(self.wrench_cdr[end.label].encode(stamp_ns, f_body.tolist()), stamp_ns)
+            publisher, encoder = self.wrench_outputs[end.label]
+            publisher.publish(encoder.encode(stamp_ns, f_body.tolist()), stamp_ns)
 
         if self.step_index % self.marker_every == 0:
             self.marker_pub.publish(self._markers(line, out["tensions"], stamp_ns), stamp_ns)

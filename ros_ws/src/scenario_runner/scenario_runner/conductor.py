@@ -40,13 +40,10 @@ FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
 
 def fed_topics(sc: Scenario) -> Tuple[str, ...]:
     """Topics the recorder gets without a subscription: the runner's own (FED_TOPICS) and the
-    per-step outputs of the nodes it starts, through their feed (tug_dynamics/record_feed.py)."""
-    topics = list(FED_TOPICS)
-    for v in sc.vessels:
-        topics += [f"/{v.name}/odom", f"/{v.name}/attachments", f"/{v.name}/status"]
-    for r in sc.ropes:
-        topics += [f"/{r.name}/state", f"/{r.name}/markers", f"/{r.name}/end_a/wrench", f"/{r.name}/end_b/wrench"]
-    return tuple(topics)
+    per-step outputs of the nodes it starts, through their feed (tug_dynamics/record_feed.py).
+    Those outputs are the contract's state topics (LATCHED_STATE_QOS), published through
+    SteppedNode.create_fed_publisher."""
+    return FED_TOPICS + tuple(t for t, _type, qos in contract_topics(sc) if qos is rc.LATCHED_STATE_QOS)
 
 
 class RunError(RuntimeError):

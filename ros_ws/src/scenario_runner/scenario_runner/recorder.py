@@ -168,18 +168,18 @@ class McapRecorder(Node):
 
     def feed_in_process(self, topic: str, log_time_ns: int, data: bytes) -> None:
         """The feed of nodes running in this process (record_feed.install)."""
-        if self.closed or topic not in self.channels:
-            return
-        self._pending.append((topic, log_time_ns, self.sequence, data))
-        self.sequence += 1
-        self.counts[topic] += 1
+        if topic in self.channels:
+            self._queue(topic, log_time_ns, data)
 
     def _write(self, topic: str, data: bytes) -> None:
+        self._queue(topic, self.log_time_ns, data)
+
+    def _queue(self, topic: str, log_time_ns: int, data: bytes) -> None:
         # Only queued here: the owner calls flush() when it has time (the scenario runner
         # while the nodes compute the next step), so writing is off the step's critical path.
         if self.closed:
             return
-        self._pending.append((topic, self.log_time_ns, self.sequence, data))
+        self._pending.append((topic, log_time_ns, self.sequence, data))
         self.sequence += 1
         self.counts[topic] += 1
 

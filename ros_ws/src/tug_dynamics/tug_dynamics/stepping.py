@@ -201,3 +201,7 @@ class SteppedNode(Node):
 
     def stamp(self):
         return rc.step_time(self.step_index, self.period_ns)
+
+    def stamp_ns(self) -> int:
+        """Simulation time of the current step, ns (the stamp of its outputs)."""
+        return self.step_index * self.period_ns

@@ -124,6 +124,7 @@ class VesselNode(SteppedNode):
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
         # now, on a copy, not in the first step of a paced run.
         copy.deepcopy(self.model).step(self.dt, [])
+        self._make_encoders()
         self.publish_outputs()
         self.get_logger().info(
             f"vessel '{self.vessel_name}' from {path}: {type(self.model).__name__}, "
@@ -205,9 +206,7 @@ class VesselNode(SteppedNode):
         self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name)
 
     def publish_outputs(self) -> None:
-        if not hasattr(self, "_odom_cdr"):
-            self._make_encoders()
-        stamp_ns = self.step_index * self.period_ns
+        stamp_ns = self.stamp_ns()
         s = self.model.state
         q = rc.quaternion_xyzw_from_rpy(s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
