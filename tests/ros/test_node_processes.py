@@ -16,7 +16,7 @@ TUG = ["--ros-args", "-r", "__ns:=/tug", "-r", "__node:=vessel", "-p", "ship_fil
 def _status_listener(ctx, topic="/tug/status"):
     from rclpy.node import Node
     from tug_msgs.msg import VesselStatus
-    from tug_dynamics import ros_common as rc
+    from sim_plumbing import ros_common as rc
     node = Node("test_listener", context=ctx)
     received = []
     node.create_subscription(VesselStatus, topic, received.append, rc.LATCHED_STATE_QOS)

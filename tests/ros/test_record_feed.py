@@ -1,4 +1,4 @@
-"""The recorder's feed (tug_dynamics/record_feed.py): the per-step outputs of the runner's nodes
+"""The recorder's feed (sim_plumbing/record_feed.py): the per-step outputs of the runner's nodes
 reach the recording through a pipe, not a second DDS delivery.
 
 Truths: the bytes written are the bytes read, in order, with their topic and log time, also
@@ -13,7 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from tug_dynamics import record_feed
+from sim_plumbing import record_feed
 
 from conftest import executable_path
 
@@ -132,7 +132,7 @@ def test_recording_holds_what_a_dds_subscriber_sees(tmp_path, rclpy_context):
 
 def _stamp_ns(data: bytes, topic: str) -> int:
     """The header stamp of a serialized per-step message (a MarkerArray's first marker)."""
-    from tug_dynamics import cdr
+    from sim_plumbing import cdr
     r = cdr.CdrReader(data)
     if topic.endswith("markers"):
         r.uint32()

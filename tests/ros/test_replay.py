@@ -218,7 +218,7 @@ def test_replay_options_rate_offset_duration_filters_loop(demo_recording, ros_do
     from rclpy.serialization import deserialize_message
     from rosgraph_msgs.msg import Clock
     from tug_msgs.msg import RopeState, VesselStatus
-    from tug_dynamics import ros_common as rc
+    from sim_plumbing import ros_common as rc
     node, got = _listener(rclpy_context, [("/tug/odom", Odometry, rc.LATCHED_STATE_QOS),
                                           ("/tug/status", VesselStatus, rc.LATCHED_STATE_QOS),
                                           ("/towline/state", RopeState, rc.LATCHED_STATE_QOS),
@@ -313,7 +313,7 @@ def test_truncated_recording_is_reported_and_its_readable_part_replayed(demo_rec
                                                                          tmp_path):
     from nav_msgs.msg import Odometry
     from scenario_runner.mcap_io import McapFile
-    from tug_dynamics import ros_common as rc
+    from sim_plumbing import ros_common as rc
     data = demo_recording.read_bytes()
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(data[:len(data) // 2])

@@ -7,10 +7,10 @@ import pytest
 
 from conftest import executable_path
 
-PACKAGES = {"tug_msgs", "tug_dynamics", "rope_model", "scenario_runner"}
+PACKAGES = {"tug_msgs", "sim_plumbing", "tug_dynamics", "rope_model", "scenario_runner"}
 
 
-def test_colcon_lists_the_four_packages(repo_root):
+def test_colcon_lists_the_packages(repo_root):
     out = subprocess.run(["colcon", "--log-base", os.devnull, "list", "--names-only", "--base-paths", os.path.join(repo_root, "ros_ws", "src")],
                          capture_output=True, text=True, check=True).stdout.split()
     assert set(out) == PACKAGES

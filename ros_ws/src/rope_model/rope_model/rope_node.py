@@ -27,9 +27,9 @@ from visualization_msgs.msg import MarkerArray
 
 from rope_model.models import ModelFailure, make_model, rope_file_model
 from rope_model.state_cdr import rope_state_cdr
-from tug_dynamics import cdr
-from tug_dynamics import ros_common as rc
-from tug_dynamics.stepping import SteppedNode, StepInput
+from sim_plumbing import cdr
+from sim_plumbing import ros_common as rc
+from sim_plumbing.stepping import SteppedNode, StepInput
 
 LAYOUTS = ("straight", "slack", "winch")
 

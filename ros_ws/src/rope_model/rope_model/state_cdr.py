@@ -6,7 +6,7 @@ state is instead written here as the CDR bytes (XCDR1, little endian, what rmw_f
 for ROS 2 Jazzy) and published as a serialized message. rclpy's own deserializer is checked
 to read back exactly the message built field by field (tests/ros/test_rope_state_cdr.py).
 
-The CDR rules and the writer are those of tug_dynamics.cdr (the other per-step messages).
+The CDR rules and the writer are those of sim_plumbing.cdr (the other per-step messages).
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import struct
 
 import numpy as np
 
-from tug_dynamics.cdr import CdrWriter
+from sim_plumbing.cdr import CdrWriter
 
 
 def rope_state_cdr(*, stamp_ns: int, frame_id: str, step: int, rope: str, model: str,

@@ -10,7 +10,7 @@ for speed control on speed through the water, /<vessel>/status (tug_msgs/VesselS
 Publishes tug_msgs/VesselCommand on /<vessel>/command. The control law (heading PID with
 yaw-rate damping, speed feed-forward + PI, line-of-sight track guidance) is ROS-free, in
 scenario_runner/autopilot_law.py; this node only converts messages and keeps the step
-protocol (tug_dynamics/stepping.py):
+protocol (sim_plumbing/stepping.py):
 
 free-running (lockstep:=false, default)
     A wall-clock timer at exchange_rate computes a command from the latest odometry and
@@ -45,8 +45,8 @@ from tug_msgs.msg import VesselCommand, VesselStatus
 
 from scenario_runner.autopilot_law import (AutopilotConfig, AutopilotLaw, Measurement, Output, parse_waypoints,
                                            yaw_from_quaternion)
-from tug_dynamics import ros_common as rc
-from tug_dynamics.stepping import SteppedNode, StepInput
+from sim_plumbing import ros_common as rc
+from sim_plumbing.stepping import SteppedNode, StepInput
 
 SPEED_SOURCES = ("status", "odom")
 

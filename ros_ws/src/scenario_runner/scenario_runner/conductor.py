@@ -1,7 +1,7 @@
 """Runs a validated scenario: starts the nodes, owns /clock and the step protocol, sends the
 timed orders, watches the nodes and stops everything cleanly.
 
-Step protocol (see tug_dynamics/stepping.py and the README): for k = 0, 1, ...
+Step protocol (see sim_plumbing/stepping.py and the README): for k = 0, 1, ...
   1. orders due at step k go out stamped k on /<vessel>/command and /<rope>/winch;
   2. /clock is set to k*T and tug_msgs/SimStep(k, ordered=[namespaces with an order]) is sent;
   3. each node computes k -> k+1 from inputs stamped k and answers StepDone(k+1);
@@ -27,9 +27,9 @@ from rosgraph_msgs.msg import Clock
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
 from scenario_runner.scenario import Scenario, heading_rad, resolve
-from tug_dynamics import cdr
-from tug_dynamics import record_feed
-from tug_dynamics import ros_common as rc
+from sim_plumbing import cdr
+from sim_plumbing import record_feed
+from sim_plumbing import ros_common as rc
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE)
@@ -40,7 +40,7 @@ FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
 
 def fed_topics(sc: Scenario) -> Tuple[str, ...]:
     """Topics the recorder gets without a subscription: the runner's own (FED_TOPICS) and the
-    per-step outputs of the nodes it starts, through their feed (tug_dynamics/record_feed.py).
+    per-step outputs of the nodes it starts, through their feed (sim_plumbing/record_feed.py).
     Those outputs are the contract's state topics (LATCHED_STATE_QOS), published through
     SteppedNode.create_fed_publisher."""
     return FED_TOPICS + tuple(t for t, _type, qos in contract_topics(sc) if qos is rc.LATCHED_STATE_QOS)

@@ -8,7 +8,7 @@
 - messages are the serialized CDR bytes as received (no re-serialisation); log time = the
   simulation time stamp of the step (receive order kept), publish time the same;
 - the per-step outputs of the nodes the scenario runner started come through their feed
-  (tug_dynamics/record_feed.py: the bytes each node publishes, handed over by a pipe or, in one
+  (sim_plumbing/record_feed.py: the bytes each node publishes, handed over by a pipe or, in one
   process, a call) instead of a second DDS delivery; every other topic by subscription;
 - chunked, with a summary section (statistics, chunk and message indexes) written on close,
   also after Ctrl-C.
@@ -23,7 +23,7 @@ from mcap.writer import CompressionType, Writer
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
 
-from tug_dynamics.record_feed import PipeReader
+from sim_plumbing.record_feed import PipeReader
 
 PRIMITIVES = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
               "int64", "uint64", "string", "wstring"}

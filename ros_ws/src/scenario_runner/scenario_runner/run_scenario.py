@@ -26,8 +26,8 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 from scenario_runner import conductor as cd
 from scenario_runner.recorder import McapRecorder
 from scenario_runner.scenario import ScenarioError, load_scenario
-from tug_dynamics import cdr
-from tug_dynamics import ros_common as rc
+from sim_plumbing import cdr
+from sim_plumbing import ros_common as rc
 
 
 def scenario_path(name: str) -> str:

@@ -18,7 +18,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from tug_msgs.msg import VesselCommand
 
-from tug_dynamics import ros_common as rc
+from sim_plumbing import ros_common as rc
 
 ANCHOR_ORDERS = {"none": VesselCommand.ANCHOR_NO_CHANGE, "let_go": VesselCommand.ANCHOR_LET_GO,
                  "heave_up": VesselCommand.ANCHOR_HEAVE_UP}

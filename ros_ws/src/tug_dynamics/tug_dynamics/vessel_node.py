@@ -22,10 +22,10 @@ from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
 from tug_msgs.msg import AttachmentArray, ScenarioEvent, VesselCommand, VesselStatus
 
-from tug_dynamics import cdr
-from tug_dynamics import ros_common as rc
+from sim_plumbing import cdr
+from sim_plumbing import ros_common as rc
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
-from tug_dynamics.stepping import SteppedNode, StepInput
+from sim_plumbing.stepping import SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
                                  rotation_body_to_world)
 
@@ -195,7 +195,7 @@ class VesselNode(SteppedNode):
 
     def _make_encoders(self) -> None:
         """Output messages as CDR templates, laid out once (building message objects every
-        step cost more than the physics, see tug_dynamics/cdr.py)."""
+        step cost more than the physics, see sim_plumbing/cdr.py)."""
         self._names = sorted(self.model.attachments)
         self._points_body = np.array([self.model.attachments[n] for n in self._names], float).reshape(-1, 3)
         # w x r of every point as one product (_cross_r @ w): a tenth of np.cross's cost

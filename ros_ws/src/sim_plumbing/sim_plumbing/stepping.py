@@ -26,9 +26,9 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from tug_msgs.msg import SimStep, StepDone
 
-from tug_dynamics import cdr
-from tug_dynamics import record_feed
-from tug_dynamics import ros_common as rc
+from sim_plumbing import cdr
+from sim_plumbing import record_feed
+from sim_plumbing import ros_common as rc
 
 
 @dataclasses.dataclass
@@ -39,7 +39,7 @@ class StepInput:
     # otherwise applied from the step it arrives for.
     kind: str = "state"
     qos: Any = None
-    # Hot inputs are taken raw and decoded by this function (tug_dynamics.cdr) into a light
+    # Hot inputs are taken raw and decoded by this function (sim_plumbing.cdr) into a light
     # tuple with a stamp_ns field; None: rclpy deserializes into the message class.
     decode: Optional[Callable[[bytes], Any]] = None
 

@@ -4,7 +4,7 @@ per-step outputs to the runner's recorder directly, besides publishing them.
 Why: with every node in its own process, each recorded message cost a second DDS delivery
 (shared-memory push, a wake-up of the runner) for about 12 messages a step: a quarter of the
 CPU of a recorded run. The bytes a node publishes are the ones it writes here (the per-step
-messages are CDR it wrote itself, tug_dynamics/cdr.py), so the recording is unchanged; topics
+messages are CDR it wrote itself, sim_plumbing/cdr.py), so the recording is unchanged; topics
 from anybody else (commands, events, outside autopilots) are still recorded by subscription.
 
 A node finds its feed in the environment: TUGSIM_RECORD_FD names the write end of a pipe the
