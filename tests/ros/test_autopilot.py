@@ -292,7 +292,9 @@ def _lockstep_steps(obs, start_node, start_autopilot, n_steps, autopilot_first):
     assert obs.spin_until(lambda: step_pub.get_subscription_count() >= len(expected), 30)
     t0 = time.monotonic()
     for k in range(n_steps):
-        msg = SimStep(step=k, time=rc.step_time(k, PERIOD_NS), period=PERIOD_NS * 1e-9, ordered=["tug"])
+        # started by hand without a run id, the nodes join the run of the first SimStep(0)
+        msg = SimStep(run_id="hand-run", step=k, time=rc.step_time(k, PERIOD_NS), period=PERIOD_NS * 1e-9,
+                      ordered=["tug"])
         msg.header.stamp = msg.time
         step_pub.publish(msg)
         assert obs.spin_until(lambda: set(done.get(k + 1, {})) == expected, 30), \

@@ -67,13 +67,13 @@ def test_vessel_status(vessel):
     rng = np.random.default_rng(len(vessel))
     a, b = rng.normal(size=5), rng.normal(size=6)
     ref = VesselStatus(vessel=vessel, step=987654321, anchor_state=3, girting_warning=True,
-                       commands_rejected=7, commands_clamped=4_000_000_000)
+                       commands_rejected=7, commands_clamped=4_000_000_000, commands_lost=12345)
     ref.header.frame_id = vessel + "/base_link"
     _stamp(ref.header)
     for key, value in zip(cdr.VESSEL_STATUS_FLOATS_A + cdr.VESSEL_STATUS_FLOATS_B, list(a) + list(b)):
         setattr(ref, key, float(value))
     data = cdr.VesselStatusEncoder(ref.header.frame_id, vessel).encode(STAMP_NS, ref.step, a, 3, b, True, 7,
-                                                                        4_000_000_000)
+                                                                        4_000_000_000, 12345)
     assert deserialize_message(data, VesselStatus) == ref
 
 
@@ -96,21 +96,23 @@ def test_wrench_stamped_both_ways(frame):
 @pytest.mark.parametrize("node", ["/tug/vessel", "/a", "/towline/rope_node_x"])
 @pytest.mark.parametrize("error", ["", "step 5 failed: rope diverged (tension 1e12 N)"])
 def test_step_done_both_ways(node, error):
-    ref = StepDone(node=node, step=123456789012, compute_time=0.000321, ok=not error, error=error)
+    run = "0123456789abcdef"
+    ref = StepDone(run_id=run, node=node, step=123456789012, compute_time=0.000321, ok=not error,
+                   refused_messages=3_000_000_000, error=error)
     _stamp(ref.header)
-    data = cdr.StepDoneEncoder(node).encode(STAMP_NS, ref.step, ref.compute_time, error)
+    data = cdr.StepDoneEncoder(node, run).encode(STAMP_NS, ref.step, ref.compute_time, error, 3_000_000_000)
     assert deserialize_message(data, StepDone) == ref
     got = cdr.decode_step_done(serialize_message(ref))
-    assert got == (STAMP_NS, node, ref.step, ref.compute_time, not error, error)
+    assert got == (STAMP_NS, run, node, ref.step, ref.compute_time, not error, 3_000_000_000, error)
 
 
 @pytest.mark.parametrize("ordered", [[], ["tug"], ["barge", "tug", "towline"], NAMES[1:]])
 def test_sim_step_both_ways(ordered):
-    ref = SimStep(step=4321, period=0.02, ordered=ordered)
+    ref = SimStep(run_id="run-7", step=4321, period=0.02, ordered=ordered)
     _stamp(ref.header)
     ref.time.sec, ref.time.nanosec = divmod(STAMP_NS, 10 ** 9)
-    assert deserialize_message(cdr.sim_step_cdr(STAMP_NS, 4321, 0.02, ordered), SimStep) == ref
-    assert cdr.decode_sim_step(serialize_message(ref)) == (STAMP_NS, 4321, tuple(ordered))
+    assert deserialize_message(cdr.sim_step_cdr(STAMP_NS, 4321, 0.02, ordered, "run-7"), SimStep) == ref
+    assert cdr.decode_sim_step(serialize_message(ref)) == (STAMP_NS, "run-7", 4321, tuple(ordered))
 
 
 def test_clock():
@@ -150,7 +152,7 @@ def test_line_strip_marker_array(n, ns, frame):
 
 def test_undecodable_bytes_are_reported_and_dropped():
     reasons = []
-    bad_name = cdr.StepDoneEncoder("/tug/vessel").encode(STAMP_NS, 1, 0.1).replace(b"/tug/vessel", b"/tug/\xffessel")
+    bad_name = cdr.StepDoneEncoder("/tug/vessel", "r").encode(STAMP_NS, 1, 0.1).replace(b"/tug/vessel", b"/tug/\xffessel")
     assert cdr.decode_or_report(cdr.decode_step_done, bad_name, reasons.append) is None
     assert cdr.decode_or_report(cdr.decode_sim_step, b"\x00\x01\x00\x00\x01", reasons.append) is None
     assert "not UTF-8" in reasons[0] and "ends at byte" in reasons[1]

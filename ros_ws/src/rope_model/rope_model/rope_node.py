@@ -29,7 +29,7 @@ from rope_model.models import ModelFailure, make_model, rope_file_model
 from rope_model.state_cdr import rope_state_cdr
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
-from sim_plumbing.stepping import SteppedNode, StepInput
+from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
 
 LAYOUTS = ("straight", "slack", "winch")
 
@@ -97,6 +97,8 @@ class RopeNode(SteppedNode):
         self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
         self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
         self.reported_events = 0
+        self.rejected = 0  # winch orders refused (NaN, inf)
+        self.clamped = 0   # winch orders clamped to the winch's limits
 
         self.state_pub = self.create_fed_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
         self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
@@ -133,19 +135,23 @@ class RopeNode(SteppedNode):
     def accept_input(self, spec: StepInput, msg) -> bool:
         if spec.msg_type is WinchCommand:
             if not math.isfinite(msg.payout_rate):
-                self.get_logger().error(f"winch command rejected: payout_rate={msg.payout_rate!r} is not finite")
+                self.rejected += 1
+                detail = f"winch command rejected, keeping the last valid one: payout_rate={msg.payout_rate!r}"
+                if self.complaints("winch rejected", detail):
+                    self.emit_event("command_rejected", detail)
                 return False
             return True
         for end in self.ends:
             if end.mode == "pinned" and f"/{end.vessel}/attachments" == spec.topic:
                 point = msg.points.get(end.attachment)
                 if point is None:
-                    self.get_logger().error(
-                        f"{spec.topic} has no attachment '{end.attachment}' for end {end.label} "
-                        f"(it has {list(msg.points)})")
+                    self.complaints("attachments " + spec.topic,
+                                    f"{spec.topic} has no attachment '{end.attachment}' for end {end.label} "
+                                    f"(it has {list(msg.points)})")
                     return False
                 if not all(math.isfinite(v) for v in point.position + point.velocity + point.orientation):
-                    self.get_logger().error(f"{spec.topic}: non-finite kinematics for '{end.attachment}' rejected")
+                    self.complaints("attachments " + spec.topic,
+                                    f"{spec.topic}: non-finite kinematics for '{end.attachment}' rejected")
                     return False
         if self.rope is None and msg.step == 0:
             self._take_attachments(msg)
@@ -191,12 +197,18 @@ class RopeNode(SteppedNode):
                 self.rope.set_end(end.label, end.position, end.velocity)
         order = inputs.get("winch")
         if order is not None:
-            self.rope.set_payout_rate(order.payout_rate)
+            # clamped to the winch's limits like any order; the notes say how
+            for note in self.rope.set_payout_rate(order.payout_rate) or ():
+                self.clamped += 1
+                if self.complaints("winch clamped", f"winch command clamped: {note}", "warning"):
+                    self.emit_event("command_clamped", note)
         try:
             self.rope.step(self.dt)
         except ModelFailure as exc:
-            self.emit_event("rope_failed", str(exc))
-            raise
+            k = self.step_index
+            detail = f"rope '{self.rope_name}' failed at step {k} -> {k + 1} (t = {k * self.dt:.3f} s): {exc}"
+            self.emit_event("rope_failed", detail)
+            raise ModelDiverged(detail) from exc
         for detail, tension in self.rope.new_events():
             self.emit_event("rope_parted", detail, tension)
 
@@ -244,7 +256,8 @@ class RopeNode(SteppedNode):
                            target=self.rope_name, detail=detail, value=float(value))
         ev.header.stamp = self.stamp()
         self.event_pub.publish(ev)
-        self.get_logger().warning(detail)
+        if kind not in ("command_rejected", "command_clamped"):  # those were logged rate-limited
+            self.get_logger().warning(detail)
 
 
 def main(args: Optional[List[str]] = None) -> int:

@@ -10,10 +10,12 @@ Step protocol (see sim_plumbing/stepping.py and the README): for k = 0, 1, ...
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
 import json
 import math
 import os
+import secrets
 import signal
 import subprocess
 import sys
@@ -30,6 +32,7 @@ from scenario_runner.scenario import Scenario, heading_rad, resolve
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
+from sim_plumbing.stepping import RateLimitedLog
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE)
@@ -48,6 +51,22 @@ def fed_topics(sc: Scenario) -> Tuple[str, ...]:
 
 class RunError(RuntimeError):
     """The run could not go on (a node died, stopped answering or reported a failure)."""
+
+
+class DomainInUse(RunError):
+    """Another run, or nodes left by one, are on this ROS domain: refused before anything starts."""
+
+
+class Interrupted(Exception):
+    """Ctrl-C or SIGTERM: the run stops, the recording is finalised (signal number in args[0])."""
+
+
+# s of discovery before the domain check: Fast DDS on one host finds its peers in a few hundred ms
+DOMAIN_DISCOVERY_WAIT = 1.0
+
+
+def new_run_id() -> str:
+    return secrets.token_hex(8)
 
 
 @dataclasses.dataclass
@@ -94,9 +113,9 @@ def _yaml_value(value) -> str:
     return json.dumps(str(value))
 
 
-def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
-    """The nodes a scenario needs, with their parameters."""
-    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
+def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeSpec]:
+    """The nodes a scenario needs, with their parameters (run_id: the run they belong to)."""
+    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True, "run_id": run_id,
               "current_east": float(sc.environment.current[0]), "current_north": float(sc.environment.current[1])}
     specs = []
     for v in sc.vessels:
@@ -134,7 +153,8 @@ def node_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
         params = {k: (list(v) if isinstance(v, tuple) else
                       float(v) if isinstance(v, int) and not isinstance(v, bool) else v)
                   for k, v in a.params.items()}
-        params.update(vessel=a.vessel, exchange_rate=float(sc.exchange_rate), lockstep=True, use_sim_time=True)
+        params.update(vessel=a.vessel, exchange_rate=float(sc.exchange_rate), lockstep=True, use_sim_time=True,
+                      run_id=run_id)
         specs.append(NodeSpec(f"/{a.name}", "autopilot", a.package, a.executable, params))
     return specs
 
@@ -160,7 +180,8 @@ class NodeProcesses:
 
     def start(self) -> None:
         os.makedirs(self.log_dir, exist_ok=True)
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        # the nodes end when this process does, however it ends (sim_plumbing.ros_common.die_with_parent)
+        env = dict(os.environ, PYTHONUNBUFFERED="1", **{rc.PARENT_PID_ENV: str(os.getpid())})
         for spec in self.specs:
             log = os.path.join(self.log_dir, spec.name.strip("/").replace("/", "_") + ".log")
             self.logs[spec.name] = log
@@ -231,18 +252,27 @@ class RunStats:
     round_trips: List[float] = dataclasses.field(default_factory=list)  # s from SimStep to last StepDone
     compute_times: Dict[str, List[float]] = dataclasses.field(default_factory=dict)  # node -> s per step
     cpu_time: float = float("nan")  # s of CPU of every process of the run (runner and nodes) while stepping
+    run_id: str = ""
+    refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # why -> StepDones the runner refused
+    node_refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # node -> messages it refused
 
 
 class Conductor(Node):
     """The runner's own node: /clock, /sim/step, orders and events out; StepDone in."""
 
-    def __init__(self, sc: Scenario, node_names: List[str], recorder=None):
+    def __init__(self, sc: Scenario, node_names: List[str], recorder=None, run_id: Optional[str] = None):
         super().__init__("scenario_runner")
+        self.created = time.monotonic()
         self.recorder = recorder
         self.sc = sc
+        self.run_id = run_id or new_run_id()
         self.period_ns = rc.period_ns(sc.exchange_rate)
         self.expected = set(node_names)
         self.done: Dict[int, set] = {}
+        self.awaited = 0  # the step whose StepDone is due: 0 before the first trigger, then k+1
+        self.refused: collections.Counter = collections.Counter()  # why -> StepDones refused
+        self.node_refused: Dict[str, int] = {}  # node -> messages it reports having refused
+        self.complaints = RateLimitedLog(self.get_logger())
         self.failures: List[str] = []
         self.compute_times: Dict[str, List[float]] = {n: [] for n in node_names}
         self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS)
@@ -272,14 +302,58 @@ class Conductor(Node):
         if self.recorder:
             self.recorder.record(topic, data)
 
+    def _refuse(self, why: str, msg: cdr.DoneIn, detail: str) -> None:
+        self.refused[why] += 1
+        self.complaints(why, f"{rc.STEP_DONE_TOPIC}: StepDone({msg.step}) from '{msg.node}' refused: {detail}")
+
     def _on_done(self, msg: cdr.DoneIn) -> None:
+        """Only an answer of this run, from a node of the run, for the step now due, once."""
+        if msg.run_id != self.run_id:
+            return self._refuse("another run", msg, f"run '{msg.run_id}', this run is '{self.run_id}'")
         if msg.node not in self.expected:
+            return self._refuse("not in the run", msg, f"nodes of this run are {sorted(self.expected)}")
+        self.node_refused[msg.node] = msg.refused
+        if msg.step == 0 and self.awaited <= 1:
+            self.done.setdefault(0, set()).add(msg.node)  # the ready signal, repeated until triggered
             return
+        if msg.step != self.awaited:
+            return self._refuse("step not triggered" if msg.step > self.awaited else "late or duplicate", msg,
+                                f"the step due is {self.awaited}")
+        answered = self.done.setdefault(msg.step, set())
+        if msg.node in answered:
+            return self._refuse("duplicate", msg, "this node has answered that step already")
         if not msg.ok:
             self.failures.append(f"{msg.node} failed at step {msg.step}: {msg.error}")
-        self.done.setdefault(msg.step, set()).add(msg.node)
-        if msg.step > 0:
-            self.compute_times[msg.node].append(msg.compute_time)
+        answered.add(msg.node)
+        self.compute_times[msg.node].append(msg.compute_time)
+
+    def foreign_participants(self) -> List[str]:
+        """Other step-protocol participants on this domain: a runner publishing /sim/step, or
+        nodes taking it or answering /sim/step_done (a run in progress, or nodes a killed run
+        left behind). Their triggers, answers and latched outputs would mix with this run's."""
+        me = self.get_fully_qualified_name()
+        found = set()
+        for info in self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC):
+            found.add(f"scenario runner {_node_of(info)} (publishes {rc.SIM_STEP_TOPIC})")
+        for info in self.get_subscriptions_info_by_topic(rc.SIM_STEP_TOPIC):
+            found.add(f"node {_node_of(info)} (takes {rc.SIM_STEP_TOPIC})")
+        for info in self.get_publishers_info_by_topic(rc.STEP_DONE_TOPIC):
+            found.add(f"node {_node_of(info)} (answers on {rc.STEP_DONE_TOPIC})")
+        own_pub = f"scenario runner {me} (publishes {rc.SIM_STEP_TOPIC})"
+        if sum(1 for i in self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC) if _node_of(i) == me) <= 1:
+            found.discard(own_pub)
+        return sorted(found)
+
+    def check_domain(self, executor, wait: float = DOMAIN_DISCOVERY_WAIT) -> None:
+        """Refuse to start on a domain where another run (or its leftover nodes) is present."""
+        while time.monotonic() < self.created + wait:
+            executor.spin_once(timeout_sec=0.02)
+        found = self.foreign_participants()
+        if found:
+            domain = os.environ.get("ROS_DOMAIN_ID", "0")
+            raise DomainInUse(
+                f"ROS_DOMAIN_ID={domain} is in use by another run: {'; '.join(found)}. Stop that run (or its "
+                f"leftover nodes), or start this one on another domain, e.g. ROS_DOMAIN_ID={(int(domain) + 1) % 101}")
 
     def _orders_by_step(self) -> Dict[int, List]:
         """Events merged per target and step: one order per namespace per step."""
@@ -326,8 +400,9 @@ class Conductor(Node):
         stamp_ns = k * self.period_ns
         # the trigger first: the nodes start computing while /clock goes out (they stamp by
         # step number and do not read the clock to compute)
+        self.awaited = k + 1
         self._publish(self.step_pub, rc.SIM_STEP_TOPIC, cdr.sim_step_cdr(
-            stamp_ns, k, self.period_ns * 1e-9, sorted(set(ordered + self.piloted))))
+            stamp_ns, k, self.period_ns * 1e-9, sorted(set(ordered + self.piloted)), self.run_id))
         self._publish(self.clock_pub, "/clock", cdr.clock_cdr(stamp_ns))
         if self.recorder:
             self.recorder.log_time_ns = (k + 1) * self.period_ns
@@ -344,6 +419,11 @@ class Conductor(Node):
                            detail=detail, value=float("nan"))
         ev.header.stamp = rc.step_time(k, self.period_ns)
         self.event_pub.publish(ev)
+
+
+def _node_of(info) -> str:
+    ns = info.node_namespace.rstrip("/")
+    return f"{ns}/{info.node_name}"
 
 
 def contract_topics(sc: Scenario) -> List[tuple]:
@@ -387,115 +467,158 @@ def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
                                                parameter_overrides=s.parameter_overrides()) for s in specs]
 
 
+class StopSignals:
+    """Ctrl-C (SIGINT) and SIGTERM end a run the same way: the handler only notes the signal; the
+    run loop sees it within a millisecond, stops the nodes and the caller finalises the
+    recording. (rclpy's own handlers would shut the context down under the running loop.)"""
+
+    def __init__(self):
+        self.signum: Optional[int] = None
+        self._old = {}
+
+    def __enter__(self):
+        import threading
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old[sig] = signal.signal(sig, self._note)
+        return self
+
+    def _note(self, signum, frame) -> None:
+        self.signum = signum
+
+    def check(self) -> None:
+        if self.signum is not None:
+            raise Interrupted(self.signum)
+
+    def __exit__(self, *exc) -> None:
+        for sig, handler in self._old.items():
+            signal.signal(sig, handler)
+
+
 def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float = 240.0,
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
         on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes",
-        on_finished: Optional[Callable[[int], Callable[[], bool]]] = None) -> RunStats:
+        on_finished: Optional[Callable[[int], Callable[[], bool]]] = None,
+        run_id: Optional[str] = None) -> RunStats:
     """Start the nodes (each its own process, or all in this process on one executor), run the
-    scenario, stop everything. Raises RunError naming the node. on_finished(final stamp ns), called
-    after the last step while the nodes still run, returns a predicate: the run waits (up to 5 s)
-    until it holds, e.g. until a late subscriber got the final state."""
+    scenario, stop everything. Raises RunError naming the node (DomainInUse before anything
+    starts if another run is on the domain) and Interrupted on SIGINT / SIGTERM.
+    on_finished(final stamp ns), called after the last step while the nodes still run, returns a
+    predicate: the run waits (up to 5 s) until it holds, e.g. until a late subscriber got the
+    final state."""
     if layout not in LAYOUTS:
         raise ValueError(f"layout {layout!r}: expected one of {LAYOUTS}")
-    specs = node_specs(sc, scenario_path)
+    run_id = run_id or new_run_id()
+    specs = node_specs(sc, scenario_path, run_id)
     procs = NodeProcesses(specs if layout == "processes" else [], log_dir, recorder)
-    conductor = Conductor(sc, [s.name for s in specs], recorder)
+    conductor = Conductor(sc, [s.name for s in specs], recorder, run_id)
     executor = rc.make_executor()
     executor.add_node(conductor)
-    if recorder is not None and layout == "one_process":
-        record_feed.install(recorder.feed_in_process)
-    try:
-        local_nodes = in_process_nodes(specs) if layout == "one_process" else []
-    finally:
-        record_feed.install(None)
-    for node in (extra_nodes or []) + ([recorder] if recorder else []) + local_nodes:
-        executor.add_node(node)
-    stats = RunStats()
+    local_nodes: List[Node] = []
+    stats = RunStats(run_id=run_id)
     n_steps = sc.steps if steps is None else steps
 
-    def wait_for(step: int, timeout: float, what: str) -> None:
-        now = time.monotonic()
-        deadline = now + timeout
-        next_check = now  # processes are polled every 20 ms, not after every message
-        expected = conductor.expected
-        done = conductor.done
-        while done.get(step) != expected:
-            try:
-                executor.spin_once(timeout_sec=0.001)
-            except rclpy.executors.ExternalShutdownException:
-                raise  # Ctrl-C / SIGTERM: the caller finalises the recording
-            except Exception as exc:  # an in-process node failed in its callback
-                raise RunError(f"a node failed while {what}: {exc!r}") from exc
-            if conductor.failures:
-                raise RunError(conductor.failures[0])
+    with StopSignals() as stop:
+        def wait_for(step: int, timeout: float, what: str) -> None:
             now = time.monotonic()
-            if now < next_check:
-                continue
-            next_check = now + 0.02
-            dead = procs.dead()
-            if dead:
-                raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
-                               f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
-            if now > deadline:
-                missing = sorted(conductor.expected - conductor.done.get(step, set()))
-                raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
-                               f"{timeout:g} s while {what}")
+            deadline = now + timeout
+            next_check = now  # processes are polled every 20 ms, not after every message
+            expected = conductor.expected
+            done = conductor.done
+            while done.get(step) != expected:
+                try:
+                    executor.spin_once(timeout_sec=0.001)
+                except rclpy.executors.ExternalShutdownException:
+                    raise  # the context was shut down: the caller finalises the recording
+                except Exception as exc:  # an in-process node failed in its callback
+                    raise RunError(f"a node failed while {what}: {exc!r}") from exc
+                if conductor.failures:
+                    raise RunError(conductor.failures[0])
+                now = time.monotonic()
+                if now < next_check:
+                    continue
+                next_check = now + 0.02
+                stop.check()
+                if recorder:
+                    recorder.flush()  # a node blocked on a full feed pipe must never stall the step
+                dead = procs.dead()
+                if dead:
+                    raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
+                                   f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
+                if now > deadline:
+                    missing = sorted(conductor.expected - conductor.done.get(step, set()))
+                    raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
+                                   f"{timeout:g} s while {what}")
 
-    try:
-        procs.start()
-        wait_for(0, ready_timeout, "starting up")
-        # Triggers and orders are volatile: every participant (and the recorder) must have
-        # matched them before step 0 goes out.
-        want = 2 if recorder else 1
-        needs = [(p, want) for p in conductor.order_publishers()]
-        needs.append((conductor.step_pub, len(specs)))
-        deadline = time.monotonic() + ready_timeout
-        while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
-            executor.spin_once(timeout_sec=0.01)
-            if time.monotonic() > deadline:
-                late = [p.topic_name for p, n in needs if p.get_subscription_count() < n]
-                late += recorder.unmatched_topics() if recorder else []
-                raise RunError(f"no subscriber matched topic(s) {late} within {ready_timeout:g} s")
-        conductor.event(0, "scenario_started", "", f"scenario '{sc.name}': {n_steps} steps at "
-                        f"{sc.exchange_rate:g} Hz, {sc.mode}")
-        t_start = time.monotonic()
-        cpu_start = time.process_time() + procs.cpu_seconds()
-        period = conductor.period_ns * 1e-9
-        for k in range(n_steps):
-            if sc.mode == "realtime":
-                target = t_start + k * period
-                while time.monotonic() < target:
-                    executor.spin_once(timeout_sec=max(0.0, min(0.001, target - time.monotonic())))
-                late = time.monotonic() - target
-                stats.lateness.append(late)
-            t0 = time.monotonic()
-            conductor.send_step(k)
-            if recorder:
-                recorder.flush()  # the previous step's messages, written while the nodes compute
-            wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
-            stats.round_trips.append(time.monotonic() - t0)
-            conductor.done.pop(k, None)
-            stats.steps_done = k + 1
-            if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
-                stats.overruns += 1
-            if on_step:
-                on_step(k + 1)
-        stats.wall_time = time.monotonic() - t_start
-        stats.cpu_time = time.process_time() + procs.cpu_seconds() - cpu_start
-        stats.compute_times = conductor.compute_times
-        conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
-        # let the last messages reach subscribers in this process (recorder, summary)
-        settled = on_finished(n_steps * conductor.period_ns) if on_finished else (lambda: True)
-        start = time.monotonic()
-        while time.monotonic() < start + 0.3 or (not settled() and time.monotonic() < start + 5.0):
-            executor.spin_once(timeout_sec=0.01)
-        return stats
-    finally:
-        procs.stop()
-        executor.shutdown()
-        for node in local_nodes:
-            node.destroy_node()
-        conductor.destroy_node()
+        try:
+            conductor.check_domain(executor)
+            stop.check()
+            if recorder is not None and layout == "one_process":
+                record_feed.install(recorder.feed_in_process)
+            try:
+                local_nodes = in_process_nodes(specs) if layout == "one_process" else []
+            finally:
+                record_feed.install(None)
+            for node in (extra_nodes or []) + ([recorder] if recorder else []) + local_nodes:
+                executor.add_node(node)
+            procs.start()
+            wait_for(0, ready_timeout, "starting up")
+            # Triggers and orders are volatile: every participant (and the recorder) must have
+            # matched them before step 0 goes out.
+            want = 2 if recorder else 1
+            needs = [(p, want) for p in conductor.order_publishers()]
+            needs.append((conductor.step_pub, len(specs)))
+            deadline = time.monotonic() + ready_timeout
+            while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
+                executor.spin_once(timeout_sec=0.01)
+                stop.check()
+                if time.monotonic() > deadline:
+                    late = [p.topic_name for p, n in needs if p.get_subscription_count() < n]
+                    late += recorder.unmatched_topics() if recorder else []
+                    raise RunError(f"no subscriber matched topic(s) {late} within {ready_timeout:g} s")
+            conductor.event(0, "scenario_started", "", f"scenario '{sc.name}' (run {run_id}): {n_steps} steps at "
+                            f"{sc.exchange_rate:g} Hz, {sc.mode}")
+            t_start = time.monotonic()
+            cpu_start = time.process_time() + procs.cpu_seconds()
+            period = conductor.period_ns * 1e-9
+            for k in range(n_steps):
+                if sc.mode == "realtime":
+                    target = t_start + k * period
+                    while time.monotonic() < target:
+                        executor.spin_once(timeout_sec=max(0.0, min(0.001, target - time.monotonic())))
+                    stop.check()
+                    late = time.monotonic() - target
+                    stats.lateness.append(late)
+                t0 = time.monotonic()
+                conductor.send_step(k)
+                if recorder:
+                    recorder.flush()  # the previous step's messages, written while the nodes compute
+                wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
+                stats.round_trips.append(time.monotonic() - t0)
+                conductor.done.pop(k, None)
+                stats.steps_done = k + 1
+                if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
+                    stats.overruns += 1
+                if on_step:
+                    on_step(k + 1)
+            stats.wall_time = time.monotonic() - t_start
+            stats.cpu_time = time.process_time() + procs.cpu_seconds() - cpu_start
+            stats.compute_times = conductor.compute_times
+            conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
+            # let the last messages reach subscribers in this process (recorder, summary)
+            settled = on_finished(n_steps * conductor.period_ns) if on_finished else (lambda: True)
+            start = time.monotonic()
+            while time.monotonic() < start + 0.3 or (not settled() and time.monotonic() < start + 5.0):
+                executor.spin_once(timeout_sec=0.01)
+            return stats
+        finally:
+            stats.refused = dict(conductor.refused)
+            stats.node_refused = dict(conductor.node_refused)
+            procs.stop()
+            executor.shutdown()
+            for node in local_nodes:
+                node.destroy_node()
+            conductor.destroy_node()
 
 
 def percentile(values: List[float], q: float) -> float:

@@ -5,13 +5,16 @@
 The scenario is validated before any node starts (errors name the file and the key); then
 every node is started as its own process, the run is stepped in lockstep (or paced real
 time), progress is shown, everything is shut down, and a summary is printed. Exit status:
-0 done, 2 invalid scenario, 3 a node died / stopped answering / failed.
+0 done, 2 invalid scenario, 3 a node died / stopped answering / failed, 4 the ROS domain is
+in use by another run (refused before anything starts), 130 Ctrl-C, 143 SIGTERM (both stop the
+nodes and finalise the recording).
 """
 from __future__ import annotations
 
 import argparse
 import math
 import os
+import signal
 import sys
 from typing import Callable, Dict, List, Optional
 
@@ -112,6 +115,10 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
     if stats.compute_times:
         lines.append("  compute per step: " + ", ".join(
             f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
+    if stats.refused or any(stats.node_refused.values()):
+        lines.append("  refused protocol messages (logged, not used): " + ", ".join(
+            [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +
+            [f"{node}: {n}" for node, n in sorted(stats.node_refused.items()) if n]))
     if sc.mode == "realtime":
         lines.append(f"  realtime: {stats.overruns} overrun step(s); lateness p99 "
                      f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
@@ -151,7 +158,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     output = args.output or sc.recording.path or os.path.join("output", f"{sc.name}.mcap")
     log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{sc.name}_logs")
 
-    rclpy.init(args=argv)
+    # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
+    # shut the context down under the running loop (an RCLError traceback, or exit 3).
+    rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.fed_topics(sc)) if sc.recording.enabled and not args.no_record else None
     mon = Monitor(sc, recorder)
     progress = None
@@ -161,15 +170,21 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder, layout=args.layout,
                        on_step=(lambda k: progress.update(1)) if progress else None, on_finished=mon.finish)
+    except cd.DomainInUse as exc:
+        if progress:
+            progress.close()
+        sys.stderr.write(f"run_scenario: refused to start: {exc}\n")
+        return 4
     except cd.RunError as exc:
         if progress:
             progress.close()
         sys.stderr.write(f"run_scenario: run stopped: {exc}\n")
         return 3
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        sys.stderr.write("run_scenario: interrupted; nodes stopped"
+    except (cd.Interrupted, KeyboardInterrupt, rclpy.executors.ExternalShutdownException) as exc:
+        signum = exc.args[0] if isinstance(exc, cd.Interrupted) else signal.SIGINT
+        sys.stderr.write(f"run_scenario: interrupted by {signal.Signals(signum).name}; nodes stopped"
                          + (f", partial recording finalised: {os.path.abspath(output)}" if recorder else "") + "\n")
-        return 130
+        return 128 + int(signum)
     finally:
         if progress:
             progress.close()

@@ -175,7 +175,7 @@ class VesselStatusEncoder:
 
     _A = struct.Struct("<5dB")
     _B = struct.Struct("<6d?")
-    _C = struct.Struct("<II")
+    _C = struct.Struct("<III")
 
     def __init__(self, frame_id: str, vessel: str):
         t = self.t = Template()
@@ -184,13 +184,14 @@ class VesselStatusEncoder:
         t.string(vessel)
         t.slot(self._A, 8)   # 5 doubles, anchor_state
         t.slot(self._B, 8)   # 6 doubles, girting_warning
-        t.slot(self._C, 4)   # commands_rejected, commands_clamped
+        t.slot(self._C, 4)   # commands_rejected, commands_clamped, commands_lost
         t.seal()
 
     def encode(self, stamp_ns: int, step: int, floats_a: Sequence[float], anchor_state: int,
-               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int) -> bytes:
+               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int,
+               lost: int = 0) -> bytes:
         return self.t.pack(stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state),
-                           (*floats_b, girting_warning), (rejected, clamped))
+                           (*floats_b, girting_warning), (rejected, clamped, lost))
 
 
 class WrenchStampedEncoder:
@@ -205,36 +206,42 @@ class WrenchStampedEncoder:
 
 
 class StepDoneEncoder:
-    """tug_msgs/StepDone of one node; a failure (with its error text) goes through CdrWriter."""
+    """tug_msgs/StepDone of one node in one run; a failure (with its error text) goes
+    through CdrWriter."""
 
-    _STEP = struct.Struct("<Qd?")
+    # step, compute_time, ok, (padding to 4), refused_messages: CDR's own layout of these fields
+    _STEP = struct.Struct("<Qd?3xI")
 
-    def __init__(self, node: str):
+    def __init__(self, node: str, run_id: str):
         self.node = node
+        self.run_id = run_id
         t = self.t = Template()
         _header_template(t, "")
+        t.string(run_id)
         t.string(node)
-        t.slot(self._STEP, 8)  # step, compute_time, ok
+        t.slot(self._STEP, 8)
         t.string("")           # error
         t.seal()
 
-    def encode(self, stamp_ns: int, step: int, compute_time: float, error: str = "") -> bytes:
+    def encode(self, stamp_ns: int, step: int, compute_time: float, error: str = "", refused: int = 0) -> bytes:
         if not error:
-            return self.t.pack(stamp_parts(stamp_ns), (step, compute_time, True))
+            return self.t.pack(stamp_parts(stamp_ns), (step, compute_time, True, refused))
         w = CdrWriter()
         w.stamp(stamp_ns)
         w.string("")
+        w.string(self.run_id)
         w.string(self.node)
-        w.raw(self._STEP.pack(step, compute_time, False), 8)
+        w.raw(self._STEP.pack(step, compute_time, False, refused), 8)
         w.string(error)
         return w.getvalue()
 
 
-def sim_step_cdr(stamp_ns: int, step: int, period: float, ordered: Sequence[str]) -> bytes:
-    """tug_msgs/SimStep (header stamped and timed at step * period)."""
+def sim_step_cdr(stamp_ns: int, step: int, period: float, ordered: Sequence[str], run_id: str) -> bytes:
+    """tug_msgs/SimStep of a run (header stamped and timed at step * period)."""
     w = CdrWriter()
     w.stamp(stamp_ns)
     w.string("")
+    w.string(run_id)
     w.raw(_U64.pack(step), 8)
     w.stamp(stamp_ns)
     w.raw(_F64.pack(period), 8)
@@ -356,6 +363,7 @@ def decode_wrench_stamped(data: bytes) -> WrenchIn:
 class TriggerIn(NamedTuple):
     """A tug_msgs/SimStep as taken."""
     stamp_ns: int
+    run_id: str
     step: int
     ordered: Tuple[str, ...]
 
@@ -364,11 +372,15 @@ def decode_sim_step(data: bytes) -> TriggerIn:
     r = CdrReader(data)
     stamp = r.stamp_ns()
     r.string()  # frame_id
+    run_id = r.string()
     step = r.unpack(_U64, 8)[0]
     r.stamp_ns()  # time (= header stamp)
     r.unpack(_F64, 8)  # period
-    ordered = tuple(r.string() for _ in range(r.uint32()))
-    return TriggerIn(stamp, step, ordered)
+    n = r.uint32()
+    if n > len(data):  # every string takes at least 5 bytes: a count beyond the message is garbage
+        raise CdrError(f"sequence of {n} names in a {len(data)}-byte message")
+    ordered = tuple(r.string() for _ in range(n))
+    return TriggerIn(stamp, run_id, step, ordered)
 
 
 class PointIn(NamedTuple):
@@ -402,10 +414,12 @@ def decode_attachment_array(data: bytes) -> AttachmentsIn:
 class DoneIn(NamedTuple):
     """A tug_msgs/StepDone as taken."""
     stamp_ns: int
+    run_id: str
     node: str
     step: int
     compute_time: float
     ok: bool
+    refused: int
     error: str
 
 
@@ -413,6 +427,7 @@ def decode_step_done(data: bytes) -> DoneIn:
     r = CdrReader(data)
     stamp = r.stamp_ns()
     r.string()  # frame_id
+    run_id = r.string()
     node = r.string()
-    step, compute_time, ok = r.unpack(StepDoneEncoder._STEP, 8)
-    return DoneIn(stamp, node, step, compute_time, ok, r.string())
+    step, compute_time, ok, refused = r.unpack(StepDoneEncoder._STEP, 8)
+    return DoneIn(stamp, run_id, node, step, compute_time, ok, refused, r.string())

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from typing import Sequence
 
 import numpy as np
@@ -20,9 +21,15 @@ EVENTS_TOPIC = "/scenario/events"
 # State and wrench topics: reliable so a lockstep participant never misses a step.
 STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
                        reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-# Commands: reliable, a few deep; late joiners do not get stale orders.
+# Commands as offered by a sender: reliable, a few deep; late joiners do not get stale orders.
 COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+# Commands as a node takes them: keep-all, so the node's own history never drops an order
+# silently (a keep-last-10 reader handed on 422 of a burst of 10,000 and counted none of the
+# rest); what a sender's keep-last history overwrote before delivery DDS reports as lost, and the
+# node counts it (VesselStatus.commands_lost). Per message the node does constant work.
+COMMAND_SUB_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.VOLATILE)
 EVENTS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                         reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 
@@ -137,23 +144,60 @@ def spin_forever(executor) -> None:
             return  # a callback ran into the shutdown (Ctrl-C / SIGTERM): not an error
 
 
+PARENT_PID_ENV = "TUGSIM_PARENT_PID"
+
+
+def die_with_parent() -> None:
+    """A node started by the scenario runner (which sets TUGSIM_PARENT_PID) ends when the runner
+    does, however the runner ended (SIGKILL included): Linux's parent-death signal delivers
+    SIGTERM at once, and a watch thread covers what that misses (a parent that died before the
+    signal was armed, other kernels)."""
+    import signal
+    import threading
+    text = os.environ.get(PARENT_PID_ENV)
+    if not text:
+        return
+    parent = int(text)
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os.kill(os.getpid(), signal.SIGTERM)
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
 def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError, FileNotFoundError),
              failures=()) -> int:
     """main() of a simulator node: construct, spin until Ctrl-C / SIGTERM, clean up.
 
     Exit status: 0 stopped, 2 bad parameters or files (bad_input, message on stderr), 3 the
-    model failed (failures, e.g. a diverged rope; message on stderr)."""
+    model failed (failures, e.g. a diverged rope, or a state gone non-finite; message on stderr)."""
     import sys
 
     import rclpy
     from rclpy.exceptions import ParameterException
+
+    from sim_plumbing.stepping import ModelDiverged
+    failures = (*failures, ModelDiverged) if isinstance(failures, tuple) else (failures, ModelDiverged)
     rclpy.init(args=args)
+    die_with_parent()
     try:
         node = make_node()
     except (*bad_input, ParameterException) as exc:
         sys.stderr.write(f"{program}: {exc}\n")
         rclpy.try_shutdown()
         return 2
+    except KeyboardInterrupt:
+        rclpy.try_shutdown()
+        return 0
     executor = make_executor()
     executor.add_node(node)
     try:

@@ -13,22 +13,74 @@ lockstep (parameter ``lockstep:=true``, what the scenario runner uses)
     published at start-up, with StepDone(0) as the ready signal (repeated until the first
     trigger, so the runner need not be discovered first).
 
+    Run identity: every run has a random id (parameter ``run_id``, handed over by the runner
+    that starts the node; a node started by hand with no id joins the run of the first
+    SimStep(0) it sees). A SimStep of another run, for a step the node is not at, or a
+    duplicate is refused: logged (at most once a second per kind) and counted, and the count
+    goes back to the runner in every StepDone (refused_messages). Inputs stamped more than
+    MAX_LEAD_STEPS ahead are refused too, so a flood of future stamps cannot grow the buffers.
+    An order the runner announced (SimStep.ordered) that the node then rejects still fills
+    its slot: the node computes the step with its last valid order and says why.
+
 free-running (``lockstep:=false``, default for a node started by hand)
     A wall-clock timer steps at the exchange rate with the latest input of each kind.
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
 import time
 from typing import Any, Callable, Dict, List, Optional
 
 from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from tug_msgs.msg import SimStep, StepDone
 
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
+
+
+# Inputs are stamped with the step they belong to; nothing legitimate is more than a step or two
+# ahead of the node (outputs of step k+1 while it computes k). Farther ahead is refused, so a
+# flood of future stamps from a stray publisher cannot grow the buffers without bound.
+MAX_LEAD_STEPS = 100
+# An order the runner announced but the node refused: the slot is filled, the last valid order held.
+REJECTED_ORDER = object()
+
+
+class ModelDiverged(RuntimeError):
+    """The model's state went non-finite or blew up: numerics, not physics (named with the step)."""
+
+
+class RateLimitedLog:
+    """Logs a kind of complaint at most once per `interval` s of wall time, with how many were
+    suppressed since; counts every one. Keeps a flood of bad input from costing a log line (and
+    the step's time) per message."""
+
+    def __init__(self, logger, interval: float = 1.0):
+        self.logger = logger
+        self.interval = interval
+        self.counts: collections.Counter = collections.Counter()
+        self._last: Dict[str, float] = {}
+        self._suppressed: collections.Counter = collections.Counter()
+
+    def __call__(self, kind: str, text: str, level: str = "error") -> bool:
+        """Count one; returns True if it was logged (callers may emit an event then)."""
+        self.counts[kind] += 1
+        now = time.monotonic()
+        if now - self._last.get(kind, -1e9) < self.interval:
+            self._suppressed[kind] += 1
+            return False
+        extra = self._suppressed.pop(kind, 0)
+        self._last[kind] = now
+        getattr(self.logger, level)(text + (f" ({extra} more like it since the last report)" if extra else ""))
+        return True
+
+    @property
+    def total(self) -> int:
+        return sum(self.counts.values())
 
 
 @dataclasses.dataclass
@@ -54,9 +106,14 @@ class SteppedNode(Node):
             "Exchange steps per simulated second", 1.0, 1000.0, "Hz"))
         self.declare_parameter("lockstep", False, rc.text_param(
             "true: step on the scenario runner's /sim/step triggers; false: free-run on a wall-clock timer"))
+        self.declare_parameter("run_id", "", rc.text_param(
+            "Identity of the run (lockstep): triggers of any other run are refused; '' joins the first "
+            "run whose SimStep(0) arrives"))
         self.period_ns = rc.period_ns(self.get_parameter("exchange_rate").value)
         self.dt = self.period_ns * 1e-9
         self.lockstep = bool(self.get_parameter("lockstep").value)
+        self.run_id = str(self.get_parameter("run_id").value)
+        self.complaints = RateLimitedLog(self.get_logger())  # refused protocol messages and inputs
         self.step_index = 0
         self.ready_to_step = ready
         self.inputs = inputs
@@ -67,16 +124,21 @@ class SteppedNode(Node):
         self.namespace_name = self.get_namespace().strip("/")
         self._wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         for spec in inputs:
-            qos = spec.qos or (rc.COMMAND_QOS if spec.kind == "order" else rc.LATCHED_STATE_QOS)
+            qos = spec.qos or (rc.COMMAND_SUB_QOS if spec.kind == "order" else rc.LATCHED_STATE_QOS)
+            # DDS reports samples that never reached a keep-all reader (a sender's own history
+            # overwrote them in a burst): counted, since the node cannot see them otherwise.
+            events = SubscriptionEventCallbacks(message_lost=lambda info, s=spec: self._on_lost(s, info))
             if spec.decode is None:
                 self.create_subscription(spec.msg_type, spec.topic,
-                                         lambda msg, s=spec: self._on_input(s, msg), qos)
+                                         lambda msg, s=spec: self._on_input(s, msg), qos, event_callbacks=events)
             else:
                 self.create_subscription(spec.msg_type, spec.topic,
-                                         lambda data, s=spec: self._on_raw_input(s, data), qos, raw=True)
+                                         lambda data, s=spec: self._on_raw_input(s, data), qos, raw=True,
+                                         event_callbacks=events)
+        self.lost: collections.Counter = collections.Counter()  # topic -> messages DDS reported lost
         if self.lockstep:
             self.done_pub = self.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
-            self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name())
+            self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name(), self.run_id)
             self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger_raw, rc.PROTOCOL_QOS, raw=True)
             # Wall-clock timers: with use_sim_time a ROS-time timer would wait for /clock forever.
             self._ready_timer = self.create_timer(0.2, self._announce_ready, clock=self._wall_clock)
@@ -108,41 +170,71 @@ class SteppedNode(Node):
 
     # -- machinery -----------------------------------------------------------------------
     def _on_raw_input(self, spec: StepInput, data: bytes) -> None:
-        msg = cdr.decode_or_report(spec.decode, data, lambda why: self.get_logger().error(
-            f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {why}"))
+        msg = cdr.decode_or_report(spec.decode, data, lambda why: self.complaints(
+            "undecodable " + spec.topic, f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {why}"))
         if msg is not None:
             self._on_input(spec, msg)
 
+    def _on_lost(self, spec: StepInput, info) -> None:
+        self.lost[spec.topic] += info.total_count_change
+        self.complaints("lost " + spec.topic, f"{spec.topic}: DDS reports {self.lost[spec.topic]} message(s) "
+                        "lost before they reached this node (a burst beyond the sender's history)", "warning")
+
     def _on_trigger_raw(self, data: bytes) -> None:
-        msg = cdr.decode_or_report(cdr.decode_sim_step, data, lambda why: self.get_logger().error(
-            f"{rc.SIM_STEP_TOPIC}: undecodable SimStep dropped: {why}"))
+        msg = cdr.decode_or_report(cdr.decode_sim_step, data, lambda why: self.complaints(
+            "undecodable trigger", f"{rc.SIM_STEP_TOPIC}: undecodable SimStep dropped: {why}"))
         if msg is not None:
             self._on_trigger(msg)
 
     def _on_input(self, spec: StepInput, msg: Any) -> None:
-        if not self.accept_input(spec, msg):
-            return
-        self._latest[spec.topic] = msg
+        accepted = self.accept_input(spec, msg)
+        if accepted:
+            self._latest[spec.topic] = msg
         if not self.lockstep:
             return
         k = self.step_of(spec, msg)
         if k < 0:
-            if spec.kind == "order":
-                k = self.step_index  # unannounced order from outside the protocol: next step
-            else:
-                self.get_logger().error(f"{spec.topic}: stamp is not on the step grid, input dropped")
+            if spec.kind != "order":
+                self.complaints("off-grid " + spec.topic, f"{spec.topic}: stamp is not on the step grid, input dropped")
                 return
-        if spec.kind == "order" and k < self.step_index:
-            k = self.step_index
-        if spec.kind == "order" and k in self._buffer[spec.topic]:
-            self.get_logger().warning(f"{spec.topic}: second order for step {k}; the later one wins")
-        self._buffer[spec.topic][k] = msg
+            k = self.step_index  # unannounced order from outside the protocol: next step
+        if k > self.step_index + MAX_LEAD_STEPS:
+            self.complaints("ahead " + spec.topic, f"{spec.topic}: input stamped for step {k}, more than "
+                            f"{MAX_LEAD_STEPS} steps ahead of this node (step {self.step_index}): refused")
+            return
+        buf = self._buffer[spec.topic]
+        if spec.kind == "order":
+            k = max(k, self.step_index)
+            if not accepted:
+                # keep the step's slot filled (an announced order must not stall the step), but never
+                # displace a valid order already there
+                buf.setdefault(k, REJECTED_ORDER)
+            else:
+                if buf.get(k, REJECTED_ORDER) is not REJECTED_ORDER:
+                    self.complaints("second order " + spec.topic,
+                                    f"{spec.topic}: second order for step {k}; the later one wins", "warning")
+                buf[k] = msg
+        elif accepted:
+            buf[k] = msg
+        else:
+            return
         self._advance()
 
     def _on_trigger(self, msg: cdr.TriggerIn) -> None:
+        if not self.run_id and msg.step == 0 and msg.run_id:
+            self.run_id = msg.run_id  # started by hand: join the first run that starts
+            self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name(), self.run_id)
+            self.get_logger().info(f"joined run {self.run_id}")
+        if not msg.run_id or msg.run_id != self.run_id:
+            self.complaints("foreign trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) of run "
+                            f"'{msg.run_id}' refused (this node is in run '{self.run_id}')")
+            return
+        if msg.step != self.step_index or msg.step in self._triggers:
+            self.complaints("unexpected trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) refused: this node "
+                            f"is at step {self.step_index}" + (" and holds that trigger already"
+                                                                 if msg.step in self._triggers else ""))
+            return
         self._triggered = True
-        if msg.step < self.step_index:
-            return  # a trigger we already served (re-sent)
         self._triggers[msg.step] = msg
         self._advance()
 
@@ -171,7 +263,8 @@ class SteppedNode(Node):
             inputs = {}
             for spec in self.inputs:
                 buf = self._buffer[spec.topic]
-                inputs[spec.topic] = buf.get(k)
+                msg = buf.get(k)
+                inputs[spec.topic] = None if msg is REJECTED_ORDER else msg
                 for old in [s for s in buf if s <= k]:
                     del buf[old]
             t0 = time.perf_counter()
@@ -197,7 +290,8 @@ class SteppedNode(Node):
         self.publish_outputs()
 
     def _send_done(self, step: int, compute_time: float, error: str = "") -> None:
-        self.done_pub.publish(self._done_cdr.encode(step * self.period_ns, step, compute_time, error))
+        self.done_pub.publish(self._done_cdr.encode(step * self.period_ns, step, compute_time, error,
+                                                    self.complaints.total))
 
     def stamp(self):
         return rc.step_time(self.step_index, self.period_ns)

@@ -25,7 +25,7 @@ from tug_msgs.msg import AttachmentArray, ScenarioEvent, VesselCommand, VesselSt
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
-from sim_plumbing.stepping import SteppedNode, StepInput
+from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
                                  rotation_body_to_world)
 
@@ -138,15 +138,16 @@ class VesselNode(SteppedNode):
                 check_command(Command(msg.engine_order, msg.steering_angle, msg.anchor))
             except CommandRejected as exc:
                 self.rejected += 1
-                self.get_logger().error(f"command rejected, keeping the last valid one: {exc}")
-                self.emit_event("command_rejected", str(exc))
+                # rate-limited: a flood of bad orders must not cost a log line and an event each
+                if self.complaints("command rejected", f"command rejected, keeping the last valid one: {exc}"):
+                    self.emit_event("command_rejected", str(exc))
                 return False
             return True
         return self._wrench_point(spec.topic, msg) is not None
 
     def _wrench_point(self, topic: str, msg: cdr.WrenchIn) -> Optional[np.ndarray]:
         if not msg.is_finite():
-            self.get_logger().error(f"wrench on {topic} rejected: non-finite value {msg.force + msg.torque}")
+            self.complaints("wrench " + topic, f"wrench on {topic} rejected: non-finite value {msg.force + msg.torque}")
             return None
         frame = msg.frame_id
         point = self._wrench_points.get(frame)
@@ -159,8 +160,9 @@ class VesselNode(SteppedNode):
         elif point_name in self.model.attachments:
             point = np.asarray(self.model.attachments[point_name], float)
         else:
-            self.get_logger().error(f"wrench on {topic} rejected: frame '{frame}' is neither '{self.body_frame}' "
-                                    f"nor an attachment frame of this vessel ({sorted(self.model.attachments)})")
+            self.complaints("wrench " + topic, f"wrench on {topic} rejected: frame '{frame}' is neither "
+                            f"'{self.body_frame}' nor an attachment frame of this vessel "
+                            f"({sorted(self.model.attachments)})")
             return None
         self._wrench_points[frame] = point
         return point
@@ -176,11 +178,11 @@ class VesselNode(SteppedNode):
             except CommandRejected as exc:
                 notes = []
                 self.rejected += 1
-                self.get_logger().error(f"command rejected, keeping the last valid one: {exc}")
-                self.emit_event("command_rejected", str(exc))
+                if self.complaints("command rejected", f"command rejected, keeping the last valid one: {exc}"):
+                    self.emit_event("command_rejected", str(exc))
             for note in notes:
                 self.clamped += 1
-                self.get_logger().warning(f"command clamped: {note}")
+                self.complaints("command clamped", f"command clamped: {note}", "warning")
         # Wrench frames have body-parallel axes: rotate to world with the state of this step.
         rot = rotation_body_to_world(self.model.state.rpy)
         wrenches = []
@@ -192,6 +194,18 @@ class VesselNode(SteppedNode):
                                            point_body=self._wrench_points[msg.frame_id],
                                            moment_world=rot @ np.array(msg.torque)))
         self.model.step(self.dt, wrenches)
+        self._check_finite()
+
+    def _check_finite(self) -> None:
+        """A state gone NaN or infinite is numerics (e.g. a time constant far below the step), not
+        physics: stop, naming the vessel and the step, before anything is published."""
+        s = self.model.state
+        values = np.concatenate((s.position, s.rpy, s.linear_velocity_body, s.angular_velocity_body))
+        if not np.all(np.isfinite(values)):
+            raise ModelDiverged(
+                f"vessel '{self.vessel_name}' diverged at step {self.step_index} -> {self.step_index + 1} "
+                f"(t = {self.step_index * self.dt:.3f} s): state not finite (position {s.position.tolist()}, "
+                f"velocity {s.linear_velocity_body.tolist()}); check the ship file's masses and time constants")
 
     def _make_encoders(self) -> None:
         """Output messages as CDR templates, laid out once (building message objects every
@@ -228,7 +242,8 @@ class VesselNode(SteppedNode):
         floats_b = [float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_B]
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, floats_a, _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0),
-            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped), stamp_ns)
+            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped,
+            sum(self.lost.values())), stamp_ns)
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
