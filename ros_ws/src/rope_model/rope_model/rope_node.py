@@ -115,7 +115,7 @@ class RopeNode(SteppedNode):
                 self.vessel_topics.setdefault(f"/{end.vessel}/attachments", end.vessel)
         inputs = [StepInput(t, AttachmentArray, decode=cdr.decode_attachment_array) for t in self.vessel_topics]
         if self.layout == "winch":
-            inputs.append(StepInput("winch", WinchCommand, kind="order"))
+            inputs.append(StepInput("winch", WinchCommand, kind="order", decode=cdr.decode_winch_command))
         self.init_stepping(inputs, ready=False)
         # markers on every n-th step: RViz needs no more than ~10 Hz and they cost a third of a step
         self.marker_every = max(1, round(1e9 / self.period_ns / gp("marker_rate").value))

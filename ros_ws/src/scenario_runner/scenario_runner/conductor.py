@@ -260,8 +260,8 @@ class RunStats:
 class Conductor(Node):
     """The runner's own node: /clock, /sim/step, orders and events out; StepDone in."""
 
-    def __init__(self, sc: Scenario, node_names: List[str], recorder=None, run_id: Optional[str] = None):
-        super().__init__("scenario_runner")
+    def __init__(self, sc: Scenario, node_names: List[str], recorder=None, run_id: Optional[str] = None, **kwargs):
+        super().__init__("scenario_runner", **kwargs)
         self.created = time.monotonic()
         self.recorder = recorder
         self.sc = sc

@@ -4,7 +4,8 @@
     ros2 run scenario_runner send_command s175 --anchor let_go
 
 Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
-exits. Exit status 1 if no vessel node listens within --wait seconds.
+exits. Exit status 1 if no vessel node listens within --wait seconds, 2 for a value that is not a
+finite number (the vessel would reject it anyway).
 """
 from __future__ import annotations
 
@@ -39,6 +40,10 @@ def parse_args(argv):
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(rclpy.utilities.remove_ros_args(argv))
+    for name, value in (("--engine", args.engine), ("--steering-deg", args.steering_deg), ("--wait", args.wait)):
+        if not math.isfinite(value):
+            sys.stderr.write(f"send_command: {name} {value!r}: expected a finite number\n")
+            return 2
     rclpy.init(args=argv)
     node = Node("send_command")
     try:

@@ -431,3 +431,35 @@ def decode_step_done(data: bytes) -> DoneIn:
     node = r.string()
     step, compute_time, ok, refused = r.unpack(StepDoneEncoder._STEP, 8)
     return DoneIn(stamp, run_id, node, step, compute_time, ok, refused, r.string())
+
+
+class VesselCommandIn(NamedTuple):
+    """A tug_msgs/VesselCommand as taken."""
+    stamp_ns: int
+    engine_order: float
+    steering_angle: float
+    anchor: int
+
+
+_COMMAND = struct.Struct("<ddB")
+
+
+def decode_vessel_command(data: bytes) -> VesselCommandIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    engine, steering, anchor = r.unpack(_COMMAND, 8)
+    return VesselCommandIn(stamp, engine, steering, anchor)
+
+
+class WinchCommandIn(NamedTuple):
+    """A tug_msgs/WinchCommand as taken."""
+    stamp_ns: int
+    payout_rate: float
+
+
+def decode_winch_command(data: bytes) -> WinchCommandIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    return WinchCommandIn(stamp, r.unpack(_F64, 8)[0])

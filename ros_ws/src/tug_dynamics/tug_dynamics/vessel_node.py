@@ -119,7 +119,8 @@ class VesselNode(SteppedNode):
         self.status_pub = self.create_fed_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self._wrench_points = {}  # frame_id -> attachment point (body), for accepted frames
-        self.init_stepping([StepInput("command", VesselCommand, kind="order")] +
+        # commands raw: bytes that are not a VesselCommand are refused and counted, never crash the node
+        self.init_stepping([StepInput("command", VesselCommand, kind="order", decode=cdr.decode_vessel_command)] +
                            [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics])
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
         # now, on a copy, not in the first step of a paced run.

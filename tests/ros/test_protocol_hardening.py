@@ -1,0 +1,287 @@
+"""Issue 13 items 1, 2, 4: a lockstep that trusts no stranger (run identity, refused and counted
+stray, duplicate and untriggered messages, one run per domain), no orphans whatever kills the
+runner, SIGTERM like Ctrl-C, orders that cannot stall or grow a node."""
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from conftest import executable_path, spin_until
+from test_recording import physics, _node_pid
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
+
+SCENARIO = "seed000_straight_tow_5kn.yaml"
+DURATION = 4.0
+
+
+def runner(out, *extra, duration=DURATION):
+    args = [executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", str(duration), "--quiet"]
+    args += ["--output", str(out)] if out else ["--no-record", "--log-dir", "/tmp/tugsim-test-logs"]
+    return args + list(extra)
+
+
+def _domain_nodes(domain):
+    """pids of simulator node processes of this domain."""
+    return [p for p in (_node_pid(pat, domain) for pat in ("__ns:=/tug", "__ns:=/barge", "__ns:=/towline")) if p]
+
+
+def _wait_until_stepping(domain, log_dir, timeout=120):
+    deadline = time.monotonic() + timeout
+    log = log_dir / "towline_rope.log"
+    while time.monotonic() < deadline and not (log.exists() and "laid out" in log.read_text()):
+        time.sleep(0.2)
+    time.sleep(1.0)
+
+
+def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_context):
+    """A stranger floods /sim/step and /sim/step_done (other run ids, no run id, every step
+    number): the trajectories are those of an undisturbed run, and the refusals are counted."""
+    from rclpy.node import Node
+    from tug_msgs.msg import SimStep, StepDone
+    from sim_plumbing import ros_common as rc
+    clean = tmp_path / "clean.mcap"
+    assert subprocess.run(runner(clean), capture_output=True, text=True, timeout=240).returncode == 0
+    node = Node("stranger", context=rclpy_context)
+    step_pub = node.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
+    done_pub = node.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
+    stop = threading.Event()
+    sent = [0]
+
+    def flood():
+        rng = np.random.default_rng(1)
+        while not stop.is_set():
+            k = int(rng.integers(0, 300))
+            step_pub.publish(SimStep(run_id=["", "other-run"][k % 2], step=k, period=0.02, ordered=["tug"]))
+            for name in ("/tug/vessel", "/barge/vessel", "/towline/rope", "/ghost/vessel"):
+                done_pub.publish(StepDone(run_id="other-run", node=name, step=k, ok=True))
+            sent[0] += 5
+            time.sleep(0.002)
+
+    disturbed = tmp_path / "disturbed.mcap"
+    proc = subprocess.Popen(runner(disturbed), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    thread = threading.Thread(target=flood, daemon=True)
+    thread.start()
+    try:
+        stdout, stderr = proc.communicate(timeout=240)
+    finally:
+        stop.set()
+        thread.join(5)
+    assert proc.returncode == 0, stdout + stderr
+    assert sent[0] > 1000
+    assert "refused protocol messages" in stdout, stdout  # counted, and said
+    assert "another run" in stdout
+    a, b = physics(clean), physics(disturbed)
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_runner_refuses_answers_not_of_this_run_step_or_node(rclpy_context):
+    """The runner's bookkeeping without DDS timing: only an answer of this run, from a node of
+    the run, for the step now due, once, counts."""
+    from scenario_runner.conductor import Conductor
+    from scenario_runner.scenario import load_scenario
+    from scenario_runner.run_scenario import scenario_path
+    from sim_plumbing.cdr import DoneIn
+    sc = load_scenario(scenario_path(SCENARIO))
+    c = Conductor(sc, ["/tug/vessel", "/towline/rope"], run_id="r1", context=rclpy_context)
+    try:
+        def done(node, step, run="r1", ok=True):
+            c._on_done(DoneIn(0, run, node, step, 0.001, ok, 0, "" if ok else "boom"))
+        for _ in range(3):
+            done("/tug/vessel", 0)  # the ready signal repeats: not an anomaly
+        done("/towline/rope", 0)
+        assert c.done[0] == {"/tug/vessel", "/towline/rope"} and not c.refused
+        c.awaited = 1  # SimStep(0) went out
+        done("/tug/vessel", 1, run="r0")          # another run
+        done("/ghost/vessel", 1)                   # not in the run
+        done("/tug/vessel", 7)                     # a step that was not triggered
+        done("/tug/vessel", 1)
+        done("/tug/vessel", 1)                     # duplicate
+        assert c.done[1] == {"/tug/vessel"}
+        assert dict(c.refused) == {"another run": 1, "not in the run": 1, "step not triggered": 1, "duplicate": 1}
+        done("/towline/rope", 1)
+        assert c.done[1] == {"/tug/vessel", "/towline/rope"}
+    finally:
+        c.destroy_node()
+
+
+def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_path, ros_domain):
+    log_dir = tmp_path / "logs"
+    first = subprocess.Popen(runner(None, "--log-dir", str(log_dir), duration=600), stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_until_stepping(ros_domain, log_dir)
+        assert len(_domain_nodes(ros_domain)) == 3
+        t0 = time.monotonic()
+        second = subprocess.run(runner(None, "--log-dir", str(tmp_path / "logs2")), capture_output=True, text=True,
+                                timeout=120)
+        assert second.returncode == 4, second.stdout + second.stderr
+        assert f"ROS_DOMAIN_ID={ros_domain}" in second.stderr and "scenario runner" in second.stderr, second.stderr
+        assert time.monotonic() - t0 < 60  # refused at start-up, not after the 240 s start-up timeout
+        assert not (tmp_path / "logs2").exists()  # nothing was started
+    finally:
+        first.send_signal(signal.SIGKILL)
+        first.communicate(timeout=30)
+    deadline = time.monotonic() + 10
+    while _domain_nodes(ros_domain) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert _domain_nodes(ros_domain) == []  # the nodes died with their runner
+
+
+def test_leftover_lockstep_node_is_refused_by_the_next_run(tmp_path, ros_domain, start_node):
+    """A lockstep node on the domain that is not this run's (left by a killed runner, or started
+    by hand) would mix its latched outputs into the run: the runner refuses to start, naming it."""
+    stray = start_node("tug_dynamics", "vessel_node", "--ros-args", "-r", "__ns:=/tug", "-p",
+                       "ship_file:=harbour_tug.yaml", "-p", "lockstep:=true", "-p", "run_id:=old-run")
+    time.sleep(3.0)
+    proc = subprocess.run(runner(None, "--log-dir", str(tmp_path / "logs")), capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 4, proc.stdout + proc.stderr
+    assert "/tug/vessel" in proc.stderr and f"ROS_DOMAIN_ID={ros_domain}" in proc.stderr
+    assert stray.proc.poll() is None  # the stranger is named, not touched
+
+
+@pytest.mark.parametrize("layout", ["processes", "one_process"])
+def test_sigterm_ends_a_run_like_ctrl_c(tmp_path, ros_domain, layout):
+    from mcap.reader import make_reader
+    out = tmp_path / "term.mcap"
+    log_dir = tmp_path / "logs"
+    proc = subprocess.Popen(runner(out, "--log-dir", str(log_dir), "--layout", layout, duration=600),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if layout == "processes":
+        _wait_until_stepping(ros_domain, log_dir)
+    else:
+        time.sleep(12.0)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 143, stderr
+    assert "interrupted by SIGTERM" in stderr and "Traceback" not in stderr, stderr
+    with open(out, "rb") as f:
+        assert make_reader(f).get_summary().statistics.message_count > 0  # finalised
+    assert _domain_nodes(ros_domain) == []
+
+
+def _lockstep_vessel(start_node, run_id="run-x"):
+    return start_node("tug_dynamics", "vessel_node", "--ros-args", "-r", "__ns:=/tug", "-p",
+                      "ship_file:=harbour_tug.yaml", "-p", "lockstep:=true", "-p", f"run_id:={run_id}")
+
+
+class Driver:
+    """The test as the runner of one vessel node."""
+
+    def __init__(self, rclpy_context, run_id="run-x"):
+        from rclpy.node import Node
+        from tug_msgs.msg import SimStep, StepDone, VesselCommand, VesselStatus
+        from sim_plumbing import ros_common as rc
+        self.rc, self.SimStep, self.VesselCommand = rc, SimStep, VesselCommand
+        self.run_id = run_id
+        self.node = Node("driver", context=rclpy_context)
+        self.done, self.status = {}, []
+        self.node.create_subscription(StepDone, rc.STEP_DONE_TOPIC,
+                                      lambda m: self.done.setdefault(m.step, []).append(m), rc.PROTOCOL_QOS)
+        self.node.create_subscription(VesselStatus, "/tug/status", self.status.append, rc.LATCHED_STATE_QOS)
+        self.step_pub = self.node.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
+        self.cmd_pub = self.node.create_publisher(VesselCommand, "/tug/command", rc.COMMAND_QOS)
+
+    def ready(self, log):
+        assert spin_until(self.node, lambda: 0 in self.done and self.step_pub.get_subscription_count() > 0
+                          and self.cmd_pub.get_subscription_count() > 0, 60), log()
+
+    def command(self, step, engine, steering=0.0, anchor=0):
+        msg = self.VesselCommand(engine_order=engine, steering_angle=steering, anchor=anchor)
+        msg.header.stamp = self.rc.step_time(step, 20_000_000)
+        self.cmd_pub.publish(msg)
+
+    def trigger(self, step, ordered=()):
+        msg = self.SimStep(run_id=self.run_id, step=step, period=0.02, ordered=list(ordered))
+        msg.header.stamp = msg.time = self.rc.step_time(step, 20_000_000)
+        self.step_pub.publish(msg)
+
+
+def test_rejected_announced_order_does_not_stall_the_step(start_node, rclpy_context):
+    vessel = _lockstep_vessel(start_node)
+    d = Driver(rclpy_context)
+    d.ready(vessel.log)
+    d.command(0, 0.5)
+    d.trigger(0, ["tug"])
+    assert spin_until(d.node, lambda: 1 in d.done, 20), vessel.log()
+    d.command(1, float("nan"))  # announced for step 1, then refused by the node
+    d.trigger(1, ["tug"])
+    assert spin_until(d.node, lambda: 2 in d.done, 20), vessel.log()  # answered: no deadlock
+    assert d.done[2][0].ok
+    assert spin_until(d.node, lambda: d.status and d.status[-1].step == 2, 20)
+    assert d.status[-1].commands_rejected == 1 and d.status[-1].engine_order == 0.5  # last valid order held
+    assert "command rejected" in vessel.log()
+
+
+def test_stray_triggers_are_refused_by_the_node(start_node, rclpy_context):
+    vessel = _lockstep_vessel(start_node)
+    d = Driver(rclpy_context)
+    d.ready(vessel.log)
+    stranger = Driver.__new__(Driver)
+    stranger.__dict__.update(d.__dict__, run_id="other-run")
+    stranger.trigger(0)   # another run
+    d.run_id, run = "", d.run_id
+    d.trigger(0)          # no run id
+    d.run_id = run
+    d.trigger(5)          # a step the node is not at
+    time.sleep(0.5)
+    d.trigger(0)
+    assert spin_until(d.node, lambda: 1 in d.done, 20), vessel.log()
+    assert d.done[1][0].refused_messages == 3
+    time.sleep(0.5)
+    assert 6 not in d.done and len(d.done[1]) == 1  # nothing stepped on the strays
+    assert "refused" in vessel.log()
+
+
+def test_future_stamped_commands_cannot_grow_the_node(rclpy_context):
+    """60,000 orders stamped far ahead are refused and counted; the buffer stays bounded."""
+    from rclpy.parameter import Parameter
+    from sim_plumbing.cdr import VesselCommandIn
+    from sim_plumbing.stepping import MAX_LEAD_STEPS
+    from tug_dynamics.vessel_node import VesselNode
+    node = VesselNode(context=rclpy_context, namespace="/tug", parameter_overrides=[
+        Parameter("ship_file", value="harbour_tug.yaml"), Parameter("lockstep", value=True),
+        Parameter("run_id", value="r")])
+    try:
+        spec = next(s for s in node.inputs if s.topic == "command")
+        for i in range(60_000):
+            node._on_input(spec, VesselCommandIn((10_000 + i) * node.period_ns, 0.5, 0.0, 0))
+        for i in range(50):
+            node._on_input(spec, VesselCommandIn((1 + i) * node.period_ns, 0.5, 0.0, 0))
+        assert len(node._buffer["command"]) <= MAX_LEAD_STEPS + 1
+        assert node.complaints.counts["ahead command"] == 60_000
+    finally:
+        node.destroy_node()
+
+
+@pytest.mark.timeout(60)
+def test_send_command_refuses_nan(ros_domain):
+    proc = subprocess.run([executable_path("scenario_runner", "send_command"), "tug", "--engine", "nan"],
+                          capture_output=True, text=True, timeout=30)
+    assert proc.returncode == 2 and "--engine" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_nonfinite_vessel_state_is_named_by_the_vessel_node(start_node, rclpy_context):
+    """A force no hull can take (1e300 N) sends the state to inf: the vessel node stops with
+    exit 3, naming the vessel and the step, instead of publishing NaN."""
+    from geometry_msgs.msg import WrenchStamped
+    from rclpy.node import Node
+    from sim_plumbing import ros_common as rc
+    vessel = start_node("tug_dynamics", "vessel_node", "--ros-args", "-r", "__ns:=/tug", "-p",
+                        "ship_file:=harbour_tug.yaml", "-p", "wrench_topics:=[/push]")
+    node = Node("pusher", context=rclpy_context)
+    pub = node.create_publisher(WrenchStamped, "/push", rc.LATCHED_STATE_QOS)
+    assert spin_until(node, lambda: pub.get_subscription_count() > 0, 60), vessel.log()
+    msg = WrenchStamped()
+    msg.header.frame_id = "tug/base_link"
+    msg.wrench.force.x = 1e300
+    pub.publish(msg)
+    vessel.proc.wait(30)
+    assert vessel.proc.returncode == 3, vessel.log()
+    assert "vessel 'tug' diverged at step" in vessel.log() and "not finite" in vessel.log()
