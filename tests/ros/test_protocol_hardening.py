@@ -121,7 +121,8 @@ def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_pat
         second = subprocess.run(runner(None, "--log-dir", str(tmp_path / "logs2")), capture_output=True, text=True,
                                 timeout=120)
         assert second.returncode == 4, second.stdout + second.stderr
-        assert f"ROS_DOMAIN_ID={ros_domain}" in second.stderr and "scenario runner" in second.stderr, second.stderr
+        assert f"ROS_DOMAIN_ID={ros_domain} is in use by another run" in second.stderr, second.stderr
+        assert "/towline/rope" in second.stderr
         assert time.monotonic() - t0 < 60  # refused at start-up, not after the 240 s start-up timeout
         assert not (tmp_path / "logs2").exists()  # nothing was started
     finally:
