@@ -152,7 +152,7 @@ def test_sigterm_ends_a_run_like_ctrl_c(tmp_path, ros_domain, layout):
     from mcap.reader import make_reader
     out = tmp_path / "term.mcap"
     log_dir = tmp_path / "logs"
-    proc = subprocess.Popen(runner(out, "--log-dir", str(log_dir), "--layout", layout, duration=600),
+    proc = subprocess.Popen(runner(out, "--log-dir", str(log_dir), "--layout", layout, duration=6000),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if layout == "processes":
         _wait_until_stepping(ros_domain, log_dir)
