@@ -19,8 +19,21 @@ SCENARIO = "seed000_straight_tow_5kn.yaml"
 DURATION = 4.0
 
 
+def _long_scenario():
+    """The tow scenario lasting an hour (its own duration caps --duration)."""
+    import tempfile
+    import yaml
+    from scenario_runner.run_scenario import scenario_path
+    sc = dict(yaml.safe_load(open(scenario_path(SCENARIO))), duration=3600.0)
+    path = os.path.join(tempfile.mkdtemp(prefix="tugsim-long-"), "long_tow.yaml")
+    with open(path, "w") as f:
+        yaml.safe_dump(sc, f)
+    return path
+
+
 def runner(out, *extra, duration=DURATION):
-    args = [executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", str(duration), "--quiet"]
+    scenario = SCENARIO if duration <= 120 else _long_scenario()
+    args = [executable_path("scenario_runner", "run_scenario"), scenario, "--duration", str(duration), "--quiet"]
     args += ["--output", str(out)] if out else ["--no-record", "--log-dir", "/tmp/tugsim-test-logs"]
     return args + list(extra)
 

@@ -349,6 +349,11 @@ class Conductor(Node):
         while time.monotonic() < self.created + wait:
             executor.spin_once(timeout_sec=0.02)
         found = self.foreign_participants()
+        # endpoints are discovered before the names of their nodes: give the names a moment
+        deadline = time.monotonic() + 3.0
+        while any("_UNKNOWN_" in f for f in found) and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+            found = self.foreign_participants()
         if found:
             domain = os.environ.get("ROS_DOMAIN_ID", "0")
             raise DomainInUse(
@@ -597,6 +602,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
                 stats.round_trips.append(time.monotonic() - t0)
                 conductor.done.pop(k, None)
                 stats.steps_done = k + 1
+                stop.check()
                 if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
                     stats.overruns += 1
                 if on_step:
