@@ -30,38 +30,55 @@ def _write(tmp_path, name, text):
     return f
 
 
-@pytest.mark.parametrize("text,key,what", [
-    ("diameter: -1\n", "diameter", "positive number"),
-    ("length: 0\n", "length", "positive number"),
-    ("length: -5.0\n", "length", "positive number"),
-    ("mass_per_length: abc\n", "mass_per_length", "positive number"),
-    ("n_elements: 0\n", "n_elements", "integer >= 1"),
-    ("n_elements: 2.5\n", "n_elements", "integer >= 1"),
-    ("drag_normal: -0.1\n", "drag_normal", "non-negative"),
-    ("diamter: 0.05\n", "diamter", "unknown key"),
-    ("breaking_load: .nan\n", "breaking_load", "positive number"),
+def _table1_with(line):
+    """The shipped table1.yaml with the key of `line` ("key: value") replaced by it (appended
+    if the key is new): every other key valid, so the error can only be about this one."""
+    key = line.split(":")[0]
+    out, done = [], False
+    for old in open(default_rope_path()).read().splitlines():
+        if old.split(":")[0] == key:
+            out.append(line)
+            done = True
+        else:
+            out.append(old)
+    if not done:
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+@pytest.mark.parametrize("line,what", [
+    ("diameter: -1", "expected a number in [0.001, 0.5] m, got -1"),
+    ("length: 0", "expected a number in [1, 10000] m, got 0"),
+    ("length: -5.0", "expected a number in [1, 10000] m, got -5.0"),
+    ("mass_per_length: abc", "expected a number in [0.001, 1000] kg/m, got 'abc'"),
+    ("n_elements: 0", "expected an integer in [1, 2000], got 0"),
+    ("n_elements: 2.5", "expected an integer in [1, 2000], got 2.5"),
+    ("drag_normal: -0.1", "expected a number in [0, 3], got -0.1"),
+    ("diamter: 0.05", "unknown key (misspelt?"),
+    ("breaking_load: .nan", "expected a number in [100, 1e+08] N, got nan"),
 ])
-def test_bad_yaml_names_file_and_key(tmp_path, text, key, what):
-    f = _write(tmp_path, "bad_rope.yaml", text)
+def test_bad_yaml_names_file_and_key(tmp_path, line, what):
+    f = _write(tmp_path, "bad_rope.yaml", _table1_with(line))
+    key = line.split(":")[0]
     with pytest.raises(RopeParamsError) as ei:
         load_rope_params(f)
     msg = str(ei.value)
     assert msg.startswith(f"bad_rope.yaml: key '{key}':"), msg
-    assert what in msg
+    assert what in msg, msg
     assert isinstance(ei.value, ValueError)
 
 
 def test_bad_yaml_message_exact(tmp_path):
-    f = _write(tmp_path, "table1.yaml", "diameter: -1\n")
-    with pytest.raises(ValueError, match=r"^table1\.yaml: key 'diameter': expected a positive "
-                                         r"number, got -1"):
+    f = _write(tmp_path, "table1.yaml", _table1_with("diameter: -1"))
+    with pytest.raises(ValueError, match=r"^table1\.yaml: key 'diameter': expected a number in "
+                                         r"\[0\.001, 0\.5\] m, got -1$"):
         load_rope_params(f)
 
 
 def test_not_a_mapping_and_invalid_yaml(tmp_path):
     with pytest.raises(RopeParamsError, match="list.yaml"):
         load_rope_params(_write(tmp_path, "list.yaml", "- 1\n- 2\n"))
-    with pytest.raises(RopeParamsError, match="broken.yaml: not valid YAML"):
+    with pytest.raises(RopeParamsError, match=r"broken.yaml: line 2: not valid YAML"):
         load_rope_params(_write(tmp_path, "broken.yaml", "length: [1, 2\n"))
 
 
@@ -72,15 +89,19 @@ def test_missing_file(tmp_path):
 
 
 def test_model_selector_key(tmp_path):
-    p = load_rope_params(_write(tmp_path, "m.yaml", "model: element_chain\nlength: 80\n"))
+    p = load_rope_params(_write(tmp_path, "m.yaml", "model: element_chain\n" + _table1_with("length: 80")))
     assert p.length == 80.0
     with pytest.raises(RopeParamsError, match="c.yaml: key 'model'"):
-        load_rope_params(_write(tmp_path, "c.yaml", "model: fd_cable\n"))
+        load_rope_params(_write(tmp_path, "c.yaml", _table1_with("model: fd_cable")))
 
 
-def test_partial_yaml_keeps_defaults(tmp_path):
-    p = load_rope_params(_write(tmp_path, "short.yaml", "length: 50\nn_elements: 5\n"))
-    assert p.length == 50.0 and p.n_elements == 5 and p.diameter == 0.05
+def test_optional_keys_keep_defaults(tmp_path):
+    """Only the rope itself is required; the model and environment keys default."""
+    text = ("length: 50\ndiameter: 0.05\nmass_per_length: 1.725\nbreaking_load: 156906.4\n"
+            "elongation_at_break: 0.15\ndrag_normal: 1.2\ndrag_tangential: 0.015\n")
+    p = load_rope_params(_write(tmp_path, "short.yaml", text))
+    assert p.length == 50.0 and p.n_elements == 11 and p.water_density == 1025.0
+    assert p.winch_max_payout_speed == 3.0 and p.winch_max_heave_speed == 3.0
 
 
 def test_zero_and_bad_element_counts():

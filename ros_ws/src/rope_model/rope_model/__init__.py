@@ -5,7 +5,8 @@ Units SI, angles rad, world frame ENU (x east, y north, z up), water surface z =
 API (what the rope node uses)::
 
     params = load_rope_params(path)            # RopeParams; RopeParamsError (a ValueError)
-                                               # naming file and key; FileNotFoundError
+                                               # naming file, key and expected range
+                                               # (schema.RopeFile); FileNotFoundError
     params = load_rope_params(default_rope_path())   # Table 1 rope
     rope = RopeChain.straight(params, p_a, p_b, n_elements=None, end_a="pinned",
                               end_b="pinned", max_substep=0.01, theta=0.55,
@@ -16,9 +17,12 @@ API (what the rope node uses)::
                                     n_elements=None, sag_direction=(0, 0, -1),
                                     heading=(1, 0, 0), **same_keywords)
     rope.set_end_kinematics("a" | "b", position(3,), velocity(3,))   # pinned ends
-    rope.set_payout_rate(rate_m_per_s)         # winch at end a: + pays out, - heaves in
+    notes = rope.set_payout_rate(rate_m_per_s)  # winch at end a: + pays out, - heaves in;
+                                               # clamped to params.winch_max_payout_speed /
+                                               # winch_max_heave_speed, notes: list of str
     rope.step(dt)                              # exchange period; internal sub-steps;
-                                               # RopeDivergedError(step, time, element)
+                                               # RopeDivergedError(step, time, element,
+                                               # connection): also a "parting" without strain
     rope.end_force("a" | "b")                  # (3,) force ON the attachment, N, world
     rope.mean_end_force("a" | "b")             # same, averaged over the last step
     rope.positions, .axes, .velocities, .angular_velocities, .lengths, .pitch_yaw,

@@ -20,11 +20,12 @@ END_MODES = ("pinned", "fixed", "free")
 class RopeDivergedError(RuntimeError):
     """The integration produced NaN/inf or absurd values; the rope keeps its last good state."""
 
-    def __init__(self, message, step, time, element):
+    def __init__(self, message, step, time, element, connection=None):
         super().__init__(message)
         self.step = step
         self.time = time
         self.element = element
+        self.connection = connection  # set when a "parting" was refused as a blow-up
 
 
 @dataclass(frozen=True)
@@ -169,6 +170,17 @@ class RopeChain:
         if total > params.length * (1 + 1e-9):
             raise ValueError(f"deployed length {total:.3f} m exceeds rope length {params.length} m")
         self._refresh()
+        if self.events or self._diverged_connection() is not None:
+            # a layout stretched beyond the breaking load before any motion (straight between
+            # ends farther apart than the rope reaches, or an absurd EA): no state to start from
+            c = int(self.events[0].connection if self.events else self._io[K.IO_DIAG, 0])
+            T = float(self.events[0].tension if self.events else self._io[K.IO_DIAG, 1])
+            span = float(np.linalg.norm(self.att_pos[1] - self.att_pos[0]))
+            raise ValueError(
+                f"initial layout overloads connection {c}: tension {T / 1e3:.1f} kN above the "
+                f"breaking load {params.breaking_load / 1e3:.1f} kN at t = 0 (ends {span:.3f} m "
+                f"apart, {total:.3f} m of rope, EA {params.ea:.4g} N): lay it slack or "
+                f"shorten the span")
 
     _IO_VIEWS = ("att_on", "att_pos", "att_vel", "_io_flat", "_end_force", "_imp",
                  "_mean_end_force", "_end_views", "_ev_buf", "_info", "_nev")
@@ -345,13 +357,27 @@ class RopeChain:
 
     def set_payout_rate(self, rate_m_per_s):
         """Winch at end a: positive pays out, negative heaves in (m/s). Length stays within
-        [params.min_deployed_length, params.length]."""
+        [params.min_deployed_length, params.length]. Like any winch order the rate is clamped
+        to params.winch_max_payout_speed / winch_max_heave_speed; returns a list of
+        human-readable notes, one per clamp (empty: taken as given). NaN / inf: ValueError,
+        nothing changed."""
         r = float(rate_m_per_s)
         if not math.isfinite(r):
             raise ValueError(f"payout rate must be finite, got {rate_m_per_s!r}")
         if not self.winch:
             raise ValueError("this rope has no winch (use RopeChain.wound_on_winch)")
+        p = self.params
+        notes = []
+        if r > p.winch_max_payout_speed:
+            notes.append(f"payout_rate {r:g} m/s clamped to {p.winch_max_payout_speed:g} m/s "
+                         f"(winch_max_payout_speed)")
+            r = float(p.winch_max_payout_speed)
+        elif r < -p.winch_max_heave_speed:
+            notes.append(f"payout_rate {r:g} m/s clamped to {-p.winch_max_heave_speed:g} m/s "
+                         f"(winch_max_heave_speed)")
+            r = -float(p.winch_max_heave_speed)
         self.payout_rate = r
+        return notes
 
     # ------------------------------------------------------------------ stepping
     def _pack(self):
@@ -388,9 +414,16 @@ class RopeChain:
 
     def _refresh(self, t=None, payout=0.0):
         """Recompute tensions and end forces for the current state (no time advance;
-        payout: rope sliding through the drum at this rate)."""
-        self._kernel(0.0, 0, payout, 0.0)
+        payout: rope sliding through the drum at this rate). Returns the kernel status."""
+        st = self._kernel(0.0, 0, payout, 0.0)
         self._collect_events(self.time if t is None else t)
+        return st
+
+    def _diverged_connection(self):
+        """Connection the kernel refused to part in its last call (see kernels.PART_MIN_ELASTIC),
+        or None."""
+        c = self._io[K.IO_DIAG, 0]
+        return None if c < 0 else int(c)
 
     def _collect_events(self, t0):
         ne = int(self._nev[0])
@@ -438,11 +471,25 @@ class RopeChain:
                 st = K.OK
         if st != K.OK:
             info = self._info
-            k, j = int(info[0]), int(info[1])
+            k, j = min(int(info[0]), n_sub - 1), int(info[1])  # n_sub: the end-of-step evaluation
             t_fail = self.time + (k + 1) * h
+            where = f"exchange step {self.step_count + 1}, sub-step {k + 1}/{n_sub} (t = {t_fail:.6f} s)"
+            c = self._diverged_connection()
+            if c is not None:
+                T, Te = float(self._io[K.IO_DIAG, 1]), float(self._io[K.IO_DIAG, 2])
+                n = self.n_elements
+                pair = (f"attachment a and element 0" if c == 0 else f"element {n - 1} and "
+                        f"attachment b" if c == n else f"elements {c - 1} and {c}")
+                raise RopeDivergedError(
+                    f"rope diverged at {where}, connection {c} ({pair}): "
+                    f"tension {T / 1e3:.1f} kN above the breaking load "
+                    f"{float(self.breaking_load[c]) / 1e3:.1f} kN, but its elastic part (EA x "
+                    f"axial strain) is only {Te / 1e3:.1f} kN: a damper or folded-link force of "
+                    f"a numerical or input blow-up, not a parting; state left at "
+                    f"t = {self.time:.6f} s", self.step_count + 1, t_fail, max(0, min(j, self.n_elements - 1)),
+                    connection=c)
             raise RopeDivergedError(
-                f"rope diverged at exchange step {self.step_count + 1}, sub-step {k + 1}/{n_sub} "
-                f"(t = {t_fail:.6f} s), element {j}: non-finite or absurd state; "
+                f"rope diverged at {where}, element {j}: non-finite or absurd state; "
                 f"state left at t = {self.time:.6f} s", self.step_count + 1, t_fail, j)
         self.time += dt
         self.step_count += 1
@@ -471,8 +518,13 @@ class RopeChain:
             # tensions at the end of the step: the attachments where they are then, the rope
             # still sliding through the drum
             self.att_pos[:] = pos0 + self.att_vel * dt
-            self._refresh(self.time + dt, self.payout_rate if self._winch_running() else 0.0)
-            self._mean_end_force[:] = imp_total * (1.0 / dt)
+            st = self._refresh(self.time + dt, self.payout_rate if self._winch_running() else 0.0) & ~K.PARTED
+            if st != K.OK:
+                info[0] = n_sub - 1
+                self._restore(snap)
+                self.att_pos[:] = pos0
+            else:
+                self._mean_end_force[:] = imp_total * (1.0 / dt)
         else:
             self.att_pos[:] = pos0
         return st

@@ -36,13 +36,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import fd_kernels as FK
-from .params import check_numbers, finite_vec3, read_mapping, shipped_rope_file
+from .params import check_numbers, finite_vec3, shipped_rope_file
+from .schema import (CableFile, RopeParamsError, check_density, read_yaml_mapping,
+                     validate_file)
 
 G0 = 9.80665  # m/s^2
 
 
-class FdCableParamsError(ValueError):
-    """Bad cable parameter; the message names the file and the key."""
+class FdCableParamsError(RopeParamsError):
+    """Bad cable parameter; the message names the file and the key (a RopeParamsError, so one
+    except clause serves both rope file kinds)."""
 
 
 class _Fail(Exception):
@@ -182,32 +185,21 @@ _FIELDS = {f.name for f in dataclasses.fields(FdCableParams)} - {"source"}
 
 
 def load_cable_params(path: str | os.PathLike) -> FdCableParams:
-    """Read a cable YAML file (flat mapping of the FdCableParams field names, `model: fd_cable`).
+    """Read a cable YAML file (schema.CableFile: the FdCableParams field names, `model:
+    fd_cable` required).
 
-    Raises FileNotFoundError (with the path) or FdCableParamsError (file + key).
+    Raises FileNotFoundError (with the path) or FdCableParamsError (file + key + expected).
     """
-    src, data = read_mapping(path, "cable", FdCableParamsError)
-    if "model" not in data:
-        raise FdCableParamsError(f"{src}: key 'model': missing (expected 'fd_cable')")
-    kw = {}
-    for k, v in data.items():
-        if k not in _FIELDS:
-            raise FdCableParamsError(
-                f"{src}: key '{k}': unknown key (known: {', '.join(sorted(_FIELDS))})")
-        if k in _INTS:
-            if _is_number(v) and float(v).is_integer():
-                v = int(v)
-        elif k not in _BOOLS and k not in ("model", "name"):
-            if isinstance(v, str):  # PyYAML reads 4.4e8 (no dot before e) as a string
-                try:
-                    v = float(v)
-                except ValueError:
-                    pass
-            if _is_number(v):
-                v = float(v)
-        kw[k] = v
+    src, data = read_yaml_mapping(path, "cable", FdCableParamsError)
+    f = validate_file(CableFile, data, src, FdCableParamsError)
+    kw = {k: getattr(f, k) for k in _FIELDS}
     p = FdCableParams(**kw, source=src)
     _validate(p, src)
+    if not 1.0e3 <= p.ea <= 1.0e10:  # schema.EA: also when derived as E pi d^2 / 4
+        raise FdCableParamsError(f"{src}: key 'youngs_modulus': E pi d^2 / 4 = {p.ea:g} N is "
+                                 f"outside the axial stiffness range 1e3..1e10 N")
+    if f.mass_per_length is not None:
+        check_density(src, f.mass_per_length, f.diameter, FdCableParamsError)
     return p
 
 

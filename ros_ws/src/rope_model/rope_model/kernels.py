@@ -41,6 +41,16 @@ DIVERGED = 1
 NEED_WS = 2  # ws holds fewer than N + 1 element slots: pass new_workspace(N)
 PARTED = 4  # flag or-ed into OK: parting events were recorded (io[IO_NEV] of them)
 STRICT_EQ25 = False  # compile-time switch, see the connections in run_substeps()
+# Parting or blow-up. A rope breaks when its material strain reaches the strain at break, so
+# at a genuine parting the spring part of the connection force, EA x strain (along the rope),
+# carries most of the breaking load; the axial damper (Eq 16, c = 2 zeta sqrt(EA mu)) only adds
+# to it. A tension that is mostly damper force needs the points to separate at more than
+# BL / (4 zeta sqrt(EA mu)) (58 m/s for Table 1), and a folded pair of links pulls sideways
+# with its axial strain negative: neither is a rope reaching its breaking strain, both are the
+# signature of a numerical or input blow-up (measured: partings pulled apart at 2 m/s or
+# stretched at 0.3 1/s carry 85-100 % elastically; theta = 0.5 instabilities 13-47 %, a
+# 1e6 m/s heave-in 0 %). Such a "parting" is reported as divergence, not as an event.
+PART_MIN_ELASTIC = 0.5
 # fused multiply-add allowed (results change at the round-off level only); no other
 # fast-math assumption: NaN and inf keep their meaning for the divergence check
 FMA = {"contract"}
@@ -66,7 +76,8 @@ P_PMAX = (17, 0)
 IO_ATT = 17  # columns 1, 2: attachment a, b on (1.0) or not (0.0)
 IO_INFO = 18  # columns 0, 1: divergence (sub-step, element); column 2: events recorded
 IO_NEV = (18, 2)
-IO_EVENTS = 19  # rows: parting events (t, c, T)
+IO_DIAG = 19  # a parting refused as a blow-up (PART_MIN_ELASTIC): (connection or -1, T, EA strain)
+IO_EVENTS = 20  # rows: parting events (t, c, T)
 N_EVENTS_MAX = 64
 IO_ROWS = IO_EVENTS + N_EVENTS_MAX
 # ws: float64 (6, cap, 5, 5), cap >= N + 1: 0 Ad, 1 Ao, 2 Wm (= D^-1 Ao), 3 per-element
@@ -373,6 +384,7 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
             bF[s, a] = io[IO_FORCE + s, a]
             io[IO_IMPULSE + s, a] = 0.0
     b_nev = io[IO_NEV]
+    io[IO_DIAG, 0] = -1.0
     # constants of the elements and connections: they depend on the lengths only (fixed
     # during the call, changed by the winch), recomputed when those differ from the last call
     same = ws[5, 1, 0, 0] == N
@@ -412,6 +424,7 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
             best_c = -1
             best_ratio = 1.0
             best_T = 0.0
+            best_el = 0.0
             for a in range(3):
                 io[IO_FORCE, a] = 0.0
                 io[IO_FORCE + 1, a] = 0.0
@@ -747,6 +760,8 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                             best_ratio = T / S[c, SB]
                             best_c = c
                             best_T = T
+                            # elastic part: EA x strain along the rope (see PART_MIN_ELASTIC)
+                            best_el = kc * ((Pp0 - Pn0) * n0 + (Pp1 - Pn1) * n1 + (Pp2 - Pn2) * n2)
                     else:
                         F[c, 1] = 1
                     S[c, ST] = T
@@ -953,12 +968,18 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                     bad = j  # singular: diverged unless a parting changes the system
             if best_c < 0:
                 break
+            if best_el < PART_MIN_ELASTIC * S[best_c, SB]:  # a blow-up, not a parting
+                io[IO_DIAG, 0] = best_c
+                io[IO_DIAG, 1] = best_T
+                io[IO_DIAG, 2] = best_el
+                bad = max(0, min(best_c, N - 1))
+                break
             _part(best_c, best_T, t, N, S, F, io)
         w8 = 0.5 * h if (step == 0 or step == n_sub) else h
         for s in range(2):
             for a in range(3):
                 io[IO_IMPULSE + s, a] += w8 * io[IO_FORCE + s, a]
-        if not full:
+        if not full and bad < 0:
             break
         if bad < 0:
             # -------------------------------------------- back substitution and update

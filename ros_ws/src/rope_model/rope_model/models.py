@@ -9,11 +9,11 @@ from __future__ import annotations
 from typing import List, Optional
 
 import numpy as np
-import yaml
 
 from rope_model.chain import RopeChain, RopeDivergedError
 from rope_model.fd_cable import FdCable, FdCableConvergenceError, load_cable_params
 from rope_model.params import load_rope_params
+from rope_model.schema import RopeParamsError, read_yaml_mapping
 
 MODELS = ("element_chain", "fd_cable")
 # What a model raises when it cannot go on; the node reports it and stops.
@@ -21,11 +21,13 @@ ModelFailure = (RopeDivergedError, FdCableConvergenceError)
 
 
 def rope_file_model(path: str) -> str:
-    with open(path) as f:
-        data = yaml.safe_load(f)
-    model = data.get("model", "element_chain") if isinstance(data, dict) else "element_chain"
+    """The file's model key (default element_chain). Raises FileNotFoundError, or
+    RopeParamsError (a ValueError) naming the file for bad YAML, a duplicate or empty file or
+    an unknown model."""
+    src, data = read_yaml_mapping(path, "rope", RopeParamsError)
+    model = data.get("model", "element_chain")
     if model not in MODELS:
-        raise ValueError(f"{path}: key 'model': expected one of {MODELS}, got {model!r}")
+        raise RopeParamsError(f"{src}: key 'model': expected one of {', '.join(MODELS)}, got {model!r}")
     return model
 
 
@@ -63,8 +65,10 @@ class ChainAdapter:
     def set_end(self, label: str, position, velocity) -> None:
         self.rope.set_end_kinematics(label, position, velocity)
 
-    def set_payout_rate(self, rate: float) -> None:
-        self.rope.set_payout_rate(rate)
+    def set_payout_rate(self, rate: float) -> List[str]:
+        """Winch order, m/s (+ pays out); clamped to the rope file's winch limits. Returns
+        the notes of any clamp (empty list: taken as given); ValueError for NaN / inf."""
+        return self.rope.set_payout_rate(rate)
 
     def step(self, dt: float) -> None:
         self.rope.step(dt)

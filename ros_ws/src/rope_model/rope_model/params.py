@@ -1,8 +1,9 @@
 """Rope parameters (seed 000, Table 1) and their YAML loader.
 
-All values are SI. Paper units are converted in the YAML comments / here, once.
-Errors name the file and the key, e.g.
-``table1.yaml: key 'diameter': expected a positive number, got -1``.
+All values are SI. Paper units are converted in the YAML comments / here, once. Files are
+checked against the schema in schema.py (required keys, physical ranges, unknown and
+duplicate keys); errors name the file, the key and what was expected, e.g.
+``table1.yaml: key 'diameter': expected a number in [0.001, 0.5] m, got -1.0``.
 """
 from __future__ import annotations
 
@@ -12,15 +13,16 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
-import yaml
+
+from .schema import (RopeFile, RopeParamsError, check_breaking_strain, check_density,
+                     read_yaml_mapping, validate_file)
 
 G0 = 9.80665  # m/s^2, standard gravity: kgf -> N and tf -> N (Table 1)
 TONNE_FORCE = 1000.0 * G0  # N per tf (Table 1 "16 ton" breaking strength)
 KNOT = 1852.0 / 3600.0  # m/s per knot (section 4.4-4.6 speeds)
 
-
-class RopeParamsError(ValueError):
-    """Bad rope parameter; the message names the file and the key."""
+__all__ = ["G0", "KNOT", "TONNE_FORCE", "RopeParams", "RopeParamsError", "load_rope_params",
+           "default_rope_path", "shipped_rope_file", "finite_vec3"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +56,9 @@ class RopeParams:
     water_density: float = 1025.0  # kg/m^3
     air_density: float = 1.225  # kg/m^3 (drag of the emerged part)
     gravity: float = G0  # m/s^2
+    # winch at end a: pay-out / heave-in orders are clamped to these (schema.RopeFile)
+    winch_max_payout_speed: float = 3.0  # m/s
+    winch_max_heave_speed: float = 3.0  # m/s
     name: str = "rope"
     source: str = field(default="<defaults>", compare=False)
 
@@ -93,6 +98,7 @@ _NONNEG = (
     "damping_ratio_axial", "damping_ratio_transverse", "damping_ratio_rotational",
     "air_density", "gravity",
 )
+_POSITIVE += ("winch_max_payout_speed", "winch_max_heave_speed")
 _OPTIONAL_POSITIVE = ("axial_stiffness", "min_length")
 
 
@@ -135,48 +141,26 @@ _FIELDS = {f.name for f in dataclasses.fields(RopeParams)} - {"source"}
 
 
 def read_mapping(path, what: str, error, empty_ok: bool = False):
-    """(file name, dict) of a YAML parameter file that must hold a mapping; a missing file
-    raises FileNotFoundError with the path, bad YAML or another top-level type raises
-    error naming the file. empty_ok: an empty file reads as {}."""
-    path = os.fspath(path)
-    src = os.path.basename(path)
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"{what} parameter file not found: {path}")
-    with open(path, encoding="utf-8") as fh:
-        try:
-            data = yaml.safe_load(fh)
-        except yaml.YAMLError as exc:
-            raise error(f"{src}: not valid YAML: {exc}") from None
-    if data is None and empty_ok:
-        data = {}
-    if not isinstance(data, dict):
-        raise error(f"{src}: expected a mapping of keys, got {type(data).__name__}")
-    return src, dict(data)
+    """(file name, dict) of a YAML parameter file (schema.read_yaml_mapping: duplicate keys,
+    bad YAML and an empty file are errors naming the file; empty_ok is ignored)."""
+    return read_yaml_mapping(path, what, error)
 
 
 def load_rope_params(path: str | os.PathLike) -> RopeParams:
-    """Read a rope YAML file (flat mapping of the RopeParams field names; an optional
-    ``model: element_chain`` key, the rope node's model selector, is accepted).
+    """Read an element chain rope file (schema.RopeFile: the RopeParams field names, an
+    optional ``model: element_chain``, the rope node's model selector).
 
-    Raises FileNotFoundError (with the path) or RopeParamsError (file + key).
+    Raises FileNotFoundError (with the path) or RopeParamsError (file + key + expected).
     """
-    src, data = read_mapping(path, "rope", RopeParamsError, empty_ok=True)
-    model = data.pop("model", "element_chain")  # the rope node's model selector
-    if model != "element_chain":
-        raise RopeParamsError(
-            f"{src}: key 'model': this loader reads 'element_chain' rope files, got {model!r}")
-    for k in data:
-        if k not in _FIELDS:
-            raise RopeParamsError(
-                f"{src}: key '{k}': unknown key (known: {', '.join(sorted(_FIELDS))})")
-    kw = {}
-    for k, v in data.items():
-        if k in ("n_elements",):
-            if _is_number(v) and float(v).is_integer() and not isinstance(v, bool):
-                v = int(v)
-        elif k != "name" and _is_number(v):
-            v = float(v)
-        kw[k] = v
+    src, data = read_yaml_mapping(path, "rope", RopeParamsError)
+    f = validate_file(RopeFile, data, src, RopeParamsError)
+    if f.axial_stiffness is not None:
+        check_breaking_strain(src, "axial_stiffness", f.breaking_load, f.axial_stiffness)
+    check_density(src, f.mass_per_length, f.diameter)
+    if f.min_length is not None and f.min_length > f.length:
+        raise RopeParamsError(f"{src}: key 'min_length': expected at most length ({f.length:g} m), "
+                              f"got {f.min_length!r}")
+    kw = {k: getattr(f, k) for k in _FIELDS if k in RopeFile.model_fields}
     p = RopeParams(**kw, source=src)
     _validate(p, src)
     return p

@@ -156,7 +156,11 @@ class RopeNode(SteppedNode):
         if self.rope is None and msg.step == 0:
             self._take_attachments(msg)
             if all(e.position is not None for e in self.ends):
-                self._build()
+                try:
+                    self._build()
+                except ValueError as exc:  # e.g. a straight layout already beyond the breaking load
+                    raise ModelDiverged(f"rope '{self.rope_name}' cannot be laid out between its ends' "
+                                        f"step-0 positions: {exc}") from exc
         return True
 
     def _take_attachments(self, msg: cdr.AttachmentsIn) -> None:

@@ -1,0 +1,256 @@
+"""Schemas of the rope files (element chain, ropes/table1.yaml) and cable files (fd cable,
+ropes/cable_001.yaml) and the strict YAML reader both use.
+
+pydantic models with unknown keys forbidden and strict types (a string or a bool is not a
+number, 11.0 is not an element count), the same approach as scenario_runner's scenario
+format. Every error names the file, the key, what was expected and what was given, e.g.
+``table1.yaml: key 'diameter': expected a number in [0.001, 0.5] m, got -1.0``. The ranges
+are physical (comments say where each bound comes from): a value outside them is a slip of
+units or of a digit, and would otherwise run as a silent absurdity (EA 1e15 N, water density
+1e-9 kg/m^3).
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import typing
+from typing import Literal, Optional
+
+import annotated_types as at
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+G0 = 9.80665  # m/s^2, standard gravity
+
+
+class RopeParamsError(ValueError):
+    """Bad rope or cable file / parameter; the message names the file and the key."""
+
+
+# ------------------------------------------------------------------ strict YAML reader
+class StrictLoader(yaml.SafeLoader):
+    """SafeLoader that refuses duplicate mapping keys (PyYAML silently keeps the last one) and
+    reads 1e9 / 4.4e8 as numbers like YAML 1.2 (YAML 1.1 wants a dot: "4.4e+8")."""
+
+
+class DuplicateKeyError(yaml.MarkedYAMLError):
+    pass
+
+
+def _construct_mapping(loader, node, deep=False):
+    loader.flatten_mapping(node)
+    seen = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        try:
+            first = seen.get(key)
+        except TypeError:  # unhashable key: SafeLoader's own error follows
+            continue
+        if first is not None:
+            raise DuplicateKeyError(
+                problem=f"key '{key}': duplicate key (first given on line {first})",
+                problem_mark=key_node.start_mark)
+        seen[key] = key_node.start_mark.line + 1
+    return yaml.SafeLoader.construct_mapping(loader, node, deep)
+
+
+StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"))
+
+
+def read_yaml_mapping(path, what: str, error=RopeParamsError):
+    """(file name, dict) of a YAML parameter file that must hold a non-empty mapping. A missing
+    file raises FileNotFoundError with the path; bad YAML, a duplicate key, an empty file or
+    another top-level type raise error naming the file (and the line where YAML knows it)."""
+    path = os.fspath(path)
+    src = os.path.basename(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"{what} parameter file not found: {path}")
+    with open(path, encoding="utf-8") as fh:
+        try:
+            data = yaml.load(fh, Loader=StrictLoader)  # noqa: S506 (a SafeLoader)
+        except yaml.MarkedYAMLError as exc:
+            mark = exc.problem_mark or exc.context_mark
+            where = f"line {mark.line + 1}: " if mark is not None else ""
+            if isinstance(exc, DuplicateKeyError):
+                raise error(f"{src}: {where}{exc.problem}") from None
+            why = " ".join(s for s in (exc.context, exc.problem) if s)
+            raise error(f"{src}: {where}not valid YAML: {why}") from None
+        except yaml.YAMLError as exc:
+            raise error(f"{src}: not valid YAML: {exc}") from None
+    if data is None:
+        raise error(f"{src}: the file is empty: expected a mapping of {what} parameters")
+    if not isinstance(data, dict):
+        raise error(f"{src}: expected a mapping of {what} parameters, got {type(data).__name__}")
+    return src, dict(data)
+
+
+# ------------------------------------------------------------------ schema helpers
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+def num(default, lo, hi, unit="", *, lo_open=False):
+    """A number field in [lo, hi] (lo_open: (lo, hi]); default ... = required."""
+    low = {"gt": lo} if lo_open else {"ge": lo}
+    return Field(default, le=hi, json_schema_extra={"unit": unit}, **low)
+
+
+def _expected(schema, key) -> str:
+    f = schema.model_fields.get(key)
+    if f is None:
+        return "a known key"
+    ann = f.annotation
+    optional = False
+    if typing.get_origin(ann) is typing.Union:
+        args = [a for a in typing.get_args(ann) if a is not type(None)]
+        optional, ann = True, args[0]
+    if typing.get_origin(ann) is Literal:
+        text = "one of " + ", ".join(repr(a) for a in typing.get_args(ann))
+    elif ann is bool:
+        text = "true or false"
+    elif ann is str:
+        text = "a string"
+    else:
+        lo = hi = None
+        lb = "["
+        for m in f.metadata:
+            if isinstance(m, at.Ge):
+                lo = m.ge
+            elif isinstance(m, at.Gt):
+                lo, lb = m.gt, "("
+            elif isinstance(m, at.Le):
+                hi = m.le
+        kind = "an integer" if ann is int else "a number"
+        text = f"{kind} in {lb}{lo:g}, {hi:g}]" if lo is not None and hi is not None else kind
+        unit = (f.json_schema_extra or {}).get("unit", "")
+        if unit:
+            text += f" {unit}"
+    return text + (" or null" if optional else "")
+
+
+def validate_file(schema, data: dict, src: str, error=RopeParamsError):
+    """schema instance of data; error lists every bad key (values first, missing keys last)."""
+    try:
+        return schema.model_validate(data)
+    except ValidationError as exc:
+        lines = []
+        for e in exc.errors():
+            key = ".".join(str(p) for p in e["loc"] if isinstance(p, str)) or "(top)"
+            if e["type"] == "extra_forbidden":
+                known = ", ".join(sorted(schema.model_fields))
+                lines.append((1, f"{src}: key '{key}': unknown key (misspelt? known: {known})"))
+            elif e["type"] == "missing":
+                lines.append((2, f"{src}: key '{key}': required key is missing (expected "
+                                 f"{_expected(schema, key)})"))
+            else:
+                lines.append((0, f"{src}: key '{key}': expected {_expected(schema, key)}, "
+                                 f"got {e.get('input')!r}"))
+        seen = []
+        for _, line in sorted(lines, key=lambda x: x[0]):
+            if line not in seen:
+                seen.append(line)
+        raise error("\n".join(seen)) from None
+
+
+def check_breaking_strain(src, key, breaking_load, ea, error=RopeParamsError):
+    """breaking_load / EA is the strain at break of a linear rope: steel wire rope about
+    0.01-0.02, HMPE 0.035, polyester 0.12-0.15, nylon 0.2-0.4 (Table 1: 0.15). Outside
+    0.005-0.8 the pair is not a rope (EA 1e12 N with Table 1's 157 kN breaks at 1.6e-7)."""
+    eps = breaking_load / ea
+    if not 0.005 <= eps <= 0.8:
+        raise error(f"{src}: key '{key}': breaking_load / {key} = {breaking_load:g} N / {ea:g} N "
+                    f"= {eps:.3g} is not a rope's strain at break (expected 0.005..0.8)")
+
+
+def check_density(src, mass_per_length, diameter, error=RopeParamsError):
+    """Mass per metre over the nominal section pi d^2 / 4: from a floating fibre rope with its
+    voids (polypropylene, about 500 kg/m^3) to solid steel (7850); Table 1 is 878 kg/m^3."""
+    rho = mass_per_length / (0.25 * math.pi * diameter ** 2)
+    if not 300.0 <= rho <= 9000.0:
+        raise error(f"{src}: key 'mass_per_length': {mass_per_length:g} kg/m on a {diameter:g} m "
+                    f"diameter is {rho:.4g} kg/m^3 over the section (expected 300..9000 kg/m^3: "
+                    f"wrong unit or diameter?)")
+
+
+# ------------------------------------------------------------------ the two file kinds
+# Shared bounds. Towlines are tens of m to about 2 km (deep-sea tow wires); diameters 2 mm
+# (a heaving line) to 0.5 m (the largest fibre hawsers are about 0.3 m). EA: a 200 mm steel
+# wire rope has EA ~ 3e9 N (E ~ 100 GPa on its metallic area), 1e10 N leaves margin; 1e3 N is
+# a rubber cord. Drag (Eq 11 / seed 001 Eq 6): normal C_D of a cylinder 1.0-1.2, stranded
+# ropes up to about 2; skin friction 0.01-0.03. Environment: water 1000 (fresh) .. 1025 (sea)
+# kg/m^3, air 1.1 (40 degC) .. 1.42 (-30 degC), gravity 9.78-9.83 on the Earth's surface
+# (bounds as the scenario format's environment).
+LEN = (1.0, 1.0e4, "m")
+DIAM = (0.001, 0.5, "m")
+MASS = (0.001, 1000.0, "kg/m")
+EA = (1.0e3, 1.0e10, "N")
+RHO_W = (900.0, 1100.0, "kg/m^3")
+GRAV = (9.0, 10.5, "m/s^2")
+
+
+class RopeFile(_Strict):
+    """Element chain rope file (seed 000; ropes/table1.yaml)."""
+
+    model: Literal["element_chain"] = "element_chain"
+    name: str = "rope"
+    # required: the rope itself
+    length: float = num(..., *LEN)
+    diameter: float = num(..., *DIAM)
+    mass_per_length: float = num(..., *MASS)
+    breaking_load: float = num(..., 100.0, 1.0e8, "N")  # 100 N twine .. 100 MN (x3 the largest hawsers)
+    elongation_at_break: float = num(..., 0.005, 0.8, "(strain)")  # see check_breaking_strain
+    drag_normal: float = num(..., 0.0, 3.0)
+    drag_tangential: float = num(..., 0.0, 0.5)
+    # optional, with the Table 1 / paper defaults
+    axial_stiffness: Optional[float] = num(None, *EA)  # null -> breaking_load / elongation
+    tangential_area_factor: float = num(1.0, 0.0, 4.0)  # 1 (Eq 10) or pi (MoorDyn)
+    added_mass_coefficient: float = num(1.0, 0.0, 2.0)  # cylinder: 1
+    # Eq 17 ambiguity: the prose reading needs axial 5.0; 10 = far overdamped
+    damping_ratio_axial: float = num(0.5, 0.0, 10.0)
+    damping_ratio_transverse: float = num(0.05, 0.0, 10.0)
+    damping_ratio_rotational: float = num(0.5, 0.0, 10.0)
+    n_elements: int = num(11, 1, 2000)  # the rope node's own limit
+    min_length: Optional[float] = num(None, 0.0, 1.0e4, "m", lo_open=True)
+    water_density: float = num(1025.0, *RHO_W)
+    air_density: float = num(1.225, 0.9, 1.5, "kg/m^3")
+    gravity: float = num(G0, *GRAV)
+    # winch at end a: largest pay-out / heave-in speeds; orders beyond are clamped. Towing
+    # winches haul 0.3-1 m/s at full pull and run a light line at 2-3 m/s; 3.0 m/s keeps the
+    # shipped scenarios (section 4.6 pays out at 5 kn = 2.5722 m/s). 10 m/s: no winch is faster.
+    winch_max_payout_speed: float = num(3.0, 0.0, 10.0, "m/s", lo_open=True)
+    winch_max_heave_speed: float = num(3.0, 0.0, 10.0, "m/s", lo_open=True)
+
+
+class CableFile(_Strict):
+    """Finite-difference cable file (seed 001; ropes/cable_001.yaml)."""
+
+    model: Literal["fd_cable"]
+    name: str = "cable"
+    length: float = num(..., *LEN)
+    diameter: float = num(..., *DIAM)
+    weight_in_water: float = num(..., 0.0, 1.0e4, "N/m")  # w0 of Eq 2; 200 mm steel: ~1.4e3
+    youngs_modulus: float = num(..., 1.0e6, 3.0e11, "Pa")  # soft elastomer .. steel (2.1e11)
+    drag_tangential: float = num(..., 0.0, 0.5)
+    drag_normal: float = num(..., 0.0, 3.0)
+    drag_binormal: float = num(..., 0.0, 3.0)
+    n_nodes: int = num(7, 3, 2000)
+    mass_per_length: Optional[float] = num(None, *MASS)  # null -> w0/g + rho A
+    axial_stiffness: Optional[float] = num(None, *EA)  # null -> E A
+    # null -> E pi d^4 / 64; 1e8 N m^2 = a solid 0.3 m steel bar, stiffer than any cable
+    bending_stiffness: Optional[float] = num(None, 0.0, 1.0e8, "N m^2", lo_open=True)
+    added_mass_coefficient: float = num(1.0, 0.0, 2.0)
+    added_mass_full_acceleration: bool = True
+    water_density: float = num(1025.0, *RHO_W)
+    gravity: float = num(G0, *GRAV)
+    current_along_heading: float = num(-1.0, -10.0, 10.0, "m/s")  # the rope node's current range
+    tow_speed: float = num(1.0, -20.0, 20.0, "m/s")
+    time_weight: float = num(0.5, 0.5, 1.0)  # Eq 13: 0.5 centred .. 1 fully implicit
+    newton_tol: float = num(1.0e-9, 0.0, 1.0e-2, lo_open=True)
+    newton_max_iter: int = num(25, 1, 200)
+    max_halvings: int = num(4, 0, 12)
+    rebase_angle: float = num(0.7, 0.0, 1.4, "rad", lo_open=True)  # theta = pi/2 is singular
