@@ -75,7 +75,14 @@ class RateLimitedLog:
             return False
         extra = self._suppressed.pop(kind, 0)
         self._last[kind] = now
-        getattr(self.logger, level)(text + (f" ({extra} more like it since the last report)" if extra else ""))
+        text += f" ({extra} more like it since the last report)" if extra else ""
+        # one call site per severity: rclpy refuses a call site whose severity changes
+        if level == "error":
+            self.logger.error(text)
+        elif level == "warning":
+            self.logger.warning(text)
+        else:
+            self.logger.info(text)
         return True
 
     @property
