@@ -23,7 +23,10 @@ from mcap.writer import CompressionType, Writer
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
 
+from rclpy.serialization import deserialize_message
+
 from sim_plumbing.record_feed import PipeReader
+from sim_plumbing.stepping import RateLimitedLog
 
 PRIMITIVES = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
               "int64", "uint64", "string", "wstring"}
@@ -125,6 +128,8 @@ class McapRecorder(Node):
         self._pending: List[Tuple[str, int, int, bytes]] = []
         self.fed_topics = set(fed_topics)
         self.pipes: List[PipeReader] = []
+        self.refused: Dict[str, int] = {}  # topic -> undecodable messages not recorded
+        self.complaints = RateLimitedLog(self.get_logger())
         for topic, msg_class, qos in topics:
             self.add_topic(topic, msg_class, qos)
 
@@ -143,7 +148,7 @@ class McapRecorder(Node):
         reader_qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=qos.reliability,
                                 durability=qos.durability)
         self.subscriptions_by_topic[topic] = self.create_subscription(
-            msg_class, topic, lambda data, t=topic: self._write(t, data), reader_qos, raw=True)
+            msg_class, topic, lambda data, t=topic, c=msg_class: self._write_checked(t, c, data), reader_qos, raw=True)
 
     def tap(self, topic: str, callback: Callable[[bytes], None]) -> bool:
         """Hand every recorded message of topic (serialized) to callback as well; False if the
@@ -172,6 +177,18 @@ class McapRecorder(Node):
             self._queue(topic, log_time_ns, data)
 
     def _write(self, topic: str, data: bytes) -> None:
+        self._queue(topic, self.log_time_ns, data)
+
+    def _write_checked(self, topic: str, msg_class, data: bytes) -> None:
+        """Messages from anybody on the domain: bytes that are not a message of the topic's type
+        are refused (logged, counted in self.refused), so every reader can decode the file."""
+        try:
+            deserialize_message(data, msg_class)
+        except Exception as exc:  # noqa: BLE001 - whatever the type support says, the bytes are not the type
+            self.refused[topic] = self.refused.get(topic, 0) + 1
+            self.complaints("undecodable " + topic, f"{topic}: {len(data)} bytes that are not a "
+                            f"{msg_class.__name__} not recorded: {exc}")
+            return
         self._queue(topic, self.log_time_ns, data)
 
     def _queue(self, topic: str, log_time_ns: int, data: bytes) -> None:

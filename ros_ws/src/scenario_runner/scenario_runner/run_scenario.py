@@ -148,6 +148,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     args = parser.parse_args(rclpy.utilities.remove_ros_args(argv))
 
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        sys.stderr.write(f"run_scenario: --duration {args.duration!r}: expected a finite number of seconds > 0\n")
+        return 2
     path = scenario_path(args.scenario)
     try:
         sc = load_scenario(path)
@@ -195,7 +198,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     print(summary(sc, stats, mon))
     if recorder:
         print(f"  recording: {os.path.abspath(output)} ({sum(recorder.counts.values())} messages on "
-              f"{len(recorder.counts)} topics)")
+              f"{len(recorder.counts)} topics)" + (f"; not recorded, undecodable: {recorder.refused}"
+                                                   if recorder.refused else ""))
     print(f"  node logs: {log_dir}")
     return 0
 
