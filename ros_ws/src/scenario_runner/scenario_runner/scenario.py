@@ -25,10 +25,12 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any, Dict, List, Literal, Optional, Tuple
+from typing import Any, Dict, List, Literal, Optional
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from typing_extensions import Annotated
+
+from tug_dynamics.yaml_input import YamlInputError, load_yaml
 
 
 class ScenarioError(ValueError):
@@ -36,19 +38,29 @@ class ScenarioError(ValueError):
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # strict: "1" and true are not numbers; no NaN or inf anywhere (the nodes refuse them)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+# The nodes' parameter ranges (vessel_node.py, rope_node.py declare_parameter): a value outside
+# them makes the node refuse to start, so the scenario refuses it first.
+MAX_COORD = 1e7       # m, initial_x / initial_y
+MAX_CURRENT = 10.0    # m/s per component, current_east / current_north
+Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD)]
+Point3 = Annotated[List[Coord], Field(min_length=3, max_length=3)]
 
 
 class Environment(_Strict):
-    current: Tuple[float, float] = (0.0, 0.0)  # east, north, m/s
+    current: Annotated[List[Annotated[float, Field(ge=-MAX_CURRENT, le=MAX_CURRENT)]],
+                       Field(min_length=2, max_length=2)] = [0.0, 0.0]  # east, north, m/s
     water_density: float = Field(1025.0, gt=900.0, lt=1100.0)
     gravity: float = Field(9.80665, gt=9.0, lt=10.5)
 
 
 class InitialState(_Strict):
-    x: float = 0.0  # m east
-    y: float = 0.0  # m north
-    heading_deg: float = 0.0  # 0 = bow east, counter-clockwise positive (REP-103)
+    x: Coord = 0.0  # m east
+    y: Coord = 0.0  # m north
+    heading_deg: float = Field(0.0, ge=-360.0, le=360.0)  # 0 = bow east, counter-clockwise positive (REP-103)
     speed: float = Field(0.0, ge=-30.0, le=40.0)  # m/s surge
     # Orders held from the start with the engine and rudder already there (e.g. "turn from
     # 9 kn at half ahead"); 0 keeps the model's own start.
@@ -60,13 +72,13 @@ class Motion(_Strict):
     """Prescribed motion (seed 000 section 4 tug tracks), in the initial frame."""
     type: Literal["constant_speed", "sinusoidal_sway", "acceleration", "turn"]
     speed: float = Field(ge=0.0, le=40.0)  # m/s, U or U_max
-    amplitude: float = Field(0.0, ge=0.0)  # m
-    period: float = Field(0.0, ge=0.0)  # s
-    acceleration: float = Field(0.0, ge=0.0)  # m/s^2
+    amplitude: float = Field(0.0, ge=0.0, le=1e3)  # m
+    period: float = Field(0.0, ge=0.0, le=1e4)  # s
+    acceleration: float = Field(0.0, ge=0.0, le=10.0)  # m/s^2
     heading: Literal["track", "fixed"] = "track"
-    turn_rate_deg: float = 0.0  # deg/s, positive to port
-    turn_start: float = Field(0.0, ge=0.0)  # s
-    turn_duration: float = Field(0.0, ge=0.0)  # s
+    turn_rate_deg: float = Field(0.0, ge=-57.29, le=57.29)  # deg/s, positive to port (node: +-1 rad/s)
+    turn_start: float = Field(0.0, ge=0.0, le=1e6)  # s
+    turn_duration: float = Field(0.0, ge=0.0, le=1e6)  # s
 
     @model_validator(mode="after")
     def _complete(self):
@@ -93,10 +105,10 @@ class RopeSpec(_Strict):
     rope_file: str = "table1.yaml"
     end_a: str
     end_b: str
-    end_a_position: Optional[Tuple[float, float, float]] = None
-    end_b_position: Optional[Tuple[float, float, float]] = None
+    end_a_position: Optional[Point3] = None
+    end_b_position: Optional[Point3] = None
     layout: Literal["straight", "slack", "winch"] = "straight"
-    deployed_length: Optional[float] = Field(None, gt=0.0)
+    deployed_length: Optional[float] = Field(None, gt=0.0, le=1e5)  # also <= the rope file's length
     n_elements: Optional[int] = Field(None, ge=1, le=2000)
 
 
@@ -107,7 +119,7 @@ class Event(_Strict):
     engine_order: Optional[float] = Field(None, ge=-1.0, le=1.0)
     steering_deg: Optional[float] = Field(None, ge=-90.0, le=90.0)
     anchor: Optional[Literal["let_go", "heave_up"]] = None
-    payout_rate: Optional[float] = None
+    payout_rate: Optional[float] = Field(None, ge=-10.0, le=10.0)  # m/s; winches run below 2 m/s
 
     @model_validator(mode="after")
     def _one_target(self):
@@ -127,8 +139,9 @@ class AutopilotSpec(_Strict):
     the command the vessel applies from step k+1."""
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")  # ROS namespace of the controller
     vessel: str
-    package: str = "scenario_runner"
-    executable: str = "autopilot"
+    # a package and an executable name, never a path (looked up in lib/<package>/ like `ros2 run`)
+    package: str = Field("scenario_runner", pattern=r"^[A-Za-z0-9_]+$")
+    executable: str = Field("autopilot", pattern=r"^[A-Za-z0-9_.-]+$")
     params: Dict[str, Any] = Field(default_factory=dict)  # ROS parameters of the controller
 
 
@@ -138,9 +151,9 @@ class Recording(_Strict):
 
 
 class Scenario(_Strict):
-    name: str
+    name: str = Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$", max_length=100)  # names output files: no paths
     description: str = ""
-    duration: float = Field(gt=0.0)
+    duration: float = Field(gt=0.0, le=1e7)  # s (1e7 s: 115 days)
     exchange_rate: float = Field(50.0, ge=1.0, le=1000.0)
     mode: Literal["lockstep", "realtime"] = "lockstep"
     environment: Environment = Environment()
@@ -175,24 +188,24 @@ def _key_path(loc) -> str:
 
 def _explain(err: dict) -> str:
     if err["type"] == "extra_forbidden":
-        return "unknown key (misspelt?)"
+        return f"unknown key (misspelt?), value {err['input']!r}"
     if err["type"] == "missing":
         return "required key is missing"
-    return err["msg"]
+    return f"{err['msg']}, got {err['input']!r}"
 
 
 def load_scenario(path: str, check_files: bool = True) -> Scenario:
-    """Read and validate a scenario; with check_files also resolve every ship and rope file and
-    check that each rope end names an attachment of its vessel."""
+    """Read and validate a scenario; with check_files also load every ship and rope file, check
+    the rope lengths and ends against them, and find every autopilot executable. Everything a
+    node would refuse at start-up is refused here, as ScenarioError naming file, key and value."""
     if not os.path.isfile(path):
         raise ScenarioError(f"scenario file '{path}' not found")
     try:
-        with open(path) as f:
-            data = yaml.safe_load(f)
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"{path}: not valid YAML: {exc}") from None
+        data = load_yaml(path)  # duplicate keys are errors; messages carry the line
+    except YamlInputError as exc:
+        raise ScenarioError(f"{path}: {exc}") from None
     if not isinstance(data, dict):
-        raise ScenarioError(f"{path}: expected a mapping of scenario keys at the top level")
+        raise ScenarioError(f"{path}: expected a mapping of scenario keys at the top level, got {type(data).__name__}")
     try:
         sc = Scenario.model_validate(data)
     except ValidationError as exc:
@@ -202,6 +215,63 @@ def load_scenario(path: str, check_files: bool = True) -> Scenario:
     if check_files:
         _check_files(path, sc)
     return sc
+
+
+# ROS parameters of `scenario_runner autopilot` (autopilot.py declare_parameter): name -> the
+# accepted type and range. The node refuses a value of another type or outside the range, and
+# ignores a parameter it does not declare (so a misspelt one would pass silently).
+_NUMBER = (int, float)
+AUTOPILOT_PARAMS: Dict[str, tuple] = {
+    "mode": (str, ("heading", "track")), "speed_control": (bool, None), "speed_source": (str, ("status", "odom")),
+    "track": ((list, str), None),
+    "heading": (_NUMBER, (-360.0, 360.0)), "speed": (_NUMBER, (-10.0, 20.0)), "engine_order": (_NUMBER, (-1.0, 1.0)),
+    "lookahead": (_NUMBER, (1.0, 1e4)), "acceptance_radius": (_NUMBER, (0.0, 1e4)),
+    "heading_kp": (_NUMBER, (0.0, 100.0)), "heading_ki": (_NUMBER, (0.0, 10.0)), "heading_kd": (_NUMBER, (0.0, 1000.0)),
+    "heading_integral_band_deg": (_NUMBER, (0.0, 180.0)), "heading_integral_limit_deg": (_NUMBER, (0.0, 90.0)),
+    "max_steering_deg": (_NUMBER, (0.1, 90.0)), "speed_kp": (_NUMBER, (0.0, 10.0)), "speed_ki": (_NUMBER, (0.0, 10.0)),
+    "speed_full_ahead": (_NUMBER, (0.1, 50.0)), "speed_exponent": (_NUMBER, (0.2, 5.0)),
+    "speed_integral_band": (_NUMBER, (0.0, 50.0)), "speed_integral_limit": (_NUMBER, (0.0, 2.0)),
+    "min_engine_order": (_NUMBER, (-1.0, 1.0)), "max_engine_order": (_NUMBER, (-1.0, 1.0)),
+    "odom_timeout": (_NUMBER, (0.1, 3600.0)), "log_period": (_NUMBER, (0.0, 3600.0)),
+}
+_RUNNER_PARAMS = ("vessel", "exchange_rate", "lockstep", "use_sim_time")  # conductor.node_specs sets these
+
+
+def _check_autopilot_params(path: str, i: int, a: AutopilotSpec) -> None:
+    for name, value in a.params.items():
+        key = f"autopilots[{i}].params.{name}"
+        if name in _RUNNER_PARAMS:
+            raise ScenarioError(f"{path}: key '{key}': set by the runner (from the scenario), not a parameter to give")
+        if a.package != "scenario_runner" or a.executable != "autopilot":
+            continue  # another controller: its parameters are its own
+        if name not in AUTOPILOT_PARAMS:
+            raise ScenarioError(f"{path}: key '{key}': unknown parameter of scenario_runner/autopilot (misspelt?); "
+                                f"known: {sorted(AUTOPILOT_PARAMS)}")
+        kind, allowed = AUTOPILOT_PARAMS[name]
+        if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
+            raise ScenarioError(f"{path}: key '{key}': wrong type, got {value!r}")
+        if kind is _NUMBER and not (math.isfinite(value) and allowed[0] <= value <= allowed[1]):
+            raise ScenarioError(f"{path}: key '{key}': must be in [{allowed[0]:g}, {allowed[1]:g}], got {value!r}")
+        if kind is str and value not in allowed:
+            raise ScenarioError(f"{path}: key '{key}': expected one of {list(allowed)}, got {value!r}")
+    if a.package != "scenario_runner" or a.executable != "autopilot":
+        return
+    from scenario_runner.autopilot_law import AutopilotConfig, parse_waypoints
+    p = a.params
+    try:
+        waypoints = ()
+        if p.get("mode", "heading") == "track":
+            track = p.get("track", "")
+            if isinstance(track, str):
+                track = [float(v) for v in track.strip().strip("[]").replace(",", " ").split()]
+            if not all(isinstance(v, _NUMBER) and not isinstance(v, bool) for v in track):
+                raise ValueError(f"track: expected numbers x1, y1, x2, y2, ..., got {p.get('track')!r}")
+            waypoints = parse_waypoints(track)
+        AutopilotConfig(mode=p.get("mode", "heading"), waypoints=waypoints,
+                        min_engine_order=float(p.get("min_engine_order", 0.0)),
+                        max_engine_order=float(p.get("max_engine_order", 1.0))).check()
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: key 'autopilots[{i}].params': {exc}") from None
 
 
 def _check_references(path: str, sc: Scenario) -> None:
@@ -240,6 +310,15 @@ def _check_references(path: str, sc: Scenario) -> None:
         if a.vessel in driven:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' already has an autopilot")
         driven[a.vessel] = a.name
+        _check_autopilot_params(path, i, a)
+    if sc.steps < 1:
+        raise ScenarioError(f"{path}: key 'duration': {sc.duration} s is less than one step at "
+                            f"{sc.exchange_rate:g} Hz (exchange_rate)")
+    for i, r in enumerate(sc.ropes):
+        if r.deployed_length is not None and r.layout == "straight":
+            # the node ignores it: a straight rope is laid with the rope file's length
+            raise ScenarioError(f"{path}: key 'ropes[{i}].deployed_length': only for layout slack or winch "
+                                f"(layout is straight: the rope file's length is laid out)")
     for i, ev in enumerate(sc.events):
         if ev.vessel is not None and ev.vessel not in vessels:
             raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is not in 'vessels' ({vessels})")
@@ -267,35 +346,97 @@ def resolve(package: str, subdir: str, name: str, scenario_path: str) -> str:
     return os.path.join(get_package_share_directory(package), subdir, name)
 
 
+def _executable(package: str, executable: str) -> Optional[str]:
+    """Where `ros2 run` finds it (the lookup of conductor.executable_path, without importing rclpy)."""
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        cand = os.path.join(prefix, "lib", package, executable)
+        if prefix and os.access(cand, os.X_OK):
+            return cand
+    return None
+
+
+def _load_error(exc: Exception) -> str:
+    # loaders' own errors already name their file and key; anything else gets its type named
+    if isinstance(exc, (ValueError, FileNotFoundError)):
+        return str(exc)
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _end_point(path: str, sc: Scenario, r: RopeSpec, end: str, points: Dict[str, Dict[str, Any]]):
+    """World position of a rope end at the start (vessel initial pose + attachment), or None."""
+    spec = getattr(r, f"end_{end}")
+    if "/" not in spec:
+        return getattr(r, f"end_{end}_position")
+    vessel, point = spec.split("/")
+    v = next(v for v in sc.vessels if v.name == vessel)
+    ax, ay, az = points[vessel][point]
+    c, s = math.cos(heading_rad(v)), math.sin(heading_rad(v))
+    return [v.initial.x + c * ax - s * ay, v.initial.y + s * ax + c * ay, az]
+
+
 def _check_files(path: str, sc: Scenario) -> None:
-    from rope_model.models import load_params as load_rope_params
+    from rope_model.models import MODELS, load_params as load_rope_params
     from tug_dynamics.ship_file import load_ship
-    attachments = {}
+    points: Dict[str, Dict[str, Any]] = {}
     for i, v in enumerate(sc.vessels):
+        key = f"vessels[{i}].ship_file"
         ship = resolve("tug_dynamics", "ships", v.ship_file, path)
         if not os.path.isfile(ship):
-            raise ScenarioError(f"{path}: key 'vessels[{i}].ship_file': ship file '{v.ship_file}' not found "
-                                f"(looked for {ship})")
+            raise ScenarioError(f"{path}: key '{key}': ship file '{v.ship_file}' not found (looked for {ship})")
         try:
-            attachments[v.name] = set(load_ship(ship, name=v.name, overrides=v.ship_overrides).attachments)
-        except (ValueError, KeyError) as exc:
-            raise ScenarioError(f"{path}: key 'vessels[{i}].ship_file': {exc}") from None
+            points[v.name] = {k: [float(c) for c in p] for k, p in
+                              load_ship(ship, name=v.name, overrides=v.ship_overrides).attachments.items()}
+        except Exception as exc:  # noqa: BLE001 - whatever stops the vessel node stops the run here
+            what = "ship file (with ship_overrides)" if v.ship_overrides else "ship file"
+            raise ScenarioError(f"{path}: key '{key}': {what} '{v.ship_file}' is not usable:\n"
+                                f"  {_load_error(exc)}") from None
     for i, r in enumerate(sc.ropes):
+        key = f"ropes[{i}]"
         rope = resolve("rope_model", "ropes", r.rope_file, path)
         if not os.path.isfile(rope):
-            raise ScenarioError(f"{path}: key 'ropes[{i}].rope_file': rope file '{r.rope_file}' not found "
+            raise ScenarioError(f"{path}: key '{key}.rope_file': rope file '{r.rope_file}' not found "
                                 f"(looked for {rope})")
         try:
-            load_rope_params(rope)
-        except ValueError as exc:
-            raise ScenarioError(f"{path}: key 'ropes[{i}].rope_file': {exc}") from None
+            raw = load_yaml(rope)  # duplicate keys, and bad YAML with its line
+            params = load_rope_params(rope)
+        except Exception as exc:  # noqa: BLE001 - whatever stops the rope node stops the run here
+            raise ScenarioError(f"{path}: key '{key}.rope_file': rope file '{r.rope_file}' is not usable:\n"
+                                f"  {_load_error(exc) if not isinstance(exc, YamlInputError) else f'{rope}: {exc}'}"
+                                ) from None
+        if not raw:  # the loader would take every default: surely not what was meant
+            raise ScenarioError(f"{path}: key '{key}.rope_file': rope file '{r.rope_file}' is empty ({rope})")
+        model = raw.get("model", MODELS[0]) if isinstance(raw, dict) else MODELS[0]
+        length = float(params.length)
         for end in ("a", "b"):
             spec = getattr(r, f"end_{end}")
             if "/" in spec:
                 vessel, point = spec.split("/")
-                if point not in attachments[vessel]:
-                    raise ScenarioError(f"{path}: key 'ropes[{i}].end_{end}': vessel '{vessel}' has no attachment "
-                                        f"'{point}' (it has {sorted(attachments[vessel])})")
+                if point not in points[vessel]:
+                    raise ScenarioError(f"{path}: key '{key}.end_{end}': vessel '{vessel}' has no attachment "
+                                        f"'{point}' (it has {sorted(points[vessel])})")
+        if r.deployed_length is not None and r.deployed_length > length:
+            raise ScenarioError(f"{path}: key '{key}.deployed_length': {r.deployed_length:g} m is longer than "
+                                f"the rope ({length:g} m in {r.rope_file})")
+        if model == "fd_cable":
+            # rope_model.models.CableAdapter: end a towed, end b hanging free, laid straight
+            if r.end_a == "free" or r.end_b != "free":
+                raise ScenarioError(f"{path}: key '{key}.end_b': an fd_cable rope ({r.rope_file}) has end a on a "
+                                    f"vessel (or fixed) and end b 'free', got end_a {r.end_a!r}, end_b {r.end_b!r}")
+            if r.layout != "straight":
+                raise ScenarioError(f"{path}: key '{key}.layout': an fd_cable rope ({r.rope_file}) starts from its "
+                                    f"steady state: use layout straight, got {r.layout!r}")
+            if r.n_elements is not None and r.n_elements < 3:
+                raise ScenarioError(f"{path}: key '{key}.n_elements': an fd_cable rope needs at least 3 nodes, "
+                                    f"got {r.n_elements}")
+        elif r.layout == "straight":
+            pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
+            if pa is not None and pb is not None and math.dist(pa, pb) < 1e-6:
+                raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
+                                    "a straight rope needs two distinct end points")
+    for i, a in enumerate(sc.autopilots):
+        if _executable(a.package, a.executable) is None:
+            raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
+                                "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
 
 
 def heading_rad(v: VesselSpec) -> float:

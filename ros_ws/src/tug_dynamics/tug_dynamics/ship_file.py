@@ -5,8 +5,10 @@ The key ``model:`` selects the class:
   planing_6dof   tug_dynamics.planing.PlaningHull.from_config(cfg, source, name, initial_state)
 
 Every error names the file and the dotted key. Unknown keys are errors (typos would
-otherwise silently fall back to defaults). ``estimated:`` maps dotted keys to the method
-used to estimate them; each listed key must exist in the file. Schema: README.md.
+otherwise silently fall back to defaults), so are duplicate keys, strings or booleans for
+numbers, NaN / inf and values outside physical ranges (schema: ship_schema.py for the
+displacement format; planing.py checks its own). ``estimated:`` maps dotted keys to the method
+used to estimate them; each listed key must exist in the file.
 """
 from __future__ import annotations
 
@@ -14,13 +16,16 @@ import copy
 import glob
 import math
 import os
+import re
 from typing import Any, List, Optional
 
 import numpy as np
-import yaml
+from pydantic import ValidationError
 
 from . import maneuvering as mv
+from . import ship_schema as schema
 from .vessel import Vessel, VesselState
+from .yaml_input import YamlInputError, load_yaml
 
 SHIPS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "ships")
 G = 9.80665
@@ -56,82 +61,58 @@ def _deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-class _Section:
-    """Typed access to one mapping of the file; records keys used to find unknown ones."""
-
-    def __init__(self, src: str, path: str, data: Any):
-        self.src, self.path = src, path
-        if not isinstance(data, dict):
-            raise ShipFileError(f"{src}: key '{path}': expected a mapping, got {type(data).__name__}")
-        self.data = data
-        self.used = set()
-
-    def key(self, k: str) -> str:
-        return f"{self.path}.{k}" if self.path else k
-
-    def err(self, k: str, msg: str) -> ShipFileError:
-        return ShipFileError(f"{self.src}: key '{self.key(k)}': {msg}")
-
-    def has(self, k: str) -> bool:
-        return k in self.data
-
-    def raw(self, k: str, default: Any = ...) -> Any:
-        self.used.add(k)
-        if k not in self.data:
-            if default is ...:
-                raise self.err(k, "required key is missing")
-            return default
-        return self.data[k]
-
-    def num(self, k: str, default: Any = ..., lo: float = -math.inf, hi: float = math.inf,
-            positive: bool = False) -> float:
-        v = self.raw(k, default)
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.err(k, f"expected a number, got {v!r}")
-        v = float(v)
-        if not math.isfinite(v):
-            raise self.err(k, f"{v!r} is not finite")
-        if positive and v <= 0.0:
-            raise self.err(k, f"must be > 0, got {v:g}")
-        if not lo <= v <= hi:
-            raise self.err(k, f"must be in [{lo:g}, {hi:g}], got {v:g}")
-        return v
-
-    def vec(self, k: str, n: Optional[int] = None, default: Any = ...) -> np.ndarray:
-        v = self.raw(k, default)
-        try:
-            a = np.asarray(v, float).reshape(-1)
-        except (TypeError, ValueError):
-            raise self.err(k, f"expected a list of numbers, got {v!r}") from None
-        if n is not None and a.size != n:
-            raise self.err(k, f"expected {n} numbers, got {a.size}")
-        if not np.all(np.isfinite(a)):
-            raise self.err(k, "contains a non-finite number")
-        return a
-
-    def sub(self, k: str, default: Any = ...) -> Optional["_Section"]:
-        v = self.raw(k, default)
-        if v is None:
-            return None
-        return _Section(self.src, self.key(k), v)
-
-    def finish(self) -> None:
-        extra = sorted(set(self.data) - self.used)
-        if extra:
-            raise self.err(extra[0], f"unknown key (known here: {sorted(self.used)})")
-
-
 def _read_yaml(path: str) -> dict:
     try:
-        with open(path, "r", encoding="utf-8") as fh:
-            cfg = yaml.safe_load(fh)
-    except OSError as exc:
-        raise ShipFileError(f"{path}: cannot read: {exc}") from None
-    except yaml.YAMLError as exc:
-        raise ShipFileError(f"{path}: not valid YAML: {exc}") from None
+        cfg = load_yaml(path)
+    except YamlInputError as exc:
+        raise ShipFileError(f"{path}: {exc}") from None
     if not isinstance(cfg, dict):
-        raise ShipFileError(f"{path}: top level must be a mapping")
+        raise ShipFileError(f"{path}: top level must be a mapping of ship keys, got {type(cfg).__name__}")
     return cfg
+
+
+# the parts of a pydantic error location that name a union's branch, not a key of the file
+_BRANCH = re.compile(r"^(literal\[.*\]|constrained-\w+|function-\w+.*|float|int|str|bool|none|list\[.*\]|dict\[.*\])$")
+
+
+def _dotted(loc) -> str:
+    parts = [str(p) for p in loc if not (isinstance(p, str) and _BRANCH.match(p))]
+    if len(parts) > 1 and parts[0] == "hull" and parts[1] in schema.HULL_FORMS:
+        del parts[1]  # the discriminated union's tag is not a key of the file
+    return ".".join(parts)
+
+
+def _explain(err: dict) -> str:
+    kind = err["type"]
+    if kind == "extra_forbidden":
+        return f"unknown key (misspelt?), value {err['input']!r}"
+    if kind == "missing":
+        return "required key is missing"
+    if kind == "union_tag_invalid":
+        return f"unknown hull form {err['input'].get('form')!r} (polynomial | lowspeed)"
+    if kind == "union_tag_not_found":
+        return "required key 'form' is missing (polynomial | lowspeed)"
+    return f"{err['msg']}, got {err['input']!r}"
+
+
+def validate_displacement(src: str, cfg: dict, overrides: bool = False) -> schema.DisplacementShip:
+    """The file checked against ship_schema; ShipFileError naming the file and every bad key."""
+    note = " (after the scenario's ship_overrides)" if overrides else ""
+    try:
+        ship = schema.DisplacementShip.model_validate(cfg)
+    except ValidationError as exc:
+        lines = []  # a value failing every branch of a union gives one line per branch: keep the first
+        for e in exc.errors():
+            key = _dotted(e["loc"]) or "(top)"
+            if not any(line.startswith(f"{src}: key '{key}':") for line in lines):
+                lines.append(f"{src}: key '{key}': {_explain(e)}{note}")
+        if len(lines) > 10:
+            lines[10:] = [f"... and {len(lines) - 10} more"]
+        raise ShipFileError("\n".join(lines)) from None
+    problems = schema.cross_checks(ship)
+    if problems:
+        raise ShipFileError("\n".join(f"{src}: key '{k}': {msg}{note}" for k, msg in problems))
+    return ship
 
 
 def _check_estimated(src: str, cfg: dict) -> None:
@@ -156,24 +137,34 @@ def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[Ves
     path: a file path, or a bare file name looked up in ships_dir().
     name: vessel name (default: the file's ``name``). initial_state: default at rest at the origin.
     overrides: nested dict merged over the file before parsing (tests, scenario variants).
+    Raises ShipFileError naming the file and the key (also for planing-hull files).
     """
     if not os.path.exists(path) and not os.path.isabs(path):
         cand = os.path.join(ships_dir(), path)
         if os.path.exists(cand):
             path = cand
     src = os.path.abspath(path)
+    if not os.path.isfile(src):
+        raise ShipFileError(f"{src}: ship file not found")
     cfg = _read_yaml(src)
     if overrides:
+        if not isinstance(overrides, dict):
+            raise ShipFileError(f"{src}: overrides must be a mapping, got {type(overrides).__name__}")
         cfg = _deep_merge(cfg, overrides)
     model = cfg.get("model")
     if model is None:
         raise ShipFileError(f"{src}: key 'model': required key is missing (displacement | planing_6dof)")
     if model == "planing_6dof":
-        from .planing import PlaningHull  # lazy: written separately
-        return PlaningHull.from_config(cfg, src, name, initial_state)
+        from .planing import PlaningHull  # lazy: written separately, checks its keys against its own table
+        try:
+            return PlaningHull.from_config(cfg, src, name, initial_state)
+        except ValueError as exc:  # planing.ShipFileError and the like: one error class for every ship file
+            msg = str(exc)
+            raise ShipFileError(msg if src in msg else f"{src}: {msg}") from None
     if model != "displacement":
         raise ShipFileError(f"{src}: key 'model': unknown model {model!r} (displacement | planing_6dof)")
-    vessel = _build_displacement(src, cfg, name, initial_state)
+    ship = validate_displacement(src, cfg, overrides=bool(overrides))
+    vessel = _build_displacement(src, ship, name, initial_state)
     if not overrides:      # an override may remove sections the estimates refer to
         _check_estimated(src, cfg)
     return vessel
@@ -184,65 +175,47 @@ _POLY_KEYS = ["Xvv", "Xrr", "Xvr", "Yv", "Yvav", "Yr", "Yrar", "Yvrr", "Yrvv",
 _LOW_KEYS = ["Xuu", "Xvr", "Yv", "Yr", "Yvv", "Yvr", "Yrr", "Nv", "Nr", "Nvvr", "Nvrr", "Nrr"]
 
 
-def _build_displacement(src: str, cfg: dict, name: Optional[str], initial_state) -> mv.ManeuveringVessel:
-    top = _Section(src, "", cfg)
-    for k in ("model", "description", "sources", "estimated", "notes"):
-        top.raw(k, None)
-    file_name = top.raw("name", None)  # always read, so it never counts as unknown
-    vname = name or str(file_name)
-    rho = top.num("water_density", positive=True)
+def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[str],
+                        initial_state) -> mv.ManeuveringVessel:
+    """The model's arrays from a validated file (ship_schema: every value typed and in range)."""
+    vname = name or str(ship.name)
+    rho = ship.water_density
     hp = np.zeros(mv.NHULL)
     hp[mv.H_RHO] = rho
 
     # ---- hull ----
-    h = top.sub("hull")
-    L = h.num("length", positive=True)
-    B = h.num("beam", positive=True)
-    T = h.num("draft", positive=True)
-    m = h.num("mass", positive=True)
-    xg = h.num("x_g", 0.0)
-    kzz = h.num("yaw_radius_of_gyration", positive=True)
-    form = h.raw("form")
-    enabled = bool(h.raw("enabled", True))
+    h = ship.hull
+    L, B, T, m, xg = h.length, h.beam, h.draft, h.mass, h.x_g
+    kzz = h.yaw_radius_of_gyration
     hp[mv.H_L], hp[mv.H_T], hp[mv.H_M], hp[mv.H_XG] = L, T, m, xg
-    d = h.sub("derivatives")
-    if form == "polynomial":
+    d = h.derivatives
+    if h.form == "polynomial":
         keys = _POLY_KEYS
         hp[mv.H_FORM] = mv.FORM_POLY
         q3 = 0.5 * rho * L ** 3
-        mx = -d.num("Xudot") * q3
-        my = -d.num("Yvdot") * q3
-        m_yr = -d.num("Yrdot") * q3 * L
-        m_nv = -d.num("Nvdot") * q3 * L
-        jz = -d.num("Nrdot") * q3 * L * L
+        mx = -d.Xudot * q3
+        my = -d.Yvdot * q3
+        m_yr = -d.Yrdot * q3 * L
+        m_nv = -d.Nvdot * q3 * L
+        jz = -d.Nrdot * q3 * L * L
         hp[mv.H_MMG_CORIOLIS] = 0.0
-    elif form == "lowspeed":
+    else:
         keys = _LOW_KEYS
         hp[mv.H_FORM] = mv.FORM_LOWSPEED
-        am = h.sub("added_mass")
-        mx = am.num("mx_over_m", lo=0.0) * m
-        my = am.num("my_over_m", lo=0.0) * m
-        jz = am.num("Jz_over_mL2", lo=0.0) * m * L * L
+        mx = h.added_mass.mx_over_m * m
+        my = h.added_mass.my_over_m * m
+        jz = h.added_mass.Jz_over_mL2 * m * L * L
         m_yr = m_nv = 0.0
-        am.finish()
         hp[mv.H_MMG_CORIOLIS] = 1.0
-    else:
-        raise h.err("form", f"unknown hull form {form!r} (polynomial | lowspeed)")
     for i, k in enumerate(keys):
-        hp[mv.H_C0 + i] = d.num(k)
-    d.finish()
-    res = h.sub("resistance", None)
-    if res is not None:
-        rv = res.vec("speed")
-        rf = res.vec("force")
-        if rv.size != rf.size or rv.size == 0 or np.any(np.diff(rv) <= 0) or rv[0] < 0 or np.any(rf < 0):
-            raise res.err("speed", "speed and force must be equal-length, speed increasing >= 0, force >= 0")
-        res.finish()
+        hp[mv.H_C0 + i] = getattr(d, k)
+    if h.resistance is not None:
+        rv = np.asarray(h.resistance.speed, float)
+        rf = np.asarray(h.resistance.force, float)
     else:
         rv = rf = np.zeros(0)
-    h.finish()
     table_v, table_f = rv, rf          # kept for the towline's X(u_c) even with the hull off
-    if not enabled:
+    if not h.enabled:
         # hull forces off: no damping, no added mass (a pure rigid body)
         hp[mv.H_FORM] = mv.FORM_NONE
         mx = my = m_yr = m_nv = jz = 0.0
@@ -250,7 +223,6 @@ def _build_displacement(src: str, cfg: dict, name: Optional[str], initial_state)
     hp[mv.H_MX], hp[mv.H_MY] = mx, my
 
     # ---- roll ----
-    rsec = top.sub("roll", None)
     roll_cfg = None
     M = np.zeros((4, 4))
     M[0, 0] = m + mx
@@ -259,156 +231,105 @@ def _build_displacement(src: str, cfg: dict, name: Optional[str], initial_state)
     M[2, 1] = m * xg + m_nv
     M[2, 2] = m * kzz ** 2 + m * xg ** 2 + jz
     hp[mv.H_ZH] = -0.5 * T
-    if rsec is not None:
-        gm = rsec.num("gm", positive=True)
-        kxx = rsec.num("radius_of_gyration", positive=True)
-        jx = rsec.num("added_inertia_ratio", lo=0.0) * m * kxx ** 2
-        zg = rsec.num("z_g")
-        zeta = rsec.num("damping_ratio", lo=0.0)
-        hp[mv.H_ZH] = rsec.num("z_lateral_resistance", hi=0.0)
-        fb = rsec.num("freeboard", positive=True)
-        bm = rsec.num("bm", positive=True)
-        thr = rsec.num("girting_threshold", positive=True)
-        rsec.finish()
+    ro = ship.roll
+    if ro is not None:
+        gm, kxx, zg = ro.gm, ro.radius_of_gyration, ro.z_g
+        jx = ro.added_inertia_ratio * m * kxx ** 2
+        hp[mv.H_ZH] = ro.z_lateral_resistance
         ix = m * kxx ** 2 + m * zg ** 2 + jx
         M[1, 3] = M[3, 1] = -m * zg
         M[3, 3] = ix
         hp[mv.H_ROLL], hp[mv.H_ZG] = 1.0, zg
         hp[mv.H_GMW] = m * G * gm
-        hp[mv.H_KP] = 2.0 * zeta * math.sqrt(ix * m * G * gm)
-        phi_de = math.atan2(fb, 0.5 * B)
-        gz = math.sin(phi_de) * (gm + 0.5 * bm * math.tan(phi_de) ** 2)   # wall-sided, deck edge
+        hp[mv.H_KP] = 2.0 * ro.damping_ratio * math.sqrt(ix * m * G * gm)
+        phi_de = math.atan2(ro.freeboard, 0.5 * B)
+        gz = math.sin(phi_de) * (gm + 0.5 * ro.bm * math.tan(phi_de) ** 2)   # wall-sided, deck edge
         roll_cfg = {"gm": gm, "deck_edge_angle": phi_de, "max_righting_moment": m * G * gz,
-                    "girting_threshold": thr, "z_lateral_resistance": hp[mv.H_ZH]}
+                    "girting_threshold": ro.girting_threshold, "z_lateral_resistance": hp[mv.H_ZH]}
     else:
         M[3, 3] = 1.0
 
     # ---- engine, propellers ----
     props: List[np.ndarray] = []
     rated_rps = 0.0
-    esec = top.sub("engine", None)
     hp[mv.H_TN] = 1.0
-    if esec is not None:
-        rated_rps = esec.num("rated_rpm", positive=True) / 60.0
-        hp[mv.H_TN] = esec.num("time_constant", positive=True)
-        esec.finish()
-    plist = top.raw("propellers", []) or []
-    if plist and esec is None:
-        raise top.err("engine", "propellers need an 'engine' section (rated_rpm, time_constant)")
-    for i, pd in enumerate(plist):
-        p = _Section(src, f"propellers.{i}", pd)
+    if ship.engine is not None:
+        rated_rps = ship.engine.rated_rpm / 60.0
+        hp[mv.H_TN] = ship.engine.time_constant
+    for p in ship.propellers or []:
         row = np.zeros(mv.NPROP)
-        pos = p.vec("position", 3)
-        row[mv.P_X], row[mv.P_Y], row[mv.P_Z] = pos
-        row[mv.P_D] = p.num("diameter", positive=True)
-        row[mv.P_PITCH] = p.num("pitch_ratio", positive=True) * row[mv.P_D]
-        row[mv.P_C1], row[mv.P_C2], row[mv.P_C3] = p.vec("kt", 3)
-        row[mv.P_WP0] = p.num("wake_fraction", lo=0.0, hi=0.9)
-        row[mv.P_T] = p.num("thrust_deduction", lo=0.0, hi=0.9)
-        row[mv.P_AST] = p.num("astern_factor", lo=0.0, hi=1.5)
-        p.finish()
+        row[mv.P_X], row[mv.P_Y], row[mv.P_Z] = p.position
+        row[mv.P_D] = p.diameter
+        row[mv.P_PITCH] = p.pitch_ratio * p.diameter
+        row[mv.P_C1], row[mv.P_C2], row[mv.P_C3] = p.kt
+        row[mv.P_WP0] = p.wake_fraction
+        row[mv.P_T] = p.thrust_deduction
+        row[mv.P_AST] = p.astern_factor
         props.append(row)
-    if len(props) > 4:
-        raise top.err("propellers", "at most 4 propellers")
     hp[mv.H_NPROP] = len(props)
 
     # ---- steering gear, rudders ----
-    ssec = top.sub("steering", None)
     max_steer = math.radians(35.0)
     hp[mv.H_TE], hp[mv.H_MAXRATE] = 1.0, 1.0
-    if ssec is not None:
-        max_steer = math.radians(ssec.num("max_angle_deg", positive=True, hi=180.0))
-        hp[mv.H_TE] = ssec.num("time_constant", positive=True)
-        hp[mv.H_MAXRATE] = math.radians(ssec.num("max_rate_deg_s", positive=True))
-        ssec.finish()
+    if ship.steering is not None:
+        max_steer = math.radians(ship.steering.max_angle_deg)
+        hp[mv.H_TE] = ship.steering.time_constant
+        hp[mv.H_MAXRATE] = math.radians(ship.steering.max_rate_deg_s)
     ruds: List[np.ndarray] = []
-    for i, rdict in enumerate(top.raw("rudders", []) or []):
-        r = _Section(src, f"rudders.{i}", rdict)
+    for r in ship.rudders or []:
         row = np.zeros(mv.NRUD)
-        pos = r.vec("position", 3)
-        row[mv.R_X], row[mv.R_Y], row[mv.R_Z] = pos
-        area = r.num("area", positive=True)
-        lam = r.num("aspect_ratio", positive=True)
-        height = r.num("height", math.sqrt(lam * area), positive=True)
-        row[mv.R_AREA] = area
+        row[mv.R_X], row[mv.R_Y], row[mv.R_Z] = r.position
+        lam = r.aspect_ratio
+        height = r.height if r.height is not None else math.sqrt(lam * r.area)
+        row[mv.R_AREA] = r.area
         row[mv.R_FALPHA] = 6.13 * lam / (lam + 2.25)     # Fujii, seed 003 Eq 8
-        pidx = r.raw("propeller", None)
-        if pidx is None:
+        if r.propeller is None:
             row[mv.R_PROP] = -1
             row[mv.R_ETA] = 0.0
         else:
-            if not isinstance(pidx, int) or not 0 <= pidx < len(props):
-                raise r.err("propeller", f"must be an index into propellers (0..{len(props) - 1}) or null")
-            row[mv.R_PROP] = pidx
-            row[mv.R_ETA] = props[pidx][mv.P_D] / height
-        row[mv.R_AH] = r.num("a_H")
-        row[mv.R_XH] = r.num("x_H")
-        row[mv.R_TR] = r.num("t_R", lo=0.0, hi=1.0)
-        row[mv.R_WR0] = r.num("wake_fraction", lo=0.0, hi=0.9)
-        row[mv.R_LR] = r.num("l_R")
-        row[mv.R_KAPPA0] = r.num("kappa_factor", 0.6, positive=True)
-        r.finish()
+            row[mv.R_PROP] = r.propeller
+            row[mv.R_ETA] = props[r.propeller][mv.P_D] / height
+        row[mv.R_AH] = r.a_H
+        row[mv.R_XH] = r.x_H
+        row[mv.R_TR] = r.t_R
+        row[mv.R_WR0] = r.wake_fraction
+        row[mv.R_LR] = r.l_R
+        row[mv.R_KAPPA0] = r.kappa_factor
         ruds.append(row)
-    if len(ruds) > 4:
-        raise top.err("rudders", "at most 4 rudders")
-    if ruds and ssec is None:
-        raise top.err("steering", "rudders need a 'steering' section")
     hp[mv.H_NRUD] = len(ruds)
 
     # ---- anchor (seed 003 Eq 5-6) ----
-    asec = top.sub("anchor", None)
+    a = ship.anchor
     anchor_cfg = None
-    if asec is not None:
-        lam_a = asec.num("holding_coefficient", lo=0.0)
-        wiw = asec.num("weight_in_water", positive=True)
-        hp[mv.H_ANC_LW] = lam_a * wiw
-        hp[mv.H_ANC_LA] = asec.num("moment_lever", lo=0.0)
-        hp[mv.H_ANC_UEPS] = asec.num("speed_regularisation", 0.05, positive=True)
-        hp[mv.H_ANC_RON] = asec.num("turning_threshold", 0.05, positive=True)
-        hp[mv.H_ANC_VUCAP] = asec.num("max_drift_ratio", 1.0, positive=True)
-        hp[mv.H_ANC_UREF] = asec.num("turning_fade_speed", 0.5, positive=True)
-        side = asec.raw("side", "auto")
+    if a is not None:
+        hp[mv.H_ANC_LW] = a.holding_coefficient * a.weight_in_water
+        hp[mv.H_ANC_LA] = a.moment_lever
+        hp[mv.H_ANC_UEPS] = a.speed_regularisation
+        hp[mv.H_ANC_RON] = a.turning_threshold
+        hp[mv.H_ANC_VUCAP] = a.max_drift_ratio
+        hp[mv.H_ANC_UREF] = a.turning_fade_speed
         sides = {"auto": 0.0, "port": 1.0, "starboard": -1.0}
-        if side not in sides:
-            raise asec.err("side", f"must be one of {sorted(sides)}, got {side!r}")
-        anchor_cfg = {"let_go_time": asec.num("let_go_time", lo=0.0),
-                      "heave_up_time": asec.num("heave_up_time", positive=True),
-                      "side": sides[side]}
-        asec.finish()
+        anchor_cfg = {"let_go_time": a.let_go_time, "heave_up_time": a.heave_up_time, "side": sides[a.side]}
 
     # ---- seed 002 Eq 3 simple towline ----
-    tsec = top.sub("towline_simple", None)
-    if tsec is not None:
-        hp[mv.H_TOW_ON] = 1.0 if bool(tsec.raw("enabled", False)) else 0.0
-        if tsec.raw("force", "resistance") == "resistance":
+    t = ship.towline_simple
+    if t is not None:
+        hp[mv.H_TOW_ON] = 1.0 if t.enabled else 0.0
+        if t.force == "resistance":
             # the paper: X(u_c), the straight-running resistance at the reference speed u_c
-            uc = tsec.num("reference_speed", positive=True)
-            if table_v.size == 0:
-                raise tsec.err("force", "'resistance' needs hull.resistance")
-            fval = -mv._interp_resistance.py_func(uc, table_v, table_f)
+            fval = -mv._interp_resistance.py_func(t.reference_speed, table_v, table_f)
         else:
-            fval = tsec.num("force", positive=True)
+            fval = t.force
         hp[mv.H_TOW_F] = fval
-        hp[mv.H_TOW_X] = tsec.num("lever", 0.5 * L)
-        hp[mv.H_TOW_DRIFT] = tsec.num("drift_sign", 1.0, lo=-1.0, hi=1.0)
-        hp[mv.H_TOW_RATE] = math.radians(tsec.num("gamma_rate_deg_s", positive=True))
-        hp[mv.H_TOW_MAX] = math.radians(tsec.num("gamma_max_deg", lo=-90.0, hi=90.0))
-        tsec.finish()
+        hp[mv.H_TOW_X] = t.lever if t.lever is not None else 0.5 * L
+        hp[mv.H_TOW_DRIFT] = t.drift_sign
+        hp[mv.H_TOW_RATE] = math.radians(t.gamma_rate_deg_s)
+        hp[mv.H_TOW_MAX] = math.radians(t.gamma_max_deg)
 
     # ---- attachments, integration, current ----
-    att = {}
-    asub = top.sub("attachments", None)
-    if asub is not None:
-        for k in list(asub.data):
-            att[str(k)] = asub.vec(k, 3)
-        asub.finish()
-    isec = top.sub("integration", None)
-    hmax = 0.1 * math.sqrt(L / G)
-    if isec is not None:
-        hmax = isec.num("max_substep", positive=True)
-        isec.finish()
-    cur = top.vec("current", 2, [0.0, 0.0])
-    top.finish()
+    att = {str(k): np.asarray(v, float) for k, v in (ship.attachments or {}).items()}
+    hmax = ship.integration.max_substep if ship.integration is not None else schema._default_hmax(L)
+    cur = ship.current
 
     return mv.ManeuveringVessel(
         vname, hp, np.array(props) if props else np.zeros((0, mv.NPROP)),

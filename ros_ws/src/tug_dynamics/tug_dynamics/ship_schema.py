@@ -1,0 +1,313 @@
+"""Schema of the displacement ship file (``model: displacement``): pydantic models, one per
+section, unknown keys forbidden, numbers strictly typed (no strings or booleans), finite and
+inside physical ranges. ship_file.load_ship validates a file with ``validate_displacement``
+and builds the model from the result. (Planing-hull files, ``model: planing_6dof``, are
+checked key by key by planing.PlaningHull.from_config against its own table.)
+
+Ranges admit the shipped files (a 5 m tank model of a barge to the 175 m S-175) and the real
+span of ships, about 10 m harbour craft to 400+ m carriers, with margin; they refuse values no
+ship has, which today make the state non-finite (mass 1e-9 kg, engine lag 1e-9 s) or the run
+endless (max_substep 1e-7 s). Checks between sections (mass against the hull's volume, lags
+against the integration step, points on the hull) are in ``cross_checks``.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Dict, List, Literal, Optional, Union
+
+from pydantic import BaseModel, ConfigDict, Field
+from typing_extensions import Annotated
+
+G = 9.80665
+
+
+class _S(BaseModel):
+    # strict: 1 is a number, "1" and true are not; no NaN or inf; unknown keys are errors
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+def _num(lo: Optional[float] = None, hi: Optional[float] = None, *, gt: Optional[float] = None, default: Any = ...):
+    return Field(default, ge=lo, le=hi, gt=gt)
+
+
+Vec3 = Annotated[List[float], Field(min_length=3, max_length=3)]
+Vec2 = Annotated[List[float], Field(min_length=2, max_length=2)]
+# non-dimensional hydrodynamic derivatives are O(1e-4 .. 1); |value| <= 10 only catches typos
+Deriv = Annotated[float, Field(ge=-10.0, le=10.0)]
+# added-mass derivatives: minus the added mass, so never positive (the mass matrix must stay
+# positive definite)
+AddedDeriv = Annotated[float, Field(ge=-10.0, le=0.0)]
+
+
+class PolyDerivatives(_S):
+    """seed 002 Eq 2 (prime system of Eq 4)."""
+    Xudot: AddedDeriv
+    Yvdot: AddedDeriv
+    Yrdot: Deriv
+    Nvdot: Deriv
+    Nrdot: AddedDeriv
+    Xvv: Deriv
+    Xrr: Deriv
+    Xvr: Deriv
+    Yv: Deriv
+    Yvav: Deriv
+    Yr: Deriv
+    Yrar: Deriv
+    Yvrr: Deriv
+    Yrvv: Deriv
+    Nv: Deriv
+    Nvav: Deriv
+    Nr: Deriv
+    Nrar: Deriv
+    Nvrr: Deriv
+    Nrvv: Deriv
+
+
+class LowSpeedDerivatives(_S):
+    """seed 003 Eq 3 (forces / 0.5 rho L d V^2)."""
+    Xuu: Deriv
+    Xvr: Deriv
+    Yv: Deriv
+    Yr: Deriv
+    Yvv: Deriv
+    Yvr: Deriv
+    Yrr: Deriv
+    Nv: Deriv
+    Nr: Deriv
+    Nvvr: Deriv
+    Nvrr: Deriv
+    Nrr: Deriv
+
+
+class AddedMass(_S):
+    # measured / estimated ratios: surge 0.02-0.1, sway 0.2-1.5 (a flat barge to a deep hull),
+    # yaw 0.01-0.1; the bounds are several times those
+    mx_over_m: float = _num(0.0, 2.0)
+    my_over_m: float = _num(0.0, 5.0)
+    Jz_over_mL2: float = _num(0.0, 0.5)
+
+
+class Resistance(_S):
+    """Straight-running resistance table: speeds increasing from >= 0, forces >= 0."""
+    speed: Annotated[List[Annotated[float, Field(ge=0.0, le=40.0)]], Field(min_length=1, max_length=200)]
+    # 1e8 N: ten times the resistance of the largest ships at their top speed
+    force: Annotated[List[Annotated[float, Field(ge=0.0, le=1e8)]], Field(min_length=1, max_length=200)]
+
+
+class _Hull(_S):
+    enabled: bool = True                 # false: no hull forces and no added mass (a rigid body)
+    length: float = _num(1.0, 500.0)     # m: tank models (5 m barge) .. the largest ships (~460 m)
+    beam: float = _num(0.1, 100.0)       # m: widest ships ~70 m
+    draft: float = _num(0.05, 40.0)      # m: a 0.3 m model .. ULCC ~30 m
+    mass: float = _num(1.0, 1e9)         # kg: a tank model .. 650 000 t; see cross_checks (block coefficient)
+    x_g: float = 0.0                     # m, |x_g| <= L/2 (cross_checks)
+    yaw_radius_of_gyration: float = _num(gt=0.0)  # m, 0.05 L .. 0.5 L (cross_checks)
+    resistance: Optional[Resistance] = None
+
+
+class PolynomialHull(_Hull):
+    form: Literal["polynomial"]
+    derivatives: PolyDerivatives         # added mass from Xudot, Yvdot, Yrdot, Nvdot, Nrdot
+
+
+class LowSpeedHull(_Hull):
+    form: Literal["lowspeed"]
+    derivatives: LowSpeedDerivatives
+    added_mass: AddedMass
+
+
+HULL_FORMS = ("polynomial", "lowspeed")
+Hull = Annotated[Union[PolynomialHull, LowSpeedHull], Field(discriminator="form")]
+
+
+class Engine(_S):
+    rated_rpm: float = _num(1.0, 5000.0)  # propeller rpm: slow-speed diesels 60-100 .. small craft ~3000
+    # engine lag (seed 003 Eq 9): diesels take seconds; 0.05 s is faster than any real engine
+    # and keeps the explicit RK4 sub-step stable (also checked against max_substep)
+    time_constant: float = _num(0.05, 600.0)
+
+
+class Propeller(_S):
+    position: Vec3
+    diameter: float = _num(0.01, 15.0)    # m: model propellers .. ~11 m on the largest ships
+    pitch_ratio: float = _num(0.3, 2.5)   # P/D of real propellers 0.5-1.6
+    kt: Vec3                              # K_T(J) = c1 + c2 J + c3 J^2; |c| <= 5 (cross_checks)
+    wake_fraction: float = _num(0.0, 0.9)
+    thrust_deduction: float = _num(0.0, 0.9)
+    astern_factor: float = _num(0.0, 1.5)
+
+
+class Steering(_S):
+    max_angle_deg: float = _num(1.0, 90.0)    # rudders 35-45 deg; flap / vector rudders up to 70-90
+    time_constant: float = _num(0.05, 600.0)  # s, steering-gear lag (seed 003 Eq 10); see Engine
+    max_rate_deg_s: float = _num(0.1, 100.0)  # SOLAS minimum 2.3 deg/s; fast tug gear ~10
+
+
+class Rudder(_S):
+    position: Vec3
+    area: float = _num(gt=0.0)             # m^2, at most 0.1 L T (cross_checks); ships 0.015-0.05 L T
+    aspect_ratio: float = _num(0.2, 6.0)
+    height: Optional[float] = _num(gt=0.0, default=None)   # m, default sqrt(aspect_ratio area)
+    propeller: Optional[int] = None        # index into propellers, or null
+    a_H: float = _num(0.0, 1.0)
+    x_H: float                             # m, |x_H| <= L (cross_checks)
+    t_R: float = _num(0.0, 1.0)
+    wake_fraction: float = _num(0.0, 0.9)
+    l_R: float = _num(-2.0, 2.0)           # non-dimensional (x L); MMG values -0.7 .. -1.0
+    kappa_factor: float = _num(gt=0.0, default=0.6)
+
+
+class Roll(_S):
+    gm: float = _num(0.01, 20.0)                 # m; ships 0.15-5 m, small craft up to ~10 m
+    bm: float = _num(0.01, 200.0)                # m; wide shallow barges have large BM
+    radius_of_gyration: float = _num(gt=0.0)     # m, at most the beam (cross_checks); ships 0.35-0.45 B
+    added_inertia_ratio: float = _num(0.0, 2.0)
+    z_g: float                                   # m, |z_g| <= L (cross_checks)
+    damping_ratio: float = _num(0.0, 2.0)
+    z_lateral_resistance: float = _num(hi=0.0)   # m, within the draft: -T .. 0 (cross_checks)
+    freeboard: float = _num(0.01, 50.0)          # m
+    girting_threshold: float = _num(0.01, 1.0)   # warning at this fraction of the deck-edge moment
+
+
+class Anchor(_S):
+    holding_coefficient: float = _num(0.0, 20.0)         # lambda_a; dredging anchors 1-10
+    weight_in_water: float = _num(1.0, 1e7)              # N; the largest anchors and chain < 1e6 N
+    moment_lever: float = _num(0.0)                      # m, at most 2 L (cross_checks)
+    let_go_time: float = _num(0.0, 3600.0)               # s
+    heave_up_time: float = _num(0.1, 7200.0)             # s
+    side: Literal["auto", "port", "starboard"] = "auto"
+    speed_regularisation: float = _num(1e-3, 5.0, default=0.05)   # m/s
+    turning_threshold: float = _num(1e-3, 1.0, default=0.05)      # r'
+    max_drift_ratio: float = _num(1e-3, 10.0, default=1.0)
+    turning_fade_speed: float = _num(1e-3, 10.0, default=0.5)     # m/s
+
+
+class TowlineSimple(_S):
+    """seed 002 Eq 3: a towline force of fixed size at an angle that swings to gamma_max."""
+    enabled: bool = False
+    force: Union[Literal["resistance"], Annotated[float, Field(gt=0.0, le=1e8)]] = "resistance"
+    reference_speed: Optional[float] = _num(gt=0.0, hi=40.0, default=None)   # m/s, for force: resistance
+    lever: Optional[float] = None            # m, default L/2; |lever| <= L (cross_checks)
+    drift_sign: float = _num(-1.0, 1.0, default=1.0)
+    gamma_rate_deg_s: float = _num(gt=0.0, hi=90.0)
+    gamma_max_deg: float = _num(-90.0, 90.0)
+
+
+class Integration(_S):
+    # RK4 sub-step: 1 ms (20 sub-steps per 50 Hz exchange) .. 2 s; smaller only burns CPU
+    # (1e-7 s would take days per simulated minute), larger misses the time constants
+    max_substep: float = _num(1e-3, 2.0)
+
+
+class DisplacementShip(_S):
+    model: Literal["displacement"]
+    name: Optional[str] = None
+    description: Optional[str] = None
+    sources: Optional[Union[List[str], Dict[str, str]]] = None
+    notes: Optional[Union[str, List[str]]] = None
+    estimated: Optional[Dict[str, str]] = None
+    # fresh water (1000) .. brine (~1240) would be physical; 900-1100 as the scenario's environment
+    water_density: float = _num(900.0, 1100.0)
+    hull: Hull
+    engine: Optional[Engine] = None
+    propellers: Optional[Annotated[List[Propeller], Field(max_length=4)]] = None
+    steering: Optional[Steering] = None
+    rudders: Optional[Annotated[List[Rudder], Field(max_length=4)]] = None
+    roll: Optional[Roll] = None
+    anchor: Optional[Anchor] = None
+    towline_simple: Optional[TowlineSimple] = None
+    attachments: Optional[Dict[str, Vec3]] = None
+    integration: Optional[Integration] = None
+    current: Vec2 = Field(default_factory=lambda: [0.0, 0.0])   # m/s east, north; |c| <= 10 (cross_checks)
+
+
+def _default_hmax(length: float) -> float:
+    return 0.1 * math.sqrt(length / G)
+
+
+def cross_checks(s: DisplacementShip) -> List[tuple]:
+    """Checks between keys: [(dotted key, message)], empty when the file is consistent."""
+    out = []
+    h = s.hull
+    L, B, T = h.length, h.beam, h.draft
+    cb = h.mass / (s.water_density * L * B * T)
+    # the block coefficient of real hulls is 0.35 (fast craft) .. 0.9 (barges); 0.1-1.1 allows
+    # for overhangs and for L, B, T not quite the displacement's
+    if not 0.1 <= cb <= 1.1:
+        out.append(("hull.mass", f"{h.mass:g} kg gives a block coefficient m / (rho L B T) = {cb:.3g}; "
+                                 "expected 0.1 .. 1.1 (check mass, length, beam, draft)"))
+    if abs(h.x_g) > 0.5 * L:
+        out.append(("hull.x_g", f"{h.x_g:g} m is off the hull (|x_g| <= L/2 = {0.5 * L:g} m)"))
+    if not 0.05 * L <= h.yaw_radius_of_gyration <= 0.5 * L:
+        # 0.5 L: all the mass at the ends; real ships 0.22-0.3 L
+        out.append(("hull.yaw_radius_of_gyration",
+                    f"{h.yaw_radius_of_gyration:g} m; expected 0.05 L .. 0.5 L ({0.05 * L:g} .. {0.5 * L:g} m)"))
+    if h.resistance is not None:
+        v, f = h.resistance.speed, h.resistance.force
+        if len(v) != len(f):
+            out.append(("hull.resistance.force", f"{len(f)} values for {len(v)} speeds"))
+        elif any(b <= a for a, b in zip(v, v[1:])):
+            out.append(("hull.resistance.speed", "speeds must increase"))
+    hmax = s.integration.max_substep if s.integration else _default_hmax(L)
+    # RK4 is stable for a first-order lag while h / T < 2.78: keep a margin of 1.4
+    for key, sec in (("engine.time_constant", s.engine), ("steering.time_constant", s.steering)):
+        if sec is not None and sec.time_constant < 0.5 * hmax:
+            out.append((key, f"{sec.time_constant:g} s is shorter than half the integration sub-step "
+                             f"({hmax:g} s, integration.max_substep): the lag would be unstable"))
+    props = s.propellers or []
+    if props and s.engine is None:
+        out.append(("engine", "propellers need an 'engine' section (rated_rpm, time_constant)"))
+    if s.rudders and s.steering is None:
+        out.append(("steering", "rudders need a 'steering' section"))
+    for i, p in enumerate(props):
+        out += _point(f"propellers.{i}.position", p.position, L)
+        if p.kt[0] <= 0.0:
+            out.append((f"propellers.{i}.kt", f"K_T at J = 0 must be positive, got {p.kt[0]:g}"))
+        if any(abs(c) > 5.0 for c in p.kt):
+            out.append((f"propellers.{i}.kt", f"coefficients beyond +-5: {p.kt}"))
+    for i, r in enumerate(s.rudders or []):
+        out += _point(f"rudders.{i}.position", r.position, L)
+        if r.area > 0.1 * L * T:
+            out.append((f"rudders.{i}.area", f"{r.area:g} m^2 is more than 0.1 L T = {0.1 * L * T:g} m^2"))
+        if abs(r.x_H) > L:
+            out.append((f"rudders.{i}.x_H", f"{r.x_H:g} m is off the hull (|x_H| <= L)"))
+        if r.propeller is not None and not 0 <= r.propeller < len(props):
+            out.append((f"rudders.{i}.propeller",
+                        f"must be an index into propellers (0..{len(props) - 1}) or null, got {r.propeller}"))
+    if s.roll is not None:
+        ro = s.roll
+        if ro.radius_of_gyration > B:
+            out.append(("roll.radius_of_gyration", f"{ro.radius_of_gyration:g} m is more than the beam ({B:g} m)"))
+        if abs(ro.z_g) > L:
+            out.append(("roll.z_g", f"{ro.z_g:g} m is off the hull"))
+        if ro.z_lateral_resistance < -T:
+            out.append(("roll.z_lateral_resistance", f"{ro.z_lateral_resistance:g} m is below the keel (-{T:g} m)"))
+        # the roll oscillation must be resolved by the RK4 sub-step (omega h < 1.6)
+        kxx2 = ro.radius_of_gyration ** 2 * (1.0 + ro.added_inertia_ratio) + ro.z_g ** 2
+        period = 2.0 * math.pi * math.sqrt(kxx2 / (G * ro.gm))
+        if period < 4.0 * hmax:
+            out.append(("roll.gm", f"roll period {period:.3g} s is shorter than 4 integration sub-steps "
+                                   f"({hmax:g} s): lower gm or integration.max_substep"))
+    if s.anchor is not None and s.anchor.moment_lever > 2.0 * L:
+        out.append(("anchor.moment_lever", f"{s.anchor.moment_lever:g} m is more than 2 L"))
+    t = s.towline_simple
+    if t is not None:
+        if t.force == "resistance":
+            if t.reference_speed is None:
+                out.append(("towline_simple.reference_speed", "required key is missing (force: resistance)"))
+            if h.resistance is None:
+                out.append(("towline_simple.force", "'resistance' needs hull.resistance"))
+        if t.lever is not None and abs(t.lever) > L:
+            out.append(("towline_simple.lever", f"{t.lever:g} m is off the hull (|lever| <= L)"))
+    for k, p in (s.attachments or {}).items():
+        out += _point(f"attachments.{k}", p, L)
+    if any(abs(c) > 10.0 for c in s.current):
+        out.append(("current", f"{s.current} m/s: components must be within +-10 m/s"))
+    return out
+
+
+def _point(key: str, p: List[float], L: float) -> List[tuple]:
+    # a body point further than one ship length from the origin is not on the ship
+    if any(abs(c) > L for c in p):
+        return [(key, f"{p} m is not on the ship (each coordinate within +-L = {L:g} m)")]
+    return []

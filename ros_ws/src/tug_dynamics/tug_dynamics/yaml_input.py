@@ -1,0 +1,93 @@
+"""Reading input YAML files strictly: duplicate mapping keys are errors, and every error
+carries the line and column. Used by the ship-file and scenario loaders (ROS-free, yaml only).
+
+PyYAML's SafeLoader keeps the last of two equal keys silently: `mass: 1000` followed later
+by `mass: 1e30` would load the second without a word.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import yaml
+
+
+class YamlInputError(ValueError):
+    """A file that is not readable, valid YAML, or has a duplicate key; message without the path."""
+
+
+class UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that refuses a key given twice in one mapping (merge keys `<<` still work:
+    only the mapping's own keys are compared)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    first = seen.get(key)
+                except TypeError:  # unhashable key: SafeLoader reports it
+                    continue
+                if first is not None:
+                    raise yaml.constructor.ConstructorError(
+                        f"while reading the mapping starting at line {node.start_mark.line + 1}", node.start_mark,
+                        f"duplicate key {key!r} (first given at line {first.line + 1})", key_node.start_mark)
+                seen[key] = key_node.start_mark
+        return super().construct_mapping(node, deep=deep)
+
+
+def describe_yaml_error(exc: yaml.YAMLError) -> str:
+    """'line L, column C: problem' of a PyYAML error (1-based, as editors count)."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc)
+    context = getattr(exc, "context", None)
+    text = f"{context}: {problem}" if context and "duplicate key" not in str(problem) else str(problem)
+    if mark is not None:
+        return f"line {mark.line + 1}, column {mark.column + 1}: {text}"
+    return text
+
+
+def load_yaml(path: str) -> Any:
+    """The parsed document of a YAML file; YamlInputError (no path in the message) if it cannot
+    be read, is not UTF-8, is not valid YAML or repeats a key."""
+    try:
+        with open(path, "r", encoding="utf-8") as fh:
+            return yaml.load(fh, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        raise YamlInputError(f"not valid YAML: {describe_yaml_error(exc)}") from None
+    except UnicodeDecodeError as exc:
+        raise YamlInputError(f"not UTF-8 text: {exc}") from None
+    except OSError as exc:
+        raise YamlInputError(f"cannot read: {exc.strerror or exc}") from None
+
+
+def loads_yaml(text: str) -> Any:
+    """As load_yaml for a string (e.g. a ROS parameter holding YAML)."""
+    try:
+        return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        raise YamlInputError(f"not valid YAML: {describe_yaml_error(exc)}") from None
+
+
+def first_non_finite(data: Any, path: str = "") -> str | None:
+    """Dotted path of the first NaN or infinite float anywhere in a parsed document, else None."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return path or "(top)"
+    if isinstance(data, dict):
+        for k, v in data.items():
+            found = first_non_finite(v, f"{path}.{k}" if path else str(k))
+            if found:
+                return found
+    elif isinstance(data, (list, tuple)):
+        for i, v in enumerate(data):
+            found = first_non_finite(v, f"{path}.{i}" if path else str(i))
+            if found:
+                return found
+    return None
+
+
+__all__ = ["YamlInputError", "UniqueKeyLoader", "describe_yaml_error", "load_yaml", "loads_yaml",
+           "first_non_finite"]
