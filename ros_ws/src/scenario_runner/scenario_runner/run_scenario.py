@@ -134,6 +134,23 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
     return "\n".join(lines)
 
 
+def check_writable(path: str, what: str) -> Optional[str]:
+    """Why a file cannot be written at path (its folder created if needed), or None. Checked
+    before anything starts, so a bad path is a message, not a traceback after the run."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        return f"{what} {path} is a folder, expected a file name"
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as exc:
+        return f"{what}: cannot create the folder {folder}: {exc.strerror}"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"{what}: the folder {folder} is not writable"
+    if os.path.exists(path) and not os.path.isfile(path):
+        return f"{what} {path} is not a regular file"
+    return None
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(prog="run_scenario", description=__doc__.split("\n\n")[0])
@@ -159,12 +176,28 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 2
     steps = sc.steps if args.duration is None else min(sc.steps, int(round(args.duration * sc.exchange_rate)))
     output = args.output or sc.recording.path or os.path.join("output", f"{sc.name}.mcap")
-    log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{sc.name}_logs")
+    stem = os.path.splitext(os.path.basename(output))[0] or sc.name
+    # the logs follow the recording's name: two runs to two files never share a log folder
+    log_dir = args.log_dir or os.path.join(os.path.dirname(os.path.abspath(output)), f"{stem}_logs")
+    record = sc.recording.enabled and not args.no_record
+    problem = check_writable(output, "recording (--output)") if record else None
+    problem = problem or check_writable(os.path.join(log_dir, "x.log"), "log folder (--log-dir)")
+    if problem:
+        sys.stderr.write(f"run_scenario: {problem}\n")
+        return 2
+    if record and os.path.exists(output):
+        sys.stderr.write(f"run_scenario: replacing the existing recording {os.path.abspath(output)} "
+                         "(give --output to keep it)\n")
 
     # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
     # shut the context down under the running loop (an RCLError traceback, or exit 3).
     rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.fed_topics(sc)) if sc.recording.enabled and not args.no_record else None
+    try:
+        recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.fed_topics(sc)) if record else None
+    except OSError as exc:
+        sys.stderr.write(f"run_scenario: cannot write the recording {output}: {exc}\n")
+        rclpy.try_shutdown()
+        return 2
     mon = Monitor(sc, recorder)
     progress = None
     if not args.quiet:
@@ -173,6 +206,11 @@ def main(argv: Optional[List[str]] = None) -> int:
     try:
         stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder, layout=args.layout,
                        on_step=(lambda k: progress.update(1)) if progress else None, on_finished=mon.finish)
+    except OSError as exc:  # the recording could not be written (disk full, file system gone)
+        if progress:
+            progress.close()
+        sys.stderr.write(f"run_scenario: run stopped: writing {os.path.abspath(output)} failed: {exc}\n")
+        return 3
     except cd.DomainInUse as exc:
         if progress:
             progress.close()
@@ -192,7 +230,11 @@ def main(argv: Optional[List[str]] = None) -> int:
         if progress:
             progress.close()
         if recorder:
-            recorder.close()  # finalised (summary, indexes) also after an error or Ctrl-C
+            try:
+                recorder.close()  # finalised (summary, indexes) also after an error or Ctrl-C
+            except OSError as exc:
+                sys.stderr.write(f"run_scenario: the recording {os.path.abspath(output)} could not be "
+                                 f"finalised: {exc}\n")
         mon.destroy_node()
         rclpy.try_shutdown()
     print(summary(sc, stats, mon))
