@@ -59,7 +59,13 @@ def test_nan_command_is_rejected_and_logged(start_node, rclpy_context, ros_domai
     assert spin_until(node, lambda: len(received) > 0, 60), vessel.log()
     assert _send(ros_domain, "--engine", "0.4").returncode == 0
     assert spin_until(node, lambda: abs(received[-1].engine_order - 0.4) < 1e-12, 20)
-    assert _send(ros_domain, "--engine", "nan").returncode == 0
+    # send_command itself refuses NaN (exit 2), so a raw publisher sends it
+    from sim_plumbing import ros_common as rc
+    from tug_msgs.msg import VesselCommand
+    assert _send(ros_domain, "--engine", "nan").returncode == 2
+    pub = node.create_publisher(VesselCommand, "/tug/command", rc.COMMAND_QOS)
+    assert spin_until(node, lambda: pub.get_subscription_count() > 0, 20)
+    pub.publish(VesselCommand(engine_order=float("nan")))
     assert spin_until(node, lambda: received[-1].commands_rejected == 1, 20), vessel.log()
     assert received[-1].engine_order == pytest.approx(0.4)  # last valid order kept
     assert _send(ros_domain, "--engine", "3.0").returncode == 0  # out of range: clamped to full ahead
