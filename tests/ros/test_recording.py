@@ -114,10 +114,19 @@ def _node_pid(pattern, domain):
     return None
 
 
+def _long_tow(tmp_path):
+    """The tow lasting an hour (the scenario's own 120 s cap --duration)."""
+    import yaml
+    from scenario_runner.run_scenario import scenario_path
+    path = tmp_path / "seed000_straight_tow_5kn.yaml"
+    path.write_text(yaml.safe_dump(dict(yaml.safe_load(open(scenario_path(SCENARIO))), duration=3600.0)))
+    return str(path)
+
+
 def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
     from mcap.reader import make_reader
     out = tmp_path / "killed.mcap"
-    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", "600",
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), _long_tow(tmp_path), "--duration", "600",
                              "--output", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     victim = None
@@ -128,7 +137,7 @@ def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
     assert victim, "barge node never started"
     # kill it once the run is going: the rope has been laid out between the vessels' step-0
     # attachments (so there is something in the recording), however slow the start-up
-    rope_log = tmp_path / "seed000_straight_tow_5kn_logs" / "towline_rope.log"
+    rope_log = tmp_path / "killed_logs" / "towline_rope.log"  # logs follow the recording's name
     while time.monotonic() < deadline and not (rope_log.exists() and "laid out" in rope_log.read_text()):
         time.sleep(0.2)
     time.sleep(1.0)
@@ -144,7 +153,7 @@ def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
 def test_ctrl_c_leaves_a_finalised_recording_and_no_nodes(tmp_path, ros_domain):
     from mcap.reader import make_reader
     out = tmp_path / "interrupted.mcap"
-    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", "600",
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), _long_tow(tmp_path), "--duration", "600",
                              "--output", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     deadline = time.monotonic() + 120
