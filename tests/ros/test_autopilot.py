@@ -175,7 +175,7 @@ def test_misbehaving_autopilot_does_not_disturb_the_vessel(start_node, rclpy_con
     rate = (last().step - step_after) / (time.monotonic() - t_after)
     print(f"\nburst of 2001 commands in {burst * 1e3:.0f} ms; vessel steps {steps_before} -> {last().step}, "
           f"{rate:.1f} steps/s after it; rejected {last().commands_rejected} (3 + {n_nan} NaN sent, the vessel's "
-          f"keep-last-10 command queue may drop some of a burst), clamped {last().commands_clamped}")
+          f"keep-all command queue drops none itself), clamped {last().commands_clamped}")
     assert 3 < last().commands_rejected <= 3 + n_nan
     assert last().commands_clamped == clamped  # the burst's valid commands were all in range
 
@@ -189,7 +189,8 @@ def test_misbehaving_autopilot_does_not_disturb_the_vessel(start_node, rclpy_con
     obs.node.destroy_node()
     vessel.stop()
     log = vessel.log()
-    assert "command rejected" in log and "engine_order=nan" in log and "steering_angle=inf" in log
+    # rejections are logged at most once a second (the rest counted): the first one is in the log
+    assert "command rejected" in log and "engine_order=nan" in log
     assert "command clamped" in log
 
 
