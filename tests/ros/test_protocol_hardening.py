@@ -58,25 +58,29 @@ def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_c
     from tug_msgs.msg import SimStep, StepDone
     from sim_plumbing import ros_common as rc
     clean = tmp_path / "clean.mcap"
-    assert subprocess.run(runner(clean), capture_output=True, text=True, timeout=240).returncode == 0
+    assert subprocess.run(runner(clean, duration=40), capture_output=True, text=True, timeout=240).returncode == 0
+    stop = threading.Event()
+    sent = [0]
+    disturbed = tmp_path / "disturbed.mcap"
+    log_dir = tmp_path / "disturbed_logs"
+    proc = subprocess.Popen(runner(disturbed, duration=40), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    # the stranger appears once the run is under way (before, the runner rightly refuses the domain)
+    _wait_until_stepping(ros_domain, log_dir)
     node = Node("stranger", context=rclpy_context)
     step_pub = node.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
     done_pub = node.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
-    stop = threading.Event()
-    sent = [0]
 
     def flood():
         rng = np.random.default_rng(1)
         while not stop.is_set():
-            k = int(rng.integers(0, 300))
+            k = int(rng.integers(0, 3000))
             step_pub.publish(SimStep(run_id=["", "other-run"][k % 2], step=k, period=0.02, ordered=["tug"]))
             for name in ("/tug/vessel", "/barge/vessel", "/towline/rope", "/ghost/vessel"):
                 done_pub.publish(StepDone(run_id="other-run", node=name, step=k, ok=True))
             sent[0] += 5
             time.sleep(0.002)
 
-    disturbed = tmp_path / "disturbed.mcap"
-    proc = subprocess.Popen(runner(disturbed), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     thread = threading.Thread(target=flood, daemon=True)
     thread.start()
     try:
@@ -85,7 +89,7 @@ def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_c
         stop.set()
         thread.join(5)
     assert proc.returncode == 0, stdout + stderr
-    assert sent[0] > 1000
+    assert sent[0] > 100
     assert "refused protocol messages" in stdout, stdout  # counted, and said
     assert "another run" in stdout
     a, b = physics(clean), physics(disturbed)
