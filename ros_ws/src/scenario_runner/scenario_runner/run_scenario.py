@@ -135,19 +135,20 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
 
 
 def check_writable(path: str, what: str) -> Optional[str]:
-    """Why a file cannot be written at path (its folder created if needed), or None. Checked
-    before anything starts, so a bad path is a message, not a traceback after the run."""
-    folder = os.path.dirname(os.path.abspath(path))
+    """Why a file cannot be written at path, or None. Checked before anything starts (and without
+    creating anything), so a bad path is a message, not a traceback after the run."""
     if os.path.isdir(path):
         return f"{what} {path} is a folder, expected a file name"
-    try:
-        os.makedirs(folder, exist_ok=True)
-    except OSError as exc:
-        return f"{what}: cannot create the folder {folder}: {exc.strerror}"
-    if not os.access(folder, os.W_OK | os.X_OK):
-        return f"{what}: the folder {folder} is not writable"
     if os.path.exists(path) and not os.path.isfile(path):
         return f"{what} {path} is not a regular file"
+    folder = os.path.dirname(os.path.abspath(path))
+    existing = folder
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing):
+        return f"{what}: cannot create the folder {folder}: {existing} is not a folder"
+    if not os.access(existing, os.W_OK | os.X_OK) or existing.startswith("/proc"):
+        return f"{what}: cannot create or write the folder {folder} ({existing} is not writable)"
     return None
 
 
