@@ -146,9 +146,9 @@ def check_writable(path: str, what: str) -> Optional[str]:
     while not os.path.exists(existing):
         existing = os.path.dirname(existing)
     if not os.path.isdir(existing):
-        return f"{what}: cannot create the folder {folder}: {existing} is not a folder"
+        return f"{what} {path}: cannot create the folder {folder}: {existing} is not a folder"
     if not os.access(existing, os.W_OK | os.X_OK) or existing.startswith("/proc"):
-        return f"{what}: cannot create or write the folder {folder} ({existing} is not writable)"
+        return f"{what} {path}: cannot create or write the folder {folder} ({existing} is not writable)"
     return None
 
 
