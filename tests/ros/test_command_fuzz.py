@@ -42,7 +42,8 @@ def test_random_commands_during_a_paced_run(tmp_path, ros_domain, rclpy_context)
     sent = {t: 0 for t in pubs}
     rng = np.random.default_rng(13)
     deadline = time.monotonic() + 120
-    while any(p.get_subscription_count() == 0 for p in pubs.values()) and time.monotonic() < deadline:
+    # the recorder and the node itself take each command topic
+    while any(p.get_subscription_count() < 2 for p in pubs.values()) and time.monotonic() < deadline:
         time.sleep(0.1)
     time.sleep(1.0)  # the paced run is under way
 
@@ -66,6 +67,7 @@ def test_random_commands_during_a_paced_run(tmp_path, ros_domain, rclpy_context)
         if i % 500 == 0:
             time.sleep(0.05)  # a flood spread over a few seconds of the paced run
     stdout, stderr = proc.communicate(timeout=200)
+    node.destroy_node()
     assert proc.returncode == 0, stdout + stderr
     assert sent == {t: PER_TOPIC for t in pubs}
     assert "overrun step(s)" in stdout and "lateness p99" in stdout  # reported, whatever they are

@@ -88,6 +88,7 @@ def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_c
     finally:
         stop.set()
         thread.join(5)
+        node.destroy_node()  # a stranger left on the domain would be refused by later runs
     assert proc.returncode == 0, stdout + stderr
     assert sent[0] > 100
     assert "refused protocol messages" in stdout, stdout  # counted, and said
@@ -221,9 +222,21 @@ class Driver:
         self.step_pub.publish(msg)
 
 
-def test_rejected_announced_order_does_not_stall_the_step(start_node, rclpy_context):
+@pytest.fixture
+def driver(rclpy_context):
+    drivers = []
+
+    def make(run_id="run-x"):
+        drivers.append(Driver(rclpy_context, run_id))
+        return drivers[-1]
+    yield make
+    for d in drivers:  # a driver left on the domain would be refused by later runs as a stranger
+        d.node.destroy_node()
+
+
+def test_rejected_announced_order_does_not_stall_the_step(start_node, driver):
     vessel = _lockstep_vessel(start_node)
-    d = Driver(rclpy_context)
+    d = driver()
     d.ready(vessel.log)
     d.command(0, 0.5)
     d.trigger(0, ["tug"])
@@ -237,9 +250,9 @@ def test_rejected_announced_order_does_not_stall_the_step(start_node, rclpy_cont
     assert "command rejected" in vessel.log()
 
 
-def test_stray_triggers_are_refused_by_the_node(start_node, rclpy_context):
+def test_stray_triggers_are_refused_by_the_node(start_node, driver):
     vessel = _lockstep_vessel(start_node)
-    d = Driver(rclpy_context)
+    d = driver()
     d.ready(vessel.log)
     stranger = Driver.__new__(Driver)
     stranger.__dict__.update(d.__dict__, run_id="other-run")
@@ -301,5 +314,6 @@ def test_nonfinite_vessel_state_is_named_by_the_vessel_node(start_node, rclpy_co
     msg.wrench.force.x = 1e300
     pub.publish(msg)
     vessel.proc.wait(30)
+    node.destroy_node()
     assert vessel.proc.returncode == 3, vessel.log()
     assert "vessel 'tug' diverged at step" in vessel.log() and "not finite" in vessel.log()
