@@ -51,14 +51,52 @@ class NodeProcess:
         return self.proc.returncode
 
 
+def processes_of_domain(domain: int) -> List[int]:
+    """pids of processes (other than this one) started with ROS_DOMAIN_ID=domain."""
+    pids = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit() or int(entry) == os.getpid():
+            continue
+        try:
+            with open(f"/proc/{entry}/environ", "rb") as f:
+                env = f.read().split(b"\0")
+        except OSError:
+            continue
+        if f"ROS_DOMAIN_ID={domain}".encode() in env:
+            pids.append(int(entry))
+    return pids
+
+
+def kill_processes_of_domain(domain: int) -> List[int]:
+    """SIGKILL whatever a test left running in its domain: domains are reused by later tests,
+    and a leftover node there is a stranger to their runs (which rightly refuse it)."""
+    pids = processes_of_domain(domain)
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    deadline = time.monotonic() + 5.0
+    while pids and time.monotonic() < deadline and processes_of_domain(domain):
+        time.sleep(0.05)
+    return pids
+
+
 @pytest.fixture
 def ros_domain():
-    """A reserved ROS_DOMAIN_ID, exported for this test's node processes."""
+    """A reserved ROS_DOMAIN_ID, exported for this test's node processes; whatever still runs
+    in it when the test ends is killed before the domain is released."""
     from domain_coordinator import domain_id
     old = os.environ.get("ROS_DOMAIN_ID")
     with domain_id() as did:
         os.environ["ROS_DOMAIN_ID"] = str(did)
-        yield did
+        try:
+            yield did
+        finally:
+            kill_processes_of_domain(did)
+            # what the killed processes left in /dev/shm (sim_plumbing.shm_hygiene says why)
+            from sim_plumbing.shm_hygiene import remove_dead_fastdds_files
+            remove_dead_fastdds_files()
     if old is None:
         os.environ.pop("ROS_DOMAIN_ID", None)
     else:

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import executable_path, spin_until
+from conftest import executable_path, processes_of_domain, spin_until
 from test_recording import physics, _node_pid
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
@@ -150,6 +150,36 @@ def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_pat
     while _domain_nodes(ros_domain) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert _domain_nodes(ros_domain) == []  # the nodes died with their runner
+
+
+@pytest.mark.parametrize("victims", ["runner", "all"])
+def test_a_run_after_a_killed_run_on_the_same_domain(tmp_path, ros_domain, victims):
+    """The runner killed with SIGKILL (its nodes then end on their own), or runner and nodes
+    killed at once (a container stopped, the OOM killer): the next run on that domain runs to
+    its end. (Ports of Fast DDS's shared-memory transport that a killed process still held stay
+    in /dev/shm; reused by the next run's participants they lost its messages: a stall.)"""
+    log_dir = tmp_path / "killed_logs"
+    first = subprocess.Popen(runner(None, "--log-dir", str(log_dir), duration=600), stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+    _wait_until_stepping(ros_domain, log_dir)
+    for pid in processes_of_domain(ros_domain) if victims == "all" else [first.pid]:
+        os.kill(pid, signal.SIGKILL)
+    first.wait(timeout=30)
+    deadline = time.monotonic() + 10
+    while processes_of_domain(ros_domain) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not processes_of_domain(ros_domain)
+    # and a dead data-sharing segment as such a kill leaves it (no process maps it)
+    planted = [f"/dev/shm/fastrtps_0000{ros_domain:04d}deadbeef{suffix}" for suffix in ("", "_el")]
+    for path in planted:
+        with open(path, "wb") as f:
+            f.write(b"\0" * 4096)
+    time.sleep(1.5)
+    t0 = time.monotonic()
+    again = subprocess.run(runner(tmp_path / "again.mcap", duration=10), capture_output=True, text=True, timeout=200)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert time.monotonic() - t0 < 60  # no stall (30 s each) on the way
+    assert not any(os.path.exists(p) for p in planted)
 
 
 def test_leftover_lockstep_node_is_refused_by_the_next_run(tmp_path, ros_domain, start_node):

@@ -31,6 +31,7 @@ from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchC
 from scenario_runner.scenario import Scenario, heading_rad, resolve
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
+from sim_plumbing import shm_hygiene
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import RateLimitedLog
 
@@ -558,6 +559,10 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         try:
             conductor.check_domain(executor)
             stop.check()
+            dead = shm_hygiene.remove_dead_fastdds_files()
+            if dead:
+                conductor.get_logger().info(f"removed {len(dead)} dead Fast DDS shared-memory file(s) of killed "
+                                            f"processes from {shm_hygiene.SHM_DIR}")
             if recorder is not None and layout == "one_process":
                 record_feed.install(recorder.feed_in_process)
             try:
