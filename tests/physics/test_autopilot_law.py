@@ -302,3 +302,29 @@ def test_tug_follows_a_track_while_towing():
     assert max(tensions[-1000:]) > 10e3  # really towing
     assert rows[-1, 4] == pytest.approx(2.5, abs=0.3)
     assert rows[-1, 2] > 1000.0  # far along the last (northward) leg
+
+
+def test_retune_keeps_integrals_and_leg_and_refuses_a_new_mode():
+    """Orders and gains changed while running (ros2 param set): the integrators and the active
+    leg carry over (a step-free change of the command), each integral within its new bound;
+    another mode or track, or a configuration the law refuses, changes nothing."""
+    cfg = AutopilotConfig(mode="track", waypoints=[(0.0, 0.0), (100.0, 0.0), (100.0, 100.0)])
+    law = AutopilotLaw(cfg)
+    law.heading_ctl.integral, law.speed_ctl.integral = 0.3, 2.0
+    law.update(Measurement(x=95.0, y=1.0, yaw=0.0, yaw_rate=0.0, speed=2.0), 0.0)
+    assert law.los.leg == 1
+    import dataclasses
+    law.retune(dataclasses.replace(cfg, speed=4.0, heading_kp=1.0, speed_ki=0.04))
+    assert law.cfg.speed == 4.0 and law.heading_ctl.kp == 1.0
+    assert law.heading_ctl.integral == 0.3 and law.los.leg == 1
+    # ki I stays within the integral limit: I <= 0.5 / 0.04 = 12.5 m, so 2.0 carries over
+    assert law.speed_ctl.integral == 2.0
+    law.retune(dataclasses.replace(law.cfg, speed_ki=0.5))  # bound 0.5 / 0.5 = 1.0 m
+    assert law.speed_ctl.integral == pytest.approx(1.0, abs=1e-12)
+    before = law.cfg
+    for bad in (dataclasses.replace(before, mode="heading"), dataclasses.replace(before, waypoints=[(0, 0), (1, 1)]),
+                dataclasses.replace(before, min_engine_order=0.9, max_engine_order=0.5),
+                dataclasses.replace(before, speed=float("nan"))):
+        with pytest.raises(ValueError):
+            law.retune(bad)
+        assert law.cfg is before and law.los.leg == 1 and law.speed_ctl.integral == pytest.approx(1.0, abs=1e-12)

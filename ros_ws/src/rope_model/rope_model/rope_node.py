@@ -57,6 +57,8 @@ class RopeEnd:
 
 
 class RopeNode(SteppedNode):
+    LIVE_PARAMETERS = ("marker_rate",)  # no effect on the physics
+
     def __init__(self, node_name: str = "rope", **kwargs):
         super().__init__(node_name, **kwargs)
         p = self.declare_parameter
@@ -127,6 +129,9 @@ class RopeNode(SteppedNode):
             + ("" if self.rope else "; waiting for the vessels' attachments"))
 
     # -- inputs --------------------------------------------------------------------------
+    def on_live_parameters(self, changes) -> None:
+        self.marker_every = max(1, round(1e9 / self.period_ns / changes["marker_rate"]))
+
     def step_of(self, spec, msg) -> int:
         if spec.msg_type is AttachmentArray:
             return msg.step

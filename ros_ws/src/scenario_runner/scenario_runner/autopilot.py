@@ -33,6 +33,7 @@ for that step (the step still completes).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 import time
@@ -56,7 +57,23 @@ def _odom_values(msg: Odometry):
     return (p.x, p.y, q.x, q.y, q.z, q.w, v.x, v.y, w.z)
 
 
+# parameter -> (AutopilotConfig field, conversion): orders, gains and limits change while running
+_LIVE_CONFIG = {
+    "heading": ("heading", math.radians), "speed": ("speed", float), "engine_order": ("engine_order", float),
+    "lookahead": ("lookahead", float), "acceptance_radius": ("acceptance_radius", float),
+    "heading_kp": ("heading_kp", float), "heading_ki": ("heading_ki", float), "heading_kd": ("heading_kd", float),
+    "heading_integral_band_deg": ("heading_integral_band", math.radians),
+    "heading_integral_limit_deg": ("heading_integral_limit", math.radians),
+    "max_steering_deg": ("max_steering", math.radians), "speed_kp": ("speed_kp", float),
+    "speed_ki": ("speed_ki", float), "speed_full_ahead": ("speed_full_ahead", float),
+    "speed_exponent": ("speed_exponent", float), "speed_integral_band": ("speed_integral_band", float),
+    "speed_integral_limit": ("speed_integral_limit", float), "min_engine_order": ("min_engine_order", float),
+    "max_engine_order": ("max_engine_order", float),
+}
+
+
 class AutopilotNode(SteppedNode):
+    LIVE_PARAMETERS = tuple(_LIVE_CONFIG) + ("odom_timeout", "log_period")
     def __init__(self, node_name: str = "autopilot", **kwargs):
         super().__init__(node_name, **kwargs)
         d = AutopilotConfig()
@@ -165,6 +182,15 @@ class AutopilotNode(SteppedNode):
         self.get_logger().info(
             f"autopilot for '{self.vessel}': {what}, {speed}; {1e9 / self.period_ns:g} Hz, "
             f"{'lockstep' if self.lockstep else 'free-running'}; waiting for {self.odom_topic}")
+
+    def on_live_parameters(self, changes) -> None:
+        """A new order, gain or limit: the law keeps its integrals and its leg."""
+        cfg = dataclasses.replace(self.cfg, **{_LIVE_CONFIG[k][0]: _LIVE_CONFIG[k][1](v)
+                                               for k, v in changes.items() if k in _LIVE_CONFIG})
+        self.law.retune(cfg)  # ValueError: refused, nothing changed
+        self.cfg = cfg
+        self.odom_timeout = changes.get("odom_timeout", self.odom_timeout)
+        self.log_period = changes.get("log_period", self.log_period)
 
     @staticmethod
     def _track_values(value) -> List[float]:

@@ -282,6 +282,21 @@ class AutopilotLaw:
                                          cfg.speed_integral_band)
         self.los = LosGuidance(cfg.waypoints, cfg.lookahead, cfg.acceptance_radius) if cfg.mode == "track" else None
 
+    def retune(self, cfg: AutopilotConfig) -> None:
+        """New orders, gains or limits while running (ros2 param set): the integrals and the
+        active leg carry over, each integral within its new bound. Raises ValueError (and
+        changes nothing) for a configuration __init__ would refuse, or another mode or track."""
+        if cfg.mode != self.cfg.mode or tuple(cfg.waypoints) != tuple(self.cfg.waypoints):
+            raise ValueError("mode and track are fixed while running: restart the autopilot to change them")
+        fresh = AutopilotLaw(cfg)
+        for old, new in ((self.heading_ctl, fresh.heading_ctl), (self.speed_ctl, fresh.speed_ctl)):
+            bound = new.integral_limit / new.ki if new.ki > 0.0 else 0.0
+            new.integral = clamp(old.integral, -bound, bound)
+            new.error = old.error
+        if self.los is not None:
+            fresh.los.leg, fresh.los.finished = self.los.leg, self.los.finished
+        self.cfg, self.heading_ctl, self.speed_ctl, self.los = cfg, fresh.heading_ctl, fresh.speed_ctl, fresh.los
+
     def update(self, m: Measurement, dt: float) -> Output:
         """Command from one measurement; dt = time since the previous update (0: no integration)."""
         if not m.finite():

@@ -189,7 +189,7 @@ class McapRecorder(Node):
             self.complaints("undecodable " + topic, f"{topic}: {len(data)} bytes that are not a "
                             f"{msg_class.__name__} not recorded: {exc}")
             return
-        self._queue(topic, self.log_time_ns, data)
+        self._write(topic, data)
 
     def _queue(self, topic: str, log_time_ns: int, data: bytes) -> None:
         # Only queued here: the owner calls flush() when it has time (the scenario runner

@@ -30,8 +30,9 @@ from __future__ import annotations
 import collections
 import dataclasses
 import time
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
@@ -106,6 +107,11 @@ class StepInput:
 class SteppedNode(Node):
     """Base of the simulator nodes. Subclasses implement compute_step and publish_outputs."""
 
+    # Parameters that may change while the node runs (`ros2 param set`), adopted by
+    # on_live_parameters from the next step on; every other parameter is fixed at start-up
+    # (it shaped the model, its topics or the step protocol) and a change is refused.
+    LIVE_PARAMETERS: Tuple[str, ...] = ()
+
     def init_stepping(self, inputs: List[StepInput], ready: bool = True) -> None:
         """Declare exchange_rate and lockstep, subscribe the inputs. ready=False: the node
         sets self.ready_to_step later (e.g. a rope waiting for its ends' first positions)."""
@@ -151,6 +157,27 @@ class SteppedNode(Node):
             self._ready_timer = self.create_timer(0.2, self._announce_ready, clock=self._wall_clock)
         else:
             self.timer = self.create_timer(self.dt, self._on_timer, clock=self._wall_clock)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+
+    def _on_set_parameters(self, params) -> SetParametersResult:
+        fixed = sorted(p.name for p in params if p.name not in self.LIVE_PARAMETERS)
+        if fixed:
+            live = ", ".join(self.LIVE_PARAMETERS) or "none"
+            return SetParametersResult(successful=False, reason=(
+                f"{', '.join(fixed)}: fixed at start-up (restart the node to change it); parameters that "
+                f"change while running: {live}"))
+        changes = {p.name: p.value for p in params}
+        try:
+            self.on_live_parameters(changes)
+        except ValueError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        self.get_logger().info(f"parameter(s) {', '.join(f'{k}={v!r}' for k, v in changes.items())} in effect "
+                               f"from step {self.step_index}")
+        return SetParametersResult(successful=True)
+
+    def on_live_parameters(self, changes: Dict[str, Any]) -> None:
+        """Adopt new values of LIVE_PARAMETERS (their descriptors' ranges already checked);
+        raise ValueError to refuse the whole change, leaving everything as it was."""
 
     def create_fed_publisher(self, msg_type, topic: str, qos) -> record_feed.FedPublisher:
         """A per-step output: publishes serialized messages and hands them to the scenario
