@@ -5,10 +5,11 @@
 Reads any MCAP recording that has the topic contract's topics (this project's recorder, a
 replay recorded again, rosbag2): /<vessel>/odom, /<vessel>/status, /<vessel>/command,
 /<rope>/state, /<rope>/end_a|end_b/wrench, /scenario/events; vessels and ropes are found by
-topic name and type. Time is the messages' header stamp (simulation time), so a re-recorded
-replay gives the same results as the original; duplicated stamps (a looped replay) are kept
-once. A truncated or corrupt file is reported (path, byte offset, what is wrong) and its
-readable part is analysed.
+topic name and type. A rosbag2 bag directory is read through its .mcap file; a sqlite3 bag
+(.db3 file or directory) is refused with the command that converts it (exit status 2). Time
+is the messages' header stamp (simulation time), so a re-recorded replay gives the same
+results as the original; duplicated stamps (a looped replay) are kept once. A truncated or
+corrupt file is reported (path, byte offset, what is wrong) and its readable part is analysed.
 
 Writes to the output directory (default: <recording without .mcap>_analysis/):
   tracks.png           XY tracks (map frame, x east, y north) of every vessel and rope element
@@ -40,7 +41,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from scenario_runner.analysis_measures import turning_measures
-from scenario_runner.mcap_io import Decoder, McapFile, McapReadError
+from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
 
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
 EPOCH_LIKE = 1e8  # s: stamps beyond ~3 years are wall-clock (epoch) times, shown relative to the first
@@ -592,7 +593,8 @@ def build_parser() -> argparse.ArgumentParser:
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog="Exit status: 0 done; 1 damaged file, its readable part analysed; "
                                        "2 nothing to analyse.")
-    p.add_argument("recording", help="MCAP file")
+    p.add_argument("recording", help="MCAP file, or a rosbag2 bag directory holding one (sqlite3 .db3 bags: "
+                                      "convert them first, the error message says how)")
     p.add_argument("-o", "--output", help="output directory (default: <recording>_analysis next to the file)")
     p.add_argument("--vessels", nargs="+", help="only these vessels (namespaces); default: every /<name>/odom")
     p.add_argument("--ropes", nargs="+", help="only these ropes; default: every /<name>/state")
@@ -614,7 +616,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     args = build_parser().parse_args(argv)
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
     try:
-        rec = Recording(args.recording, args.vessels, args.ropes)
+        path, note = locate_recording(args.recording)  # a rosbag2 directory: its .mcap; sqlite3: what to do
+        if note:
+            say(f"analyze: {note}")
+        rec = Recording(path, args.vessels, args.ropes)
     except McapReadError as exc:
         sys.stderr.write(f"analyze: {exc}\n")
         return EXIT_NOTHING

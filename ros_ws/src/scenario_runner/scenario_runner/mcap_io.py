@@ -14,7 +14,10 @@ holds most of its messages, so this module parses the MCAP records itself and ke
   the next record that passes structural checks (a chunk header with a known compression and
   consistent lengths, or a message on a known channel followed by another valid record);
 - every problem is kept as a ``Problem`` (byte offset + what is wrong); ``report()`` gives
-  one line per problem, each naming the file.
+  one line per problem, each naming the file;
+- metadata records are kept by name (``metadata``; rosbag2's bag metadata: ``rosbag2_metadata()``);
+- ``locate_recording`` maps what a user hands the tools (an MCAP file, a rosbag2 directory) to
+  the MCAP file to read, and says what to do with what is not MCAP (rosbag2 sqlite3 bags).
 
 Nothing here needs ROS; ``message_class`` / ``decoder`` (bottom) import ROS types on demand.
 """
@@ -174,6 +177,7 @@ class McapFile:
         self.footer_found = False
         self.declared_message_count: Optional[int] = None  # from the statistics record, if read
         self.suspect_messages = 0
+        self.metadata: Dict[str, Dict[str, str]] = {}  # metadata records by name (the last of a name wins)
         self._passes = 0
         self._recording = True
 
@@ -201,6 +205,20 @@ class McapFile:
         else:
             lines.append(f"{self.path}: no readable messages")
         return "\n".join(lines)
+
+    def rosbag2_metadata(self) -> Optional[dict]:
+        """The bag metadata rosbag2's MCAP storage keeps in the file (metadata record "rosbag2",
+        key "serialized_metadata", BagMetadata YAML) as a dict; None if absent or unreadable.
+        Filled by the first pass (scan())."""
+        text = self.metadata.get("rosbag2", {}).get("serialized_metadata", "")
+        if not text.strip():
+            return None
+        import yaml
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError:
+            return None
+        return data if isinstance(data, dict) else None
 
     def topics(self) -> Dict[str, Channel]:
         """Topic -> channel (the first channel of a topic if several)."""
@@ -313,6 +331,10 @@ class McapFile:
                 elif op == OP_STATISTICS:
                     c = _Cursor(buf, body, end)
                     self.declared_message_count = c.u64()
+                elif op == OP_METADATA and self._recording:
+                    c = _Cursor(buf, body, end)
+                    name = c.string()
+                    self.metadata[name] = c.string_map()
                 elif op == OP_MESSAGE_INDEX:
                     self._check_message_index(buf, pos, body, end, last_chunk)
                 elif op == OP_DATA_END:
@@ -486,6 +508,91 @@ class McapFile:
                     break
                 i = buf.find(b"\x05", i + 1)
         return min(candidates) if candidates else None
+
+
+SQLITE_MAGIC = b"SQLite format 3\x00"
+ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
+
+
+def _head(path: str, n: int = 16) -> bytes:
+    try:
+        with open(path, "rb") as f:
+            return f.read(n)
+    except OSError:
+        return b""
+
+
+def _convert_hint(src: str) -> str:
+    src = os.path.normpath(src)
+    dst = os.path.join(os.path.dirname(src), os.path.splitext(os.path.basename(src))[0] + "_mcap")
+    return (f"convert it with the rosbags tool installed here:\n"
+            f"    rosbags-convert --src {src} --dst {dst} --dst-storage mcap\n"
+            f"  and give this tool the directory it writes ({dst}, holding {os.path.basename(dst)}.mcap);\n"
+            f"  or, where rosbag2 is installed: ros2 bag convert -i {src} -o out.yaml   "
+            f"(out.yaml: output_bags: [{{uri: {dst}, storage_id: mcap}}])")
+
+
+def locate_recording(path: str) -> Tuple[str, str]:
+    """The MCAP file to read for `path` and a note saying what was found ('' for a plain file).
+
+    path may be an MCAP file (intact or damaged: the tolerant reader copes) or a rosbag2 bag
+    directory (metadata.yaml + its storage files) holding one .mcap file. McapReadError, with a
+    message naming the file and what to do, for what this reader cannot read: a missing path,
+    rosbag2's sqlite3 storage (.db3 file or a directory of them), a zstd-compressed bag file, a
+    directory with several .mcap files (a split bag) or none."""
+    if os.path.isdir(path):
+        return _locate_in_directory(path)
+    if not os.path.exists(path):
+        raise McapReadError(f"{path}: no such file or directory")
+    head = _head(path)
+    if head.startswith(SQLITE_MAGIC):
+        raise McapReadError(f"{path}: a rosbag2 bag file in sqlite3 storage (.db3), not MCAP; this tool reads "
+                            f"MCAP only: {_convert_hint(path)}")
+    if head.startswith(ZSTD_MAGIC):
+        raise McapReadError(f"{path}: this file is zstd-compressed (rosbag2 file compression), not MCAP: "
+                            f"decompress it first (`zstd -d {path}`), or {_convert_hint(path)}")
+    return path, ""
+
+
+def _locate_in_directory(path: str) -> Tuple[str, str]:
+    meta_path = os.path.join(path, "metadata.yaml")
+    storage, names = "", []
+    if os.path.isfile(meta_path):
+        try:
+            import yaml
+            with open(meta_path) as f:
+                info = (yaml.safe_load(f) or {}).get("rosbag2_bagfile_information") or {}
+            storage = str(info.get("storage_identifier") or "")
+            names = [os.path.basename(str(p)) for p in info.get("relative_file_paths") or []]
+        except Exception:  # noqa: BLE001 - unreadable or malformed metadata.yaml: go by the files present
+            storage, names = "", []
+    listed = sorted(os.listdir(path))
+    files = [n for n in names if os.path.isfile(os.path.join(path, n))] or \
+        [n for n in listed if n.endswith((".mcap", ".db3", ".mcap.zstd", ".db3.zstd"))
+         and os.path.isfile(os.path.join(path, n))]
+    kind = "rosbag2 bag directory" if os.path.isfile(meta_path) else "directory"
+    sqlite = [n for n in files if n.endswith((".db3", ".db3.zstd")) or
+              _head(os.path.join(path, n)).startswith(SQLITE_MAGIC)]
+    if sqlite or storage == "sqlite3":
+        what = ", ".join(os.path.join(path, n) for n in sqlite) or "metadata.yaml: storage_identifier sqlite3"
+        # rosbags-convert reads a bag directory through its metadata.yaml, else a .db3 file itself
+        src = path if os.path.isfile(meta_path) or len(sqlite) != 1 else os.path.join(path, sqlite[0])
+        raise McapReadError(f"{path}: a {kind} in sqlite3 storage ({what}), not MCAP; this tool reads "
+                            f"MCAP only: {_convert_hint(src)}")
+    packed = [n for n in files if n.endswith(".zstd")]
+    if packed:
+        raise McapReadError(f"{path}: a {kind} with compressed bag files ({', '.join(packed)}), not MCAP; "
+                            f"{_convert_hint(path)}")
+    mcaps = [n for n in files if n.endswith(".mcap")]
+    if len(mcaps) == 1:
+        found = os.path.join(path, mcaps[0])
+        return found, f"{path}: a {kind} (MCAP storage); reading {found}"
+    if len(mcaps) > 1:
+        raise McapReadError(f"{path}: a {kind} with {len(mcaps)} MCAP files ({', '.join(mcaps)}: a split bag); give "
+                            f"one file, or merge them into one: `rosbags-convert --src {path} --dst "
+                            f"{os.path.normpath(path)}_merged --dst-storage mcap`")
+    raise McapReadError(f"{path}: a directory without a recording (no .mcap file"
+                        + (", metadata.yaml names " + ", ".join(names) if names else "") + ")")
 
 
 def _decompress(comp: str, buf, start: int, stop: int, usize: int) -> Tuple[bytes, str]:

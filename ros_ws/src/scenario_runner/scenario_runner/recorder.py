@@ -3,22 +3,31 @@
 
 - profile "ros2"; one schema per type, encoding "ros2msg", holding the type's .msg text
   followed by every dependency ("=" * 80, "MSG: pkg/Type", its text), as rosbag2 writes it;
-- channels with message encoding "cdr" and the publisher's offered QoS in the channel
-  metadata key "offered_qos_profiles" (rosbag2's YAML form);
+- channels with message encoding "cdr", the publisher's offered QoS in the channel metadata
+  key "offered_qos_profiles" (rosbag2's YAML, metadata version 9: policies by name) and the
+  type's hash in "topic_type_hash" (REP-2011 "RIHS01_<sha256>", read from the type
+  description the ROS build generated: share/<pkg>/msg/<Type>.json);
 - messages are the serialized CDR bytes as received (no re-serialisation); log time = the
   simulation time stamp of the step (receive order kept), publish time the same;
 - the per-step outputs of the nodes the scenario runner started come through their feed
   (sim_plumbing/record_feed.py: the bytes each node publishes, handed over by a pipe or, in one
   process, a call) instead of a second DDS delivery; every other topic by subscription;
 - chunked, with a summary section (statistics, chunk and message indexes) written on close,
-  also after Ctrl-C.
+  also after Ctrl-C;
+- on close, like rosbag2's MCAP storage plugin (Jazzy), a metadata record "rosbag2" whose key
+  "serialized_metadata" holds the bag's metadata (rosbag2 BagMetadata YAML, version 9: storage
+  mcap, start time and duration, message counts per topic, QoS, type hashes, ros_distro), so
+  `ros2 bag info` / `ros2 bag play` read the file as one of theirs. A run killed before close
+  leaves a file without it (and without summary), which the tolerant reader (mcap_io) reads.
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 from typing import Callable, Dict, List, Optional, Tuple
 
+import yaml
 from mcap.writer import CompressionType, Writer
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
@@ -84,15 +93,85 @@ def message_definition(full_type: str) -> str:
     return "\n".join(parts) + "\n"
 
 
-def qos_yaml(qos: QoSProfile) -> str:
-    """The offered QoS as rosbag2 stores it in channel metadata."""
+BAG_METADATA_VERSION = 9  # rosbag2 Jazzy
+ROS_DISTRO = "jazzy"  # the ROS 2 wheels this project runs on; ROS_DISTRO in the environment wins
+INT64_MAX = 2 ** 63 - 1  # rosbag2's starting time of a bag without messages
+
+
+def _policy_name(policy) -> str:
+    """rmw's name of a QoS policy value ("keep_last", "reliable", "transient_local", ...)."""
+    return policy.name.lower()
+
+
+def qos_dict(qos: QoSProfile) -> dict:
+    """One offered QoS profile the way rosbag2 (metadata version 9) serialises it."""
     def dur(d):
-        return f"{{sec: {d.nanoseconds // 10 ** 9}, nsec: {d.nanoseconds % 10 ** 9}}}"
-    return ("- history: {h}\n  depth: {d}\n  reliability: {r}\n  durability: {u}\n  deadline: {dl}\n"
-            "  lifespan: {ls}\n  liveliness: {lv}\n  liveliness_lease_duration: {ll}\n  "
-            "avoid_ros_namespace_conventions: false\n").format(
-        h=int(qos.history), d=qos.depth, r=int(qos.reliability), u=int(qos.durability), dl=dur(qos.deadline),
-        ls=dur(qos.lifespan), lv=int(qos.liveliness), ll=dur(qos.liveliness_lease_duration))
+        return {"sec": d.nanoseconds // 10 ** 9, "nsec": d.nanoseconds % 10 ** 9}
+    return {"history": _policy_name(qos.history), "depth": int(qos.depth),
+            "reliability": _policy_name(qos.reliability), "durability": _policy_name(qos.durability),
+            "deadline": dur(qos.deadline), "lifespan": dur(qos.lifespan), "liveliness": _policy_name(qos.liveliness),
+            "liveliness_lease_duration": dur(qos.liveliness_lease_duration),
+            "avoid_ros_namespace_conventions": bool(qos.avoid_ros_namespace_conventions)}
+
+
+def to_yaml(value) -> str:
+    """Block-style YAML (rosbag2 reads it with yaml-cpp, which takes any YAML 1.2 layout)."""
+    return yaml.safe_dump(value, sort_keys=False, default_flow_style=False, allow_unicode=True, width=1 << 30)
+
+
+def qos_yaml(qos: QoSProfile) -> str:
+    """The offered QoS as rosbag2 (Jazzy) stores it in the channel metadata."""
+    return to_yaml([qos_dict(qos)])
+
+
+_hashes: Dict[str, str] = {}
+
+
+def type_hash(full_type: str) -> str:
+    """The REP-2011 type hash ("RIHS01_<64 hex>") of e.g. 'nav_msgs/msg/Odometry', from the type
+    description the ROS build generated (rosidl_generator_type_description writes
+    share/<pkg>/msg/<Type>.json); "" if there is none (what rosbag2 records when it cannot
+    know the hash)."""
+    if full_type not in _hashes:
+        pkg, sub, name = full_type.split("/")
+        found = ""
+        try:
+            from ament_index_python.packages import get_package_share_directory
+            with open(os.path.join(get_package_share_directory(pkg), sub, name + ".json")) as f:
+                for entry in json.load(f).get("type_hashes", []):
+                    if entry.get("type_name") == full_type:
+                        found = str(entry.get("hash_string", ""))
+                        break
+        except (OSError, ValueError, LookupError, AttributeError):
+            found = ""
+        _hashes[full_type] = found if re.fullmatch(r"RIHS01_[0-9a-f]{64}", found) else ""
+    return _hashes[full_type]
+
+
+def bag_metadata(file_name: str, topics: List[dict], start_ns: Optional[int], end_ns: Optional[int]) -> dict:
+    """rosbag2's BagMetadata (version 9) of a one-file MCAP bag, keys in rosbag2's order.
+    topics: {"name", "type", "qos": [qos_dict], "hash", "count"} in creation order."""
+    count = sum(t["count"] for t in topics)
+    start = INT64_MAX if start_ns is None else int(start_ns)
+    duration = 0 if start_ns is None or end_ns is None else int(end_ns - start_ns)
+    return {
+        "version": BAG_METADATA_VERSION,
+        "storage_identifier": "mcap",
+        "duration": {"nanoseconds": duration},
+        "starting_time": {"nanoseconds_since_epoch": start},
+        "message_count": count,
+        "topics_with_message_count": [
+            {"topic_metadata": {"name": t["name"], "type": t["type"], "serialization_format": "cdr",
+                                "offered_qos_profiles": t["qos"], "type_description_hash": t["hash"]},
+             "message_count": t["count"]} for t in topics],
+        "compression_format": "",
+        "compression_mode": "",
+        "relative_file_paths": [file_name],
+        "files": [{"path": file_name, "starting_time": {"nanoseconds_since_epoch": start},
+                   "duration": {"nanoseconds": duration}, "message_count": count}],
+        "custom_data": None,
+        "ros_distro": os.environ.get("ROS_DISTRO") or ROS_DISTRO,
+    }
 
 
 def type_name(msg_class) -> str:
@@ -117,7 +196,9 @@ class McapRecorder(Node):
         self.writer.start(profile="ros2", library="tugsim-recorder")
         self.schemas: Dict[str, int] = {}
         self.channels: Dict[str, int] = {}
-        self.counts: Dict[str, int] = {}
+        self.counts: Dict[str, int] = {}  # topic -> messages taken (queued or written)
+        self.topic_info: Dict[str, dict] = {}  # topic -> rosbag2 topic metadata, "count" = messages written
+        self.time_range: Optional[Tuple[int, int]] = None  # log times of the first and last message written
         self.subscriptions_by_topic = {}
         self.sequence = 0
         # Simulation time of what is arriving, set by the conductor (orders and the trigger of
@@ -138,10 +219,15 @@ class McapRecorder(Node):
         if tname not in self.schemas:
             self.schemas[tname] = self.writer.register_schema(
                 name=tname, encoding="ros2msg", data=message_definition(tname).encode())
+        thash = type_hash(tname)
+        if not thash:
+            self.get_logger().warning(f"{topic}: no type description (share/{tname.split('/')[0]}/msg/"
+                                      f"{tname.split('/')[-1]}.json) for {tname}: recorded without its type hash")
         self.channels[topic] = self.writer.register_channel(
             topic=topic, message_encoding="cdr", schema_id=self.schemas[tname],
-            metadata={"offered_qos_profiles": qos_yaml(qos)})
+            metadata={"offered_qos_profiles": qos_yaml(qos), "topic_type_hash": thash})
         self.counts[topic] = 0
+        self.topic_info[topic] = {"name": topic, "type": tname, "qos": [qos_dict(qos)], "hash": thash, "count": 0}
         if topic in self.fed_topics:
             return
         # KEEP_ALL on the reader side so no message is dropped while the writer is busy.
@@ -212,6 +298,9 @@ class McapRecorder(Node):
         for topic, log_time, sequence, data in pending:
             self.writer.add_message(channel_id=self.channels[topic], log_time=log_time, data=data,
                                     publish_time=log_time, sequence=sequence)
+            self.topic_info[topic]["count"] += 1
+            first, last = self.time_range or (log_time, log_time)
+            self.time_range = (min(first, log_time), max(last, log_time))
             tap = self.taps.get(topic)
             if tap is not None:
                 tap(data)
@@ -222,5 +311,14 @@ class McapRecorder(Node):
             for pipe in self.pipes:
                 pipe.close()
             self.closed = True
+            try:
+                self.writer.add_metadata("rosbag2", {"serialized_metadata": self.serialized_metadata()})
+            except Exception as exc:  # noqa: BLE001 - the summary must still be written
+                self.get_logger().error(f"{self.path}: rosbag2 metadata not written: {exc}")
             self.writer.finish()
             self._file.close()
+
+    def serialized_metadata(self) -> str:
+        """rosbag2's BagMetadata YAML of what has been written so far."""
+        first, last = self.time_range or (None, None)
+        return to_yaml(bag_metadata(os.path.basename(self.path), list(self.topic_info.values()), first, last))
