@@ -157,3 +157,13 @@ def test_bag_metadata_yaml_round_trips():
     assert topics[0]["hash"].startswith("RIHS01_") and type_hash("no_such_msgs/msg/Nothing") == ""
     empty = bag_metadata("x.mcap", [], None, None)  # no message: rosbag2's values
     assert empty["starting_time"] == {"nanoseconds_since_epoch": 2 ** 63 - 1} and empty["duration"]["nanoseconds"] == 0
+
+
+def test_replay_refuses_a_sqlite3_bag_the_same_way(tmp_path):
+    """replay opens its input as analyze does: a .db3 is refused before any node is made."""
+    from scenario_runner.conductor import executable_path
+    bag = _write_bag(tmp_path / "sq_bag", "sqlite3")
+    (db3,) = bag.glob("*.db3")
+    proc = subprocess.run([executable_path("scenario_runner", "replay"), str(bag)], capture_output=True, text=True,
+                          timeout=120)
+    _assert_refused_with_the_conversion(proc, db3)

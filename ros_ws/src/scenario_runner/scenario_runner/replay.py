@@ -26,7 +26,7 @@ import sys
 import time
 from typing import Callable, Dict, List, Optional
 
-from scenario_runner.mcap_io import Channel, McapFile, McapReadError, message_class
+from scenario_runner.mcap_io import Channel, McapFile, McapReadError, locate_recording, message_class
 
 CLOCK_TOPIC = "/clock"
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
@@ -164,7 +164,11 @@ def main(argv: Optional[List[str]] = None) -> int:
 
     # -- first pass: channels, counts, problems --------------------------------------------
     try:
-        mf = McapFile(args.recording).scan()
+        path, note = locate_recording(args.recording)  # a rosbag2 directory: its .mcap; sqlite3: what to do
+        if note:
+            _print(args.quiet, f"replay: {note}")
+        args.recording = path
+        mf = McapFile(path).scan()
     except McapReadError as exc:
         sys.stderr.write(f"replay: {exc}\n")
         return EXIT_NOTHING
