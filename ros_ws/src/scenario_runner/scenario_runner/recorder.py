@@ -28,7 +28,9 @@ import re
 from typing import Callable, Dict, List, Optional, Tuple
 
 import yaml
-from mcap.writer import CompressionType, Writer
+from mcap.data_stream import RecordBuilder
+from mcap.records import DataEnd, Footer
+from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile
 
@@ -174,6 +176,87 @@ def bag_metadata(file_name: str, topics: List[dict], start_ns: Optional[int], en
     }
 
 
+RESERVE_BYTES = 64 * 1024  # kept free beside a recording: room to end it readably on a full disk
+
+
+class RecordingFile:
+    """The stream the mcap Writer writes to: unbuffered, so each write (the Writer hands over
+    whole records) is on disk or has failed, and `good` is the offset after the last complete
+    one. A reserve file beside it keeps RESERVE_BYTES free: when the disk fills (or the file
+    system fails) mid-run, end_readably() frees the reserve, cuts the file back to its last
+    complete record and closes the data section (DataEnd, a Footer without summary), which
+    every MCAP reader takes: the run stops, the recording up to there stays usable."""
+
+    def __init__(self, path: str):
+        self.path = path
+        self.reserve_path = os.path.join(os.path.dirname(os.path.abspath(path)), f".{os.path.basename(path)}.reserve")
+        self._f = open(path, "wb", buffering=0)
+        self.good = 0
+        self.ended = False
+        try:
+            with open(self.reserve_path, "wb") as reserve:
+                reserve.write(b"\0" * RESERVE_BYTES)
+        except OSError:
+            self._f.close()
+            self._drop_reserve()
+            raise
+
+    def write(self, data) -> int:
+        view = memoryview(data)
+        done = 0
+        while done < len(view):
+            done += self._f.write(view[done:])  # OSError (ENOSPC, EIO, ...) leaves `good` as it was
+        self.good += done
+        return done
+
+    def tell(self) -> int:
+        return self.good
+
+    def flush(self) -> None:
+        pass  # unbuffered
+
+    def _drop_reserve(self) -> None:
+        try:
+            os.remove(self.reserve_path)
+        except OSError:
+            pass
+
+    def end_readably(self) -> None:
+        """After a failed write: the file as far as its last complete record, then DataEnd and
+        a Footer (no summary). OSError if even that cannot be written."""
+        if self.ended:
+            return
+        self.ended = True
+        self._drop_reserve()
+        self._f.truncate(self.good)
+        self._f.seek(self.good)
+        tail = RecordBuilder()
+        DataEnd(data_section_crc=0).write(tail)  # 0: no CRC (the data section was cut)
+        Footer(summary_start=0, summary_offset_start=0, summary_crc=0).write(tail)
+        self.write(tail.end() + MCAP0_MAGIC)
+        self._f.close()
+
+    def close(self) -> None:
+        if not self._f.closed:
+            self._f.close()
+        self._drop_reserve()
+
+
+def readable_extent(path: str) -> str:
+    """What a reader gets from a recording ended after a failed write: 'N messages up to
+    t = X s' (read with the mcap library, as any user's tool would)."""
+    from mcap.reader import make_reader
+    count, last = 0, 0
+    try:
+        with open(path, "rb") as f:
+            for _, _, message in make_reader(f).iter_messages(log_time_order=False):
+                count += 1
+                last = max(last, message.log_time)
+    except Exception as exc:  # noqa: BLE001 - report, whatever the reader's complaint
+        return f"{count} messages readable, then: {exc}"
+    return f"{count} messages up to t = {last * 1e-9:.2f} s"
+
+
 def type_name(msg_class) -> str:
     module = msg_class.__module__.split(".")[0]
     return f"{module}/msg/{msg_class.__name__}"
@@ -190,7 +273,8 @@ class McapRecorder(Node):
         super().__init__("recorder")
         self.path = path
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        self._file = open(path, "wb")
+        self._file = RecordingFile(path)
+        self.failure: Optional[OSError] = None  # the write that failed; the file was then ended readably
         # LZ4: a quarter of zstd's CPU per chunk here, and every MCAP reader supports it.
         self.writer = Writer(self._file, compression=CompressionType.LZ4)
         self.writer.start(profile="ros2", library="tugsim-recorder")
@@ -287,7 +371,24 @@ class McapRecorder(Node):
         self.counts[topic] += 1
 
     def flush(self) -> None:
-        """Write the queued messages and what the pipes hold (and hand them to the taps)."""
+        """Write the queued messages and what the pipes hold (and hand them to the taps). A
+        failed write (disk full) ends the file readably and raises the OSError."""
+        try:
+            self._flush()
+        except OSError as exc:
+            self._fail(exc)
+            raise
+
+    def _fail(self, exc: OSError) -> None:
+        if self.failure is None:
+            self.failure = exc
+            self.closed = True
+            try:
+                self._file.end_readably()
+            except OSError as again:
+                self.get_logger().error(f"{self.path}: could not end the file after '{exc}': {again}")
+
+    def _flush(self) -> None:
         for pipe in self.pipes:
             for topic, log_time, data in pipe.read():
                 self.feed_in_process(topic, log_time, data)
@@ -306,16 +407,20 @@ class McapRecorder(Node):
                 tap(data)
 
     def close(self) -> None:
-        if not self.closed:
-            self.flush()
+        """Write what is queued, the rosbag2 metadata and the summary. OSError if writing fails
+        (the file is then ended readably, as in flush)."""
+        try:
+            if not self.closed:  # else: closed already, or ended after a failed write
+                self._flush()
+                self.closed = True
+                self.writer.add_metadata("rosbag2", {"serialized_metadata": self.serialized_metadata()})
+                self.writer.finish()
+        except OSError as exc:
+            self._fail(exc)
+            raise
+        finally:
             for pipe in self.pipes:
                 pipe.close()
-            self.closed = True
-            try:
-                self.writer.add_metadata("rosbag2", {"serialized_metadata": self.serialized_metadata()})
-            except Exception as exc:  # noqa: BLE001 - the summary must still be written
-                self.get_logger().error(f"{self.path}: rosbag2 metadata not written: {exc}")
-            self.writer.finish()
             self._file.close()
 
     def serialized_metadata(self) -> str:

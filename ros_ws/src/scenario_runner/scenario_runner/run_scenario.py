@@ -27,7 +27,7 @@ from rclpy.serialization import deserialize_message
 from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
-from scenario_runner.recorder import McapRecorder
+from scenario_runner.recorder import McapRecorder, readable_extent
 from scenario_runner.scenario import ScenarioError, load_scenario
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
@@ -204,6 +204,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     if not args.quiet:
         from tqdm import tqdm
         progress = tqdm(total=steps, unit="step", desc=sc.name, file=sys.stderr, mininterval=0.5)
+    finalise_failed = False
     try:
         stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder, layout=args.layout,
                        on_step=(lambda k: progress.update(1)) if progress else None, on_finished=mon.finish)
@@ -211,6 +212,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         if progress:
             progress.close()
         sys.stderr.write(f"run_scenario: run stopped: writing {os.path.abspath(output)} failed: {exc}\n")
+        if recorder is not None and recorder.failure is not None:
+            sys.stderr.write(f"run_scenario: the recording ends readably where the write failed: "
+                             f"{readable_extent(output)}\n")
         return 3
     except cd.DomainInUse as exc:
         if progress:
@@ -235,9 +239,13 @@ def main(argv: Optional[List[str]] = None) -> int:
                 recorder.close()  # finalised (summary, indexes) also after an error or Ctrl-C
             except OSError as exc:
                 sys.stderr.write(f"run_scenario: the recording {os.path.abspath(output)} could not be "
-                                 f"finalised: {exc}\n")
+                                 f"finalised: {exc}; it ends readably where the write failed: "
+                                 f"{readable_extent(output)}\n")
+                finalise_failed = True
         mon.destroy_node()
         rclpy.try_shutdown()
+    if finalise_failed:
+        return 3
     print(summary(sc, stats, mon))
     if recorder:
         print(f"  recording: {os.path.abspath(output)} ({sum(recorder.counts.values())} messages on "

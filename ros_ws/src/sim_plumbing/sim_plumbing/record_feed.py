@@ -85,7 +85,9 @@ class PipeReader:
         del buf[:pos]
 
     def close(self) -> None:
-        os.close(self.fd)
+        if self.fd >= 0:
+            os.close(self.fd)
+            self.fd = -1
 
 
 _installed: List[Optional[FeedFunction]] = [None]
