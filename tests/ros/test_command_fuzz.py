@@ -70,6 +70,7 @@ def test_random_commands_during_a_paced_run(tmp_path, ros_domain, rclpy_context)
     node.destroy_node()
     assert proc.returncode == 0, stdout + stderr
     assert sent == {t: PER_TOPIC for t in pubs}
+    print(stdout)
     assert "overrun step(s)" in stdout and "lateness p99" in stdout  # reported, whatever they are
     msgs = decoded(out)
     for v in ("tug", "barge"):
