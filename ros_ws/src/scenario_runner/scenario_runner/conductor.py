@@ -33,7 +33,7 @@ from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import shm_hygiene
 from sim_plumbing import ros_common as rc
-from sim_plumbing.stepping import RateLimitedLog
+from sim_plumbing.stepping import RESCUE_AFTER, RateLimitedLog
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
 CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE)
@@ -256,6 +256,7 @@ class RunStats:
     run_id: str = ""
     refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # why -> StepDones the runner refused
     node_refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # node -> messages it refused
+    rescued: int = 0  # StepDones the executor held back, taken directly (ros_common.take_missed)
 
 
 class Conductor(Node):
@@ -284,7 +285,9 @@ class Conductor(Node):
         self.winch_pubs = {r.name: self.create_publisher(WinchCommand, f"/{r.name}/winch", rc.COMMAND_QOS)
                            for r in sc.ropes if r.layout == "winch"}
         # raw: the answers are recorded as received and decoded once, here
-        self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done_raw, rc.PROTOCOL_QOS, raw=True)
+        self.done_sub = self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done_raw, rc.PROTOCOL_QOS,
+                                                 raw=True)
+        self.rescued = 0  # StepDones the executor did not deliver, taken in wait_for (rc.take_missed)
         self.orders = self._orders_by_step()
         # Vessels steered by a lockstep autopilot get its order stamped k at every step k.
         self.piloted = sorted(a.vessel for a in sc.autopilots)
@@ -529,6 +532,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
             now = time.monotonic()
             deadline = now + timeout
             next_check = now  # processes are polled every 20 ms, not after every message
+            rescue_at = now + RESCUE_AFTER
             expected = conductor.expected
             done = conductor.done
             while done.get(step) != expected:
@@ -545,6 +549,11 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
                     continue
                 next_check = now + 0.02
                 stop.check()
+                if now > rescue_at:  # the EventsExecutor may sit on an answer (ros_common.take_missed)
+                    rescue_at = now + RESCUE_AFTER
+                    conductor.rescued += rc.take_missed(conductor.done_sub, conductor._on_done_raw)
+                    for node in local_nodes:
+                        node.poll()
                 if recorder:
                     recorder.flush()  # a node blocked on a full feed pipe must never stall the step
                 dead = procs.dead()
@@ -625,6 +634,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         finally:
             stats.refused = dict(conductor.refused)
             stats.node_refused = dict(conductor.node_refused)
+            stats.rescued = conductor.rescued
             procs.stop()
             executor.shutdown()
             for node in local_nodes:

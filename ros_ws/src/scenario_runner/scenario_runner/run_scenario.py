@@ -115,6 +115,9 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
     if stats.compute_times:
         lines.append("  compute per step: " + ", ".join(
             f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
+    if stats.rescued:
+        lines.append(f"  runner: {stats.rescued} StepDone(s) the executor held back, taken directly "
+                     "(rclpy EventsExecutor; see sim_plumbing.ros_common.take_missed)")
     if stats.refused or any(stats.node_refused.values()):
         lines.append("  refused protocol messages (logged, not used): " + ", ".join(
             [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +

@@ -49,6 +49,7 @@ from sim_plumbing import ros_common as rc
 MAX_LEAD_STEPS = 100
 # An order the runner announced but the node refused: the slot is filled, the last valid order held.
 REJECTED_ORDER = object()
+RESCUE_AFTER = 0.1  # s without a step before poll() takes what the executor may have missed
 
 
 class ModelDiverged(RuntimeError):
@@ -136,25 +137,32 @@ class SteppedNode(Node):
         self._triggered = False
         self.namespace_name = self.get_namespace().strip("/")
         self._wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
+        self._taken: List[Tuple[Any, Callable]] = []  # (subscription, callback) for take_missed
+        self._progress = (0, time.monotonic())  # (step, wall time it was reached)
+        self._last_rescue = 0.0
+        self.rescued = 0  # messages the executor did not deliver, taken by poll()
         for spec in inputs:
             qos = spec.qos or (rc.COMMAND_SUB_QOS if spec.kind == "order" else rc.LATCHED_STATE_QOS)
             # DDS reports samples that never reached a keep-all reader (a sender's own history
             # overwrote them in a burst): counted, since the node cannot see them otherwise.
             events = SubscriptionEventCallbacks(message_lost=lambda info, s=spec: self._on_lost(s, info))
             if spec.decode is None:
-                self.create_subscription(spec.msg_type, spec.topic,
-                                         lambda msg, s=spec: self._on_input(s, msg), qos, event_callbacks=events)
+                callback = lambda msg, s=spec: self._on_input(s, msg)  # noqa: E731
+                sub = self.create_subscription(spec.msg_type, spec.topic, callback, qos, event_callbacks=events)
             else:
-                self.create_subscription(spec.msg_type, spec.topic,
-                                         lambda data, s=spec: self._on_raw_input(s, data), qos, raw=True,
-                                         event_callbacks=events)
+                callback = lambda data, s=spec: self._on_raw_input(s, data)  # noqa: E731
+                sub = self.create_subscription(spec.msg_type, spec.topic, callback, qos, raw=True,
+                                               event_callbacks=events)
+            self._taken.append((sub, callback))
         self.lost: collections.Counter = collections.Counter()  # topic -> messages DDS reported lost
         if self.lockstep:
             self.done_pub = self.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
             self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name(), self.run_id)
-            self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger_raw, rc.PROTOCOL_QOS, raw=True)
+            self._taken.append((self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger_raw,
+                                                         rc.PROTOCOL_QOS, raw=True), self._on_trigger_raw))
             # Wall-clock timers: with use_sim_time a ROS-time timer would wait for /clock forever.
             self._ready_timer = self.create_timer(0.2, self._announce_ready, clock=self._wall_clock)
+            self._held: Optional[Tuple[int, float, bool]] = None  # (step, wall time first seen waiting, reported)
         else:
             self.timer = self.create_timer(self.dt, self._on_timer, clock=self._wall_clock)
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -271,6 +279,53 @@ class SteppedNode(Node):
         self._triggered = True
         self._triggers[msg.step] = msg
         self._advance()
+
+    def missing_inputs(self, k: int) -> List[str]:
+        """What step k still waits for (the trigger, a state input, an announced order)."""
+        trigger = self._triggers.get(k)
+        if trigger is None:
+            return [f"{rc.SIM_STEP_TOPIC} SimStep({k})"]
+        missing = [] if self.ready_to_step else ["the node's own start-up"]
+        ordered = self.namespace_name in trigger.ordered
+        for spec in self.inputs:
+            if k not in self._buffer[spec.topic] and (spec.kind == "state" or ordered):
+                missing.append(f"{spec.topic} stamped {k}")
+        return missing
+
+    def poll(self) -> None:
+        """Called by the spin loop after every round (not by a timer: see ros_common.take_missed).
+        A lockstep node that has not advanced for RESCUE_AFTER takes what its readers hold."""
+        if not self.lockstep:
+            return
+        now = time.monotonic()
+        if self.step_index != self._progress[0]:
+            self._progress = (self.step_index, now)
+            return
+        if now - self._progress[1] > RESCUE_AFTER and now - self._last_rescue > RESCUE_AFTER:
+            self._last_rescue = now
+            taken = sum(rc.take_missed(sub, callback) for sub, callback in self._taken)
+            if taken:
+                self.rescued += taken
+                self.complaints("rescued", f"took {self.rescued} message(s) the executor had not delivered "
+                                "(rclpy EventsExecutor)", "warning")
+        self._report_waiting()
+
+    def _report_waiting(self) -> None:
+        """A run stuck at this node's step names what the node waits for (the runner only knows
+        who is silent): the trigger, or an input of the triggered step."""
+        k = self.step_index
+        if k not in self._triggers and not (self._triggered and self.ready_to_step):
+            self._held = None
+            return
+        now = time.monotonic()
+        if self._held is None or self._held[0] != k:
+            self._held = (k, now, False)
+            return
+        _, since, reported = self._held
+        if not reported and now - since > 5.0:
+            self._held = (k, since, True)
+            self.get_logger().warning(f"step {k}: waiting for {now - since:.0f} s for: "
+                                      f"{', '.join(self.missing_inputs(k)) or 'nothing (a bug)'}")
 
     def _announce_ready(self) -> None:
         if self._triggered:
