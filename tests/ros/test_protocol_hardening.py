@@ -140,8 +140,9 @@ def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_pat
                                 timeout=120)
         assert second.returncode == 4, second.stdout + second.stderr
         assert f"ROS_DOMAIN_ID={ros_domain} is in use by another run" in second.stderr, second.stderr
-        # the nodes it names are those discovered in the check's window: at least one of them
-        assert any(n in second.stderr for n in ("/towline/rope", "/tug/vessel", "/barge/vessel")), second.stderr
+        # it names the participants discovered in the check's window: at least one of the run's
+        assert any(n in second.stderr for n in ("/towline/rope", "/tug/vessel", "/barge/vessel",
+                                                "scenario runner /scenario_runner")), second.stderr
         assert time.monotonic() - t0 < 60  # refused at start-up, not after the 240 s start-up timeout
         assert not (tmp_path / "logs2").exists()  # nothing was started
     finally:
