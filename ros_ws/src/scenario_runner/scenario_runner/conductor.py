@@ -28,7 +28,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
-from scenario_runner.scenario import Scenario, heading_rad, resolve
+from scenario_runner.scenario import Scenario, heading_rad, installed_executable, resolve
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import shm_hygiene
@@ -95,12 +95,12 @@ class NodeSpec:
 
 
 def executable_path(package: str, executable: str) -> str:
-    """Where `ros2 run package executable` finds the executable (lib/<package>/ of a prefix)."""
-    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        path = os.path.join(prefix, "lib", package, executable)
-        if prefix and os.access(path, os.X_OK):
-            return path
-    raise RunError(f"executable {package}/{executable} not found on AMENT_PREFIX_PATH (is the workspace sourced?)")
+    """Where `ros2 run package executable` finds the executable; RunError if nowhere."""
+    path = installed_executable(package, executable)
+    if path is None:
+        raise RunError(f"executable {package}/{executable} not found on AMENT_PREFIX_PATH (is the workspace "
+                       "sourced?)")
+    return path
 
 
 def _yaml_value(value) -> str:

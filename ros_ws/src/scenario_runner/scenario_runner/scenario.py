@@ -346,8 +346,9 @@ def resolve(package: str, subdir: str, name: str, scenario_path: str) -> str:
     return os.path.join(get_package_share_directory(package), subdir, name)
 
 
-def _executable(package: str, executable: str) -> Optional[str]:
-    """Where `ros2 run` finds it (the lookup of conductor.executable_path, without importing rclpy)."""
+def installed_executable(package: str, executable: str) -> Optional[str]:
+    """Where `ros2 run package executable` finds it: lib/<package>/<executable> under the first
+    prefix of AMENT_PREFIX_PATH that has it; None if none does."""
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         cand = os.path.join(prefix, "lib", package, executable)
         if prefix and os.access(cand, os.X_OK):
@@ -434,7 +435,7 @@ def _check_files(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
                                     "a straight rope needs two distinct end points")
     for i, a in enumerate(sc.autopilots):
-        if _executable(a.package, a.executable) is None:
+        if installed_executable(a.package, a.executable) is None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
 
