@@ -306,8 +306,9 @@ class SteppedNode(Node):
             taken = sum(rc.take_missed(sub, callback) for sub, callback in self._taken)
             if taken:
                 self.rescued += taken
-                self.complaints("rescued", f"took {self.rescued} message(s) the executor had not delivered "
-                                "(rclpy EventsExecutor)", "warning")
+                # not a refusal: logged directly, so StepDone's refused count stays a count of refusals
+                self.get_logger().warning(f"took {taken} message(s) the executor had not delivered (rclpy "
+                                          f"EventsExecutor; {self.rescued} so far)")
         self._report_waiting()
 
     def _report_waiting(self) -> None:
