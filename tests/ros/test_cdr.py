@@ -67,13 +67,13 @@ def test_vessel_status(vessel):
     rng = np.random.default_rng(len(vessel))
     a, b = rng.normal(size=5), rng.normal(size=6)
     ref = VesselStatus(vessel=vessel, step=987654321, anchor_state=3, girting_warning=True,
-                       commands_rejected=7, commands_clamped=4_000_000_000, commands_lost=12345)
+                       commands_rejected=7, commands_clamped=4_000_000_000)
     ref.header.frame_id = vessel + "/base_link"
     _stamp(ref.header)
     for key, value in zip(cdr.VESSEL_STATUS_FLOATS_A + cdr.VESSEL_STATUS_FLOATS_B, list(a) + list(b)):
         setattr(ref, key, float(value))
     data = cdr.VesselStatusEncoder(ref.header.frame_id, vessel).encode(STAMP_NS, ref.step, a, 3, b, True, 7,
-                                                                        4_000_000_000, 12345)
+                                                                        4_000_000_000)
     assert deserialize_message(data, VesselStatus) == ref
 
 

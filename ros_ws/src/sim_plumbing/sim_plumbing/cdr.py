@@ -175,7 +175,7 @@ class VesselStatusEncoder:
 
     _A = struct.Struct("<5dB")
     _B = struct.Struct("<6d?")
-    _C = struct.Struct("<III")
+    _C = struct.Struct("<II")
 
     def __init__(self, frame_id: str, vessel: str):
         t = self.t = Template()
@@ -184,14 +184,13 @@ class VesselStatusEncoder:
         t.string(vessel)
         t.slot(self._A, 8)   # 5 doubles, anchor_state
         t.slot(self._B, 8)   # 6 doubles, girting_warning
-        t.slot(self._C, 4)   # commands_rejected, commands_clamped, commands_lost
+        t.slot(self._C, 4)   # commands_rejected, commands_clamped
         t.seal()
 
     def encode(self, stamp_ns: int, step: int, floats_a: Sequence[float], anchor_state: int,
-               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int,
-               lost: int = 0) -> bytes:
+               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int) -> bytes:
         return self.t.pack(stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state),
-                           (*floats_b, girting_warning), (rejected, clamped, lost))
+                           (*floats_b, girting_warning), (rejected, clamped))
 
 
 class WrenchStampedEncoder:

@@ -26,8 +26,9 @@ COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 # Commands as a node takes them: keep-all, so the node's own history never drops an order
 # silently (a keep-last-10 reader handed on 422 of a burst of 10,000 and counted none of the
-# rest); what a sender's keep-last history overwrote before delivery DDS reports as lost, and the
-# node counts it (VesselStatus.commands_lost). Per message the node does constant work.
+# rest). What a sender's own keep-last history overwrites before delivery never reaches the node;
+# DDS's sample-lost report of it cannot be taken safely on Jazzy (see stepping.py). Per message
+# the node does constant work.
 COMMAND_SUB_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.VOLATILE)
 EVENTS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
@@ -149,10 +150,10 @@ def spin_forever(executor, poll: Optional[Callable[[], None]] = None) -> None:
 
 def take_missed(subscription, callback, limit: int = 10_000) -> int:
     """Take what a subscription's reader holds and hand it to callback, bypassing the executor;
-    returns how many. Rescue for rclpy's EventsExecutor (experimental in Jazzy): under a flood
-    on one of a node's topics it now and then never delivers a message another topic received
-    (measured: 1 run in 5 of the command fuzz test stalled, a node waiting for a SimStep its
-    reader held); the classic executor does not, but costs 2.6x the CPU per step."""
+    returns how many. A second line of defence around rclpy's EventsExecutor (experimental in
+    Jazzy): a node that makes no progress takes what its readers hold rather than wait for an
+    executor callback. (The flood stalls once blamed on the executor were a deadlock in
+    rmw_fastrtps' sample-lost event, which the nodes no longer subscribe to; see stepping.py.)"""
     taken = 0
     with subscription.handle:
         while taken < limit:

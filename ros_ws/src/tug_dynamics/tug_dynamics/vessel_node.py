@@ -243,8 +243,7 @@ class VesselNode(SteppedNode):
         floats_b = [float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_B]
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, floats_a, _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0),
-            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped,
-            sum(self.lost.values())), stamp_ns)
+            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped), stamp_ns)
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
