@@ -1,0 +1,3 @@
+"""ROS-free numerics shared by the physics and analysis packages, each concept written once:
+``rotations`` (REP-103 rotations and quaternions), ``integration`` (the classical Runge-Kutta
+step), ``turning`` (least-squares circle fit and the IMO / ITTC turning measures)."""
