@@ -8,7 +8,7 @@ import yaml
 
 from tug_dynamics.maneuver_trials import run
 from tug_dynamics.ship_file import ShipFileError, list_ship_files, load_ship
-from tug_dynamics.vessel import (ANCHOR_LET_GO, Command, CommandRejected, ExternalWrench, VesselState)
+from tug_dynamics.vessel import (ANCHOR_LET_GO, AnchorState, Command, CommandRejected, ExternalWrench, VesselState)
 
 DISPLACEMENT = [f for f in list_ship_files() if yaml.safe_load(open(f))["model"] == "displacement"]
 
@@ -89,7 +89,7 @@ def test_ship_at_rest_in_current_is_carried_along():
     """Released at rest over ground in a current, the ship accelerates with the water: the
     speed through the water decays towards zero (quadratic damping: slowly)."""
     ship = load_ship("harbour_tug.yaml")
-    ship.set_current(0.6, -0.8)
+    ship.set_current(np.array([0.6, -0.8, 0.0]))
     stw = []
     for _ in range(6):
         run(ship, 500.0, 1.0)
@@ -133,10 +133,10 @@ def test_anchor_let_go_takes_its_time_then_dredges():
     ship.set_state(_state(u=3.0), shaft_rps=0.0)
     ship.set_command(Command(0.0, 0.0, ANCHOR_LET_GO))
     run(ship, 14.0, 1.0)
-    assert ship.status()["anchor_state"] == "letting_go" and ship.status()["anchor_force"] == 0.0
+    assert ship.status()["anchor_state"] == AnchorState.LETTING_GO and ship.status()["anchor_force"] == 0.0
     run(ship, 2.0, 1.0)
     st = ship.status()
-    assert st["anchor_state"] == "dredging"
+    assert st["anchor_state"] == AnchorState.DREDGING
     assert st["anchor_force"] == pytest.approx(1.5 * 7200 * 9.80665, rel=1e-4)   # lambda_a W_a g, Eq 5-6
 
 

@@ -33,7 +33,9 @@ def run(vessel: Vessel, duration: float, dt: float,
         events: Optional[Dict[float, Command]] = None,
         wrenches: Callable[[Vessel, float], Sequence[ExternalWrench]] = lambda v, t: (),
         record: Sequence[str] = ()) -> Track:
-    """Step the vessel for duration s; events maps a time to a command applied at that time."""
+    """Step the vessel for duration s; events maps a time to a command applied at that time.
+
+    record: names of status fields (StatusRecord attributes) to keep in Track.extra."""
     events = dict(events or {})
     times = sorted(events)
     n = int(round(duration / dt))
@@ -47,7 +49,7 @@ def run(vessel: Vessel, duration: float, dt: float,
         if record:
             st = vessel.status()
             for k in record:
-                rec[k][i] = float(st[k])
+                rec[k][i] = float(getattr(st, k))
 
     t = 0.0
     k = 0
@@ -114,7 +116,7 @@ def readme_tables() -> str:
     from .ship_file import load_ship
     from .vessel import ANCHOR_LET_GO
     lines = []
-    # ---- seed 002 barge, simple towline ----
+    # ---- Yun & Kim barge, simple towline ----
     lines += ["### Seed 002 barge, simple towline (Eq 3, Table 6: 0.857 m/s, 59.779 N, 2 deg/s)", "",
               "| gamma_max | steady speed m/s | steady yaw rate deg/s | drift angle deg | steady diameter m | D / L | tactical diameter / L |",
               "|---|---|---|---|---|---|---|"]
@@ -199,8 +201,8 @@ def readme_tables() -> str:
         pred = math.degrees(math.asin(min(1.0, F * (hook[2] + 1.5) / (295200 * 9.80665 * 1.2))))
         st = t4.status()
         lines.append(f"| abeam pull {tonnes:.0f} t at hook height: heel deg (GM prediction) / girting ratio, warning | "
-                     f"{pred:.2f} | {abs(math.degrees(st['heel'])):.2f} / {st['girting_ratio']:.2f}, "
-                     f"{'WARNING' if st['girting_warning'] else 'ok'} |")
+                     f"{pred:.2f} | {abs(math.degrees(st.heel)):.2f} / {st.girting_ratio:.2f}, "
+                     f"{'WARNING' if st.girting_warning else 'ok'} |")
     return "\n".join(lines)
 
 

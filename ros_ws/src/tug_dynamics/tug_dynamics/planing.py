@@ -1,5 +1,5 @@
-"""6-DOF planing hull with a waterjet (seed 004: Yoon & Kang, "Modeling and simulation of the
-6 DOF motion of a high speed planing hull running in calm sea"). ROS-free.
+"""6-DOF planing hull with a waterjet (Yoon & Kang, "Modeling and Simulation of the 6 DOF Motion
+of a High Speed Planing Hull Running in Calm Sea"). ROS-free.
 
 The ship file (``model: planing_6dof``) gives the paper's data (Tables 1, 3-6), the hull
 particulars Savitsky's method needs (the calm-water resistance curve is computed from them
@@ -12,15 +12,16 @@ steering_angle > 0 turns to port; Eq 12's bucket angle is its negative.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from tug_dynamics import planing_core as pc
 from tug_dynamics import savitsky
-from tug_dynamics.vessel import (Command, ExternalWrench, Vessel, VesselState, check_command,
-                                 rotation_body_to_world)
+from tug_dynamics.vessel import (AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
+                                 check_command, check_current, rotation_body_to_world)
 
 KNOT = 1852.0 / 3600.0
 
@@ -128,8 +129,20 @@ class _Cfg:
         return np.asarray(val, float)
 
 
+@dataclasses.dataclass(kw_only=True, slots=True)
+class PlaningStatus(StatusRecord):
+    """StatusRecord plus the planing hull's own values."""
+    bucket_angle: float          # rad, + turns to port (= steering_angle)
+    throttle: float              # impeller speed fraction
+    impeller_rpm: float
+    jet_speed: float             # m/s, Eq 11
+    lift: float                  # N, bottom lift (Eq 9)
+    planing_trim: float          # rad, Savitsky's tau: + bow up (= -trim)
+    draft_at_reference: float    # m, d1 = d0 - Z0 (Eq 3)
+
+
 class PlaningHull(Vessel):
-    """The seed-004 planing hull: 6 DOF, lift bow-up only, waterjet with bucket steering."""
+    """Yoon & Kang's planing hull: 6 DOF, lift bow-up only, waterjet with bucket steering."""
 
     def __init__(self, name: str, P: np.ndarray, C: np.ndarray, rtab: np.ndarray,
                  hull: savitsky.HullParticulars, attachments: Dict[str, np.ndarray],
@@ -151,9 +164,7 @@ class PlaningHull(Vessel):
         self._x = np.zeros(12)
         self.state = VesselState.at_rest()
         if initial_state is not None:
-            self.state = VesselState(np.array(initial_state.position, float), np.array(initial_state.rpy, float),
-                                     np.array(initial_state.linear_velocity_body, float),
-                                     np.array(initial_state.angular_velocity_body, float))
+            self.state = _copied(initial_state)
             u0 = float(self.state.linear_velocity_body[0])
             flat = (self.state.position[2] == 0.0 and self.state.rpy[0] == 0.0 and self.state.rpy[1] == 0.0
                     and not np.any(self.state.linear_velocity_body[1:]) and not np.any(self.state.angular_velocity_body))
@@ -166,82 +177,24 @@ class PlaningHull(Vessel):
     @classmethod
     def from_config(cls, cfg: dict, source: str, name: Optional[str] = None,
                     initial_state: Optional[VesselState] = None) -> "PlaningHull":
-        c = _Cfg(cfg, source)
-        rho = c.num("environment.water_density", 900.0, 1100.0)
-        g = c.num("environment.gravity", 9.7, 9.9)
-        nu = c.num("environment.kinematic_viscosity", 1e-7, 1e-5)
-        loa = c.num("hull.length_overall", 0.0, 200.0, strict_lo=True)
-        c.num("hull.beam", 0.0, 50.0, strict_lo=True)
-        d0 = c.num("hull.draft", 0.0, 20.0, strict_lo=True)
-        mass = c.num("hull.mass", 0.0, 1e7, strict_lo=True)
-        x_ref = c.num("hull.reference_point_from_transom", 0.0, loa)
-        b = c.num("hull.chine_beam", 0.0, 50.0, strict_lo=True)
-        beta = c.num("hull.deadrise_deg", 0.0, 45.0)
-        lcg = c.num("hull.lcg_from_transom", 0.0, loa, strict_lo=True)
-        vcg = c.num("hull.vcg_above_waterline", -d0, 20.0)
-        kxx, kyy, kzz = c.vec("hull.radii_of_gyration", 3)
-        if min(kxx, kyy, kzz) <= 0:
-            raise c._err("hull.radii_of_gyration", "must be positive")
-        nexp = c.num("hull.displacement_exponent", 1.0, 4.0)
-        hull = savitsky.HullParticulars(mass, b, beta, lcg, rho, nu,
-                                        c.num("resistance.roughness_allowance", 0.0, 0.01), g)
-        sp = c.vec("resistance.savitsky_speeds_kn", 3)
-        if not (0 < sp[0] < sp[1] and sp[2] > 0):
-            raise c._err("resistance.savitsky_speeds_kn", "must be [first > 0, last > first, step > 0] knots")
-        speeds = np.arange(sp[0], sp[1] + 0.5 * sp[2], sp[2]) * KNOT
-        try:
-            rtab = np.array([savitsky.steady_state(hull, s).resistance for s in speeds])
-        except ValueError as exc:
-            raise c._err("resistance.savitsky_speeds_kn", f"Savitsky's method fails: {exc}") from None
+        """Build from a parsed ship file; ShipFileError names the file and the key.
 
+        The sections are read in a fixed order, so a file with several faults names the same
+        key first every time."""
+        c = _Cfg(cfg, source)
+        hull, body = _hull_particulars(c)
+        speeds, speed_step, rtab = _savitsky_resistance_table(c, hull)
         P = np.zeros(pc.P_NPAR)
-        P[pc.P_RHO], P[pc.P_G], P[pc.P_MASS] = rho, g, mass
-        P[pc.P_XG], P[pc.P_YG], P[pc.P_ZG] = lcg - x_ref, 0.0, vcg
-        P[pc.P_IXX], P[pc.P_IYY], P[pc.P_IZZ] = mass * kxx ** 2, mass * kyy ** 2, mass * kzz ** 2
-        P[pc.P_LREF] = c.num("hydrodynamics.reference_length", 0.0, 200.0, strict_lo=True)
-        P[pc.P_BLIFT] = c.num("hydrodynamics.lift_reference_beam", 0.0, 50.0, strict_lo=True)
-        P[pc.P_D0], P[pc.P_V0], P[pc.P_NEXP] = d0, mass / rho, nexp
-        P[pc.P_LIFT_FADE] = c.num("hydrodynamics.lift_fade_draft", 0.0, d0, strict_lo=True)
+        _fill_mass_and_hydrostatics(P, hull, body)
+        _fill_hydrodynamics(P, c, body.draft)
         P[pc.P_UFIT] = speeds[-1]
-        P[pc.P_ZWD] = c.num("hydrodynamics.Z_wdot", -1e8, 0.0)
-        P[pc.P_KPD] = c.num("hydrodynamics.K_pdot", -1e8, 0.0)
-        P[pc.P_MQD] = c.num("hydrodynamics.M_qdot", -1e10, 0.0)
-        P[pc.P_ZQ1] = c.num("hydrodynamics.Z_q_per_speed", -1e9, 1e9)
-        P[pc.P_CZ0], P[pc.P_CZ1] = _nonneg2(c, "hydrodynamics.heave_damping")
-        P[pc.P_CQ0], P[pc.P_CQ1] = _nonneg2(c, "hydrodynamics.pitch_damping")
-        P[pc.P_CP0], P[pc.P_CP1] = _nonneg2(c, "hydrodynamics.roll_damping")
-        P[pc.P_CKV] = c.num("hydrodynamics.K_v_lift_lever", -100.0, 100.0)
-        P[pc.P_YVV] = c.num("hydrodynamics.Y_vv", -1e9, 0.0)
-        P[pc.P_NRR] = c.num("hydrodynamics.N_rr", -1e12, 0.0)
-        P[pc.P_YPHI] = c.num("hydrodynamics.Y_phi", -1e9, 1e9)
-        P[pc.P_NPHI] = c.num("hydrodynamics.N_phi", -1e9, 1e9)
-        P[pc.P_KPHI] = c.num("hydrodynamics.K_phi", -1e9, 1e9)
-        P[pc.P_AJ] = c.num("waterjet.nozzle_area", 0.0, 10.0, strict_lo=True)
-        P[pc.P_UDES] = c.num("waterjet.design_speed_kn", 0.0, 80.0, strict_lo=True) * KNOT
-        if P[pc.P_UDES] > speeds[-1]:
-            raise c._err("waterjet.design_speed_kn", "is beyond the Savitsky resistance table "
-                         "(resistance.savitsky_speeds_kn)")
-        P[pc.P_ETAREV] = c.num("waterjet.astern_efficiency", 0.0, 1.0)
-        P[pc.P_XT], P[pc.P_YT], P[pc.P_ZT] = c.vec("waterjet.position", 3)
-        P[pc.P_RTAB_U0], P[pc.P_RTAB_DU] = speeds[0], sp[2] * KNOT
-        # astern: displacement-mode quadratic through the slowest table point, times a factor
-        P[pc.P_RAST] = c.num("resistance.astern_factor", 0.0, 10.0) * rtab[0] / speeds[0] ** 2
-        P[pc.P_NRAMP] = 1.0 / c.num("waterjet.impeller_ramp_time", 0.0, 120.0, strict_lo=True)
-        P[pc.P_DRATE] = math.radians(c.num("waterjet.bucket_rate_deg_s", 0.0, 360.0, strict_lo=True))
-        P[pc.P_DMAX] = math.radians(c.num("waterjet.bucket_max_deg", 0.0, 60.0, strict_lo=True))
+        _fill_waterjet(P, c, speeds)
+        _fill_resistance(P, c, speeds, speed_step, rtab)
+        _fill_actuators(P, c)
         P[pc.P_MAXSUB] = (c.num("integration.max_substep", 1e-4, 0.05)
                           if "integration" in cfg else 0.01)
-
-        C = np.zeros((pc.C_NPOLY, 5))
-        for key, row in _POLY_ROWS.items():
-            n_max = 5 if key in ("C_L", "C_M") else 3   # Eq 13 quadratics, Table 5 quartics
-            coef = c.vec(f"hydrodynamics.polynomials.{key}", min_n=1, max_n=n_max)
-            C[row, :len(coef)] = coef
-
-        att_node = c.lookup("attachments")
-        if not isinstance(att_node, dict) or not att_node:
-            raise c._err("attachments", "must map attachment names to [x, y, z] body points")
-        attachments = {str(k): c.vec(f"attachments.{k}", 3) for k in att_node}
+        C = _polynomials(c)
+        attachments = _attachments(c)
         limits = {"bucket_max": P[pc.P_DMAX],
                   "rated_impeller_speed": c.num("waterjet.rated_impeller_rpm", 0.0, 1e5, strict_lo=True)
                   * 2.0 * math.pi / 60.0}
@@ -249,6 +202,10 @@ class PlaningHull(Vessel):
                    limits, source, initial_state)
 
     # ------------------------------------------------------------------ Vessel interface
+    @property
+    def command(self) -> Command:
+        return self._command
+
     def settle_command(self, cmd: Command) -> List[str]:
         msgs = self.set_command(cmd)
         self._act[:] = self._cmd  # impeller and bucket at their ordered values
@@ -273,10 +230,13 @@ class PlaningHull(Vessel):
         return notes
 
     def set_current(self, current_world: Sequence[float]) -> None:
-        c = np.asarray(current_world, float)
-        if c.shape != (3,) or not np.all(np.isfinite(c)):
-            raise ValueError(f"current must be 3 finite numbers (world ENU, m/s), got {current_world!r}")
-        self._current = c.copy()
+        """Uniform current (east, north, up) m/s, world ENU; all three components act (6 DOF)."""
+        self._current = check_current(current_world)
+
+    def set_state(self, state: VesselState) -> None:
+        """Put the boat in this state as given (set_steady_run finds a planing equilibrium)."""
+        self.state = _copied(state)
+        self._refresh_diag()
 
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         if not (dt > 0.0 and math.isfinite(dt)):
@@ -288,14 +248,14 @@ class PlaningHull(Vessel):
         x[6:9] = s.linear_velocity_body
         x[9:12] = s.angular_velocity_body
         if wrenches:
-            wr = np.empty((len(wrenches), 9))
+            rows = np.empty((len(wrenches), 9))     # [F_world, r_body, M_world] per wrench
             for i, ew in enumerate(wrenches):
-                wr[i, 0:3] = ew.force_world
-                wr[i, 3:6] = ew.point_body
-                wr[i, 6:9] = ew.moment_world
+                rows[i, 0:3] = ew.force_world
+                rows[i, 3:6] = ew.point_body
+                rows[i, 6:9] = ew.moment_world
         else:
-            wr = self._no_wrench
-        pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, wr, self._current, dt, self._diag)
+            rows = self._no_wrench
+        pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt, self._diag)
         if not np.all(np.isfinite(x)):
             raise FloatingPointError(f"vessel {self.name!r}: state became non-finite")
         s.position[:] = x[0:3]
@@ -303,30 +263,34 @@ class PlaningHull(Vessel):
         s.linear_velocity_body[:] = x[6:9]
         s.angular_velocity_body[:] = x[9:12]
 
-    def status(self) -> Dict[str, float]:
+    def status(self) -> PlaningStatus:
         d = self._diag
         s = self.state
         cb = self._current_body() if np.any(self._current) else np.zeros(3)
         u, v = s.linear_velocity_body[0] - cb[0], s.linear_velocity_body[1] - cb[1]
         impeller = self._act[0] * self.limits["rated_impeller_speed"]
-        return {
-            "engine_order": float(self._cmd[0]),
-            "steering_angle_ordered": float(self._cmd[1]),
-            "steering_angle": float(self._act[1]),          # bucket, + turns to port
-            "bucket_angle": float(self._act[1]),
-            "throttle": float(self._act[0]),                # impeller speed fraction
-            "shaft_speed": float(impeller),                 # impeller, rad/s
-            "impeller_rpm": float(impeller * 60.0 / (2.0 * math.pi)),
-            "thrust": float(d[pc.D_THRUST]),
-            "jet_speed": float(d[pc.D_UJ]),
-            "lift": float(d[pc.D_LIFT]),
-            "speed_through_water": float(math.hypot(u, v)),
-            "heel": float(s.rpy[0]),                        # REP-103: + starboard down
-            "trim": float(s.rpy[1]),                        # REP-103: + bow down
-            "planing_trim": float(-s.rpy[1]),               # Savitsky tau: + bow up
-            "rise": float(s.position[2]),
-            "draft_at_reference": float(d[pc.D_DRAFT]),
-        }
+        return PlaningStatus(
+            engine_order=float(self._cmd[0]),
+            steering_angle_ordered=float(self._cmd[1]),
+            steering_angle=float(self._act[1]),          # bucket, + turns to port
+            shaft_speed=float(impeller),                 # impeller, rad/s
+            thrust=float(d[pc.D_THRUST]),
+            anchor_state=AnchorState.NONE,               # no anchor on this boat
+            speed_through_water=float(math.hypot(u, v)),
+            heel=float(s.rpy[0]),                        # REP-103: + starboard down
+            trim=float(s.rpy[1]),                        # REP-103: + bow down
+            rise=float(s.position[2]),
+            girting_ratio=0.0,                           # no towing hook: no girting
+            girting_threshold=0.0,
+            girting_warning=False,
+            bucket_angle=float(self._act[1]),
+            throttle=float(self._act[0]),                # impeller speed fraction
+            impeller_rpm=float(impeller * 60.0 / (2.0 * math.pi)),
+            jet_speed=float(d[pc.D_UJ]),
+            lift=float(d[pc.D_LIFT]),
+            planing_trim=float(-s.rpy[1]),               # Savitsky tau: + bow up
+            draft_at_reference=float(d[pc.D_DRAFT]),
+        )
 
     # ------------------------------------------------------------------ steady state
     def _current_body(self) -> np.ndarray:
@@ -404,16 +368,136 @@ class PlaningHull(Vessel):
         self._command = Command(ss["throttle"], 0.0, 0)
         self._refresh_diag()
 
-    @property
-    def command(self) -> Command:
-        return self._command
-
 
 def _nonneg2(c: _Cfg, path: str):
     v = c.vec(path, 2)
     if np.any(v < 0):
         raise c._err(path, f"damping [at rest, per m/s] must be >= 0, got {v.tolist()}")
     return float(v[0]), float(v[1])
+
+
+def _copied(state: VesselState) -> VesselState:
+    return VesselState(np.array(state.position, float), np.array(state.rpy, float),
+                       np.array(state.linear_velocity_body, float), np.array(state.angular_velocity_body, float))
+
+
+@dataclasses.dataclass(frozen=True)
+class _BodyParticulars:
+    """Hull values the parameter vector needs beside savitsky.HullParticulars."""
+    draft: float                          # d0, m (Table 1)
+    reference_from_transom: float         # m, the body origin
+    vcg: float                            # m above the waterline
+    radii_of_gyration: Tuple[float, float, float]
+    displacement_exponent: float          # V(d) = V0 (d / d0)^n (Eq 3)
+
+
+def _hull_particulars(c: _Cfg) -> Tuple[savitsky.HullParticulars, _BodyParticulars]:
+    """environment: and hull: (Table 1 and the estimated particulars Savitsky's method needs)."""
+    rho = c.num("environment.water_density", 900.0, 1100.0)
+    g = c.num("environment.gravity", 9.7, 9.9)
+    nu = c.num("environment.kinematic_viscosity", 1e-7, 1e-5)
+    loa = c.num("hull.length_overall", 0.0, 200.0, strict_lo=True)
+    c.num("hull.beam", 0.0, 50.0, strict_lo=True)
+    d0 = c.num("hull.draft", 0.0, 20.0, strict_lo=True)
+    mass = c.num("hull.mass", 0.0, 1e7, strict_lo=True)
+    x_ref = c.num("hull.reference_point_from_transom", 0.0, loa)
+    b = c.num("hull.chine_beam", 0.0, 50.0, strict_lo=True)
+    beta = c.num("hull.deadrise_deg", 0.0, 45.0)
+    lcg = c.num("hull.lcg_from_transom", 0.0, loa, strict_lo=True)
+    vcg = c.num("hull.vcg_above_waterline", -d0, 20.0)
+    kxx, kyy, kzz = c.vec("hull.radii_of_gyration", 3)
+    if min(kxx, kyy, kzz) <= 0:
+        raise c._err("hull.radii_of_gyration", "must be positive")
+    nexp = c.num("hull.displacement_exponent", 1.0, 4.0)
+    hull = savitsky.HullParticulars(mass, b, beta, lcg, rho, nu,
+                                    c.num("resistance.roughness_allowance", 0.0, 0.01), g)
+    return hull, _BodyParticulars(d0, x_ref, vcg, (kxx, kyy, kzz), nexp)
+
+
+def _savitsky_resistance_table(c: _Cfg, hull: savitsky.HullParticulars) -> Tuple[np.ndarray, float, np.ndarray]:
+    """resistance.savitsky_speeds_kn: the speeds and their step (m/s), Savitsky's calm-water
+    resistance there (N)."""
+    sp = c.vec("resistance.savitsky_speeds_kn", 3)
+    if not (0 < sp[0] < sp[1] and sp[2] > 0):
+        raise c._err("resistance.savitsky_speeds_kn", "must be [first > 0, last > first, step > 0] knots")
+    speeds = np.arange(sp[0], sp[1] + 0.5 * sp[2], sp[2]) * KNOT
+    try:
+        rtab = np.array([savitsky.steady_state(hull, s).resistance for s in speeds])
+    except ValueError as exc:
+        raise c._err("resistance.savitsky_speeds_kn", f"Savitsky's method fails: {exc}") from None
+    return speeds, sp[2] * KNOT, rtab
+
+
+def _fill_mass_and_hydrostatics(P: np.ndarray, hull: savitsky.HullParticulars, body: _BodyParticulars) -> None:
+    """Eq 1's mass, CG and inertia about the CG; Eq 3's displacement law."""
+    mass = hull.mass
+    kxx, kyy, kzz = body.radii_of_gyration
+    P[pc.P_RHO], P[pc.P_G], P[pc.P_MASS] = hull.water_density, hull.gravity, mass
+    P[pc.P_XG], P[pc.P_YG], P[pc.P_ZG] = hull.lcg_from_transom - body.reference_from_transom, 0.0, body.vcg
+    P[pc.P_IXX], P[pc.P_IYY], P[pc.P_IZZ] = mass * kxx ** 2, mass * kyy ** 2, mass * kzz ** 2
+    P[pc.P_D0], P[pc.P_V0], P[pc.P_NEXP] = body.draft, mass / hull.water_density, body.displacement_exponent
+
+
+def _fill_hydrodynamics(P: np.ndarray, c: _Cfg, d0: float) -> None:
+    """hydrodynamics: Eq 7's scalar derivatives, Eq 14's lift scales, the estimated dampings."""
+    P[pc.P_LREF] = c.num("hydrodynamics.reference_length", 0.0, 200.0, strict_lo=True)
+    P[pc.P_BLIFT] = c.num("hydrodynamics.lift_reference_beam", 0.0, 50.0, strict_lo=True)
+    P[pc.P_LIFT_FADE] = c.num("hydrodynamics.lift_fade_draft", 0.0, d0, strict_lo=True)
+    P[pc.P_ZWD] = c.num("hydrodynamics.Z_wdot", -1e8, 0.0)
+    P[pc.P_KPD] = c.num("hydrodynamics.K_pdot", -1e8, 0.0)
+    P[pc.P_MQD] = c.num("hydrodynamics.M_qdot", -1e10, 0.0)
+    P[pc.P_ZQ1] = c.num("hydrodynamics.Z_q_per_speed", -1e9, 1e9)
+    P[pc.P_CZ0], P[pc.P_CZ1] = _nonneg2(c, "hydrodynamics.heave_damping")
+    P[pc.P_CQ0], P[pc.P_CQ1] = _nonneg2(c, "hydrodynamics.pitch_damping")
+    P[pc.P_CP0], P[pc.P_CP1] = _nonneg2(c, "hydrodynamics.roll_damping")
+    P[pc.P_CKV] = c.num("hydrodynamics.K_v_lift_lever", -100.0, 100.0)
+    P[pc.P_YVV] = c.num("hydrodynamics.Y_vv", -1e9, 0.0)
+    P[pc.P_NRR] = c.num("hydrodynamics.N_rr", -1e12, 0.0)
+    P[pc.P_YPHI] = c.num("hydrodynamics.Y_phi", -1e9, 1e9)
+    P[pc.P_NPHI] = c.num("hydrodynamics.N_phi", -1e9, 1e9)
+    P[pc.P_KPHI] = c.num("hydrodynamics.K_phi", -1e9, 1e9)
+
+
+def _fill_waterjet(P: np.ndarray, c: _Cfg, speeds: np.ndarray) -> None:
+    """waterjet: Eqs 10-12's nozzle, design speed (Eq 11's U0 at full rpm) and thrust point."""
+    P[pc.P_AJ] = c.num("waterjet.nozzle_area", 0.0, 10.0, strict_lo=True)
+    P[pc.P_UDES] = c.num("waterjet.design_speed_kn", 0.0, 80.0, strict_lo=True) * KNOT
+    if P[pc.P_UDES] > speeds[-1]:
+        raise c._err("waterjet.design_speed_kn", "is beyond the Savitsky resistance table "
+                     "(resistance.savitsky_speeds_kn)")
+    P[pc.P_ETAREV] = c.num("waterjet.astern_efficiency", 0.0, 1.0)
+    P[pc.P_XT], P[pc.P_YT], P[pc.P_ZT] = c.vec("waterjet.position", 3)
+
+
+def _fill_resistance(P: np.ndarray, c: _Cfg, speeds: np.ndarray, speed_step: float, rtab: np.ndarray) -> None:
+    """The resistance table's grid, and the astern resistance."""
+    P[pc.P_RTAB_U0], P[pc.P_RTAB_DU] = speeds[0], speed_step
+    # astern: displacement-mode quadratic through the slowest table point, times a factor
+    P[pc.P_RAST] = c.num("resistance.astern_factor", 0.0, 10.0) * rtab[0] / speeds[0] ** 2
+
+
+def _fill_actuators(P: np.ndarray, c: _Cfg) -> None:
+    """Impeller ramp (paper 2.5: rpm changes linearly) and the bucket's rate and limit."""
+    P[pc.P_NRAMP] = 1.0 / c.num("waterjet.impeller_ramp_time", 0.0, 120.0, strict_lo=True)
+    P[pc.P_DRATE] = math.radians(c.num("waterjet.bucket_rate_deg_s", 0.0, 360.0, strict_lo=True))
+    P[pc.P_DMAX] = math.radians(c.num("waterjet.bucket_max_deg", 0.0, 60.0, strict_lo=True))
+
+
+def _polynomials(c: _Cfg) -> np.ndarray:
+    """hydrodynamics.polynomials: Eq 13 quadratics (Tables 3, 4, 6), Table 5 quartics (C_L, C_M)."""
+    C = np.zeros((pc.C_NPOLY, 5))
+    for key, row in _POLY_ROWS.items():
+        n_max = 5 if key in ("C_L", "C_M") else 3
+        coef = c.vec(f"hydrodynamics.polynomials.{key}", min_n=1, max_n=n_max)
+        C[row, :len(coef)] = coef
+    return C
+
+
+def _attachments(c: _Cfg) -> Dict[str, np.ndarray]:
+    att_node = c.lookup("attachments")
+    if not isinstance(att_node, dict) or not att_node:
+        raise c._err("attachments", "must map attachment names to [x, y, z] body points")
+    return {str(k): c.vec(f"attachments.{k}", 3) for k in att_node}
 
 
 def load(path: str, name: Optional[str] = None, initial_state: Optional[VesselState] = None) -> PlaningHull:

@@ -1,4 +1,11 @@
-"""Numba kernels of the 6-DOF planing hull (seed 004, Yoon & Kang). ROS-free.
+"""Numba kernels of the 6-DOF planing hull of Yoon & Kang, "Modeling and Simulation of the
+6 DOF Motion of a High Speed Planing Hull Running in Calm Sea". ROS-free.
+
+forces() sums one function per force group (Eq 2: F_G + F_B, F_H, F_P; external wrenches
+for F_ENV): _gravity_and_hydrostatics (Eqs 3-4), _bottom_lift (Eqs 9, 14),
+_horizontal_hydrodynamics and _added_mass_derivatives (Eqs 7-8, 13), _roll_moment and
+_vertical_plane (Eq 7 K, Z, M rows), _waterjet (Eqs 10-12), _wrench_in_body; then
+_rigid_body_rhs and _mass_matrix (Eq 1).
 
 All arrays SI/radians, REP-103 (body x fwd, y port, z up; world ENU). The paper's frames
 are already these (its section 2.1), so its Eqs 1-14 apply unchanged except:
@@ -29,8 +36,9 @@ from numba import njit
 (D_THRUST, D_LIFT, D_RISE, D_DRAFT, D_UJ, D_RES, D_ND) = range(7)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def poly(c, row, x):
+    """Row `row` of the coefficient table c (a0..a4) at x (Eq 13, Table 5's quartics)."""
     return c[row, 0] + x * (c[row, 1] + x * (c[row, 2] + x * (c[row, 3] + x * c[row, 4])))
 
 
@@ -100,160 +108,186 @@ def solve6(A, b):
     return x
 
 
-@njit(cache=True)
-def forces(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag, b, A):
-    """Generalised mass matrix A (6x6) and right-hand side b (6) of A nu_dot = b at state x.
+# ---- force components: each returns its contribution in the body frame ----------------------
 
-    x = [X, Y, Z, phi, theta, psi, u, v, w, p, q, r]; n_imp: impeller speed fraction (-1..1);
-    delta_cmd: bucket angle, interface sign (+ = port). wr: (k, 9) external wrenches
-    [F_world, r_body, M_world]; cur: (3,) current, world. Returns the heave rate of the origin.
-    """
-    phi, th, psi = x[3], x[4], x[5]
-    u, v, w, p, q, r = x[6], x[7], x[8], x[9], x[10], x[11]
-    cf, sf = math.cos(phi), math.sin(phi)
-    ct, st = math.cos(th), math.sin(th)
-    cp, sp = math.cos(psi), math.sin(psi)
-    # R = Rz Ry Rx (body -> world), vessel.rotation_body_to_world
-    R00 = cp * ct
-    R01 = cp * st * sf - sp * cf
-    R02 = cp * st * cf + sp * sf
-    R10 = sp * ct
-    R11 = sp * st * sf + cp * cf
-    R12 = sp * st * cf - cp * sf
-    R20 = -st
-    R21 = ct * sf
-    R22 = ct * cf
+@njit(cache=True, inline="always")
+def _rotation_body_to_world(cf, sf, ct, st, cp, sp):
+    """R = Rz Ry Rx (vessel.rotation_body_to_world) as the tuple R00, R01, ..., R22."""
+    return (cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf,
+            sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
+            -st, ct * sf, ct * cf)
 
+
+@njit(cache=True, inline="always")
+def _water_velocity_in_body(R, current, u, v, w):
+    """Velocity through the water, body axes: the body velocity less the world current."""
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
+    u_rel = u - (R00 * current[0] + R10 * current[1] + R20 * current[2])
+    v_rel = v - (R01 * current[0] + R11 * current[1] + R21 * current[2])
+    w_rel = w - (R02 * current[0] + R12 * current[1] + R22 * current[2])
+    return u_rel, v_rel, w_rel
+
+
+@njit(cache=True, inline="always")
+def _gravity_and_hydrostatics(P, C, z0, phi, th, sf, st, ct, cf, Up):
+    """Eqs 3-4: gravity less the buoyancy lost with the rise Z0 of the origin, restoring
+    moments K_S phi, M_S theta (Table 6, scaled by rho g V0 L, see planing.py).
+
+    Returns X, Y, Z, K, M and the draft d1 = d0 - Z0 at the reference point."""
     rho = P[P_RHO]
     g = P[P_G]
-    m = P[P_MASS]
-    L = P[P_LREF]
-    # velocity through the water (body): subtract the current
-    ur = u - (R00 * cur[0] + R10 * cur[1] + R20 * cur[2])
-    vr = v - (R01 * cur[0] + R11 * cur[1] + R21 * cur[2])
-    wr_ = w - (R02 * cur[0] + R12 * cur[1] + R22 * cur[2])
-    U = math.sqrt(ur * ur + vr * vr)           # resultant speed (paper 3.4)
-    ahead = ur > 0.0
-    # Eq 13 coefficients: at the resultant speed ahead, at rest astern (paper 4.1)
-    Up = min(U, P[P_UFIT]) if ahead else 0.0
-
-    # ---- gravity + hydrostatics, Eqs 3-4: buoyancy lost with the rise Z0 of the origin ----
-    z0 = x[2]
     d1 = P[P_D0] - z0
     vol = P[P_V0] * (max(d1, 0.0) / P[P_D0]) ** P[P_NEXP]
     dzs = -rho * g * (P[P_V0] - vol)            # Eq 3 (negative when risen)
-    fx = -dzs * st
-    fy = dzs * ct * sf
-    fz = dzs * ct * cf
-    rhogvl = rho * g * P[P_V0] * L                 # Table 6 scale (see planing.py)
-    mk = poly(C, C_KS, Up) * rhogvl * phi         # Eq 4 K_S phi
-    mm = poly(C, C_MS, Up) * rhogvl * th          # Eq 4 M_S theta
-    mn = 0.0
+    rhogvl = rho * g * P[P_V0] * P[P_LREF]
+    return (-dzs * st, dzs * ct * sf, dzs * ct * cf,
+            poly(C, C_KS, Up) * rhogvl * phi, poly(C, C_MS, Up) * rhogvl * th, d1)
 
-    # ---- lift and lift moment, Eqs 9 and 14: only ahead and bow up (theta < 0) ----
-    lift = 0.0
-    if ahead and th < 0.0:
-        fade = min(max(d1 / P[P_LIFT_FADE], 0.0), 1.0)   # no lift once the hull is out
-        qd = 0.5 * rho * U * U * fade
-        B = P[P_BLIFT]
-        lift = qd * B * B * poly(C, C_CL, Up)
-        fx += -lift * st
-        fz += lift * ct
-        mm += qd * B * B * B * poly(C, C_CM, Up)
-        # roll due to sway from the asymmetric bottom lift (estimated, see PLANING.md)
-        mk += P[P_CKV] * lift / U * vr
 
-    # ---- horizontal-plane hydrodynamics, Eqs 7-8, 13 (prime system on L) ----
-    h = 0.5 * rho
-    yvd = poly(C, C_YVD, Up) * h * L ** 3
-    yrd = poly(C, C_YRD, Up) * h * L ** 4
-    nvd = poly(C, C_NVD, Up) * h * L ** 4
-    nrd = poly(C, C_NRD, Up) * h * L ** 5
+@njit(cache=True, inline="always")
+def _bottom_lift(P, C, U, Up, v_rel, d1, st, ct):
+    """Eqs 9 and 14: bottom lift and lift moment (the caller applies them ahead, bow up only).
+
+    Returns the lift and its X, Z, K, M; the roll due to sway from the asymmetric bottom
+    lift is estimated (PLANING.md)."""
+    fade = min(max(d1 / P[P_LIFT_FADE], 0.0), 1.0)   # no lift once the hull is out
+    qd = 0.5 * P[P_RHO] * U * U * fade
+    B = P[P_BLIFT]
+    lift = qd * B * B * poly(C, C_CL, Up)
+    return lift, -lift * st, lift * ct, P[P_CKV] * lift / U * v_rel, qd * B * B * B * poly(C, C_CM, Up)
+
+
+@njit(cache=True, inline="always")
+def _added_mass_derivatives(P, C, Up):
+    """Eq 7's Y_vdot, Y_rdot, N_vdot, N_rdot from the Eq 13 polynomials (prime system on L)."""
+    h = 0.5 * P[P_RHO]
+    L = P[P_LREF]
+    return (poly(C, C_YVD, Up) * h * L ** 3, poly(C, C_YRD, Up) * h * L ** 4,
+            poly(C, C_NVD, Up) * h * L ** 4, poly(C, C_NRD, Up) * h * L ** 5)
+
+
+@njit(cache=True, inline="always")
+def _horizontal_hydrodynamics(P, C, rtab, U, Up, ahead, u_rel, v_rel, r, phi, yvd, yrd):
+    """Eqs 7-8, 13: surge resistance and Munk terms, sway and yaw damping (prime system on L).
+
+    Returns X, Y, N and the resistance term of X."""
+    h = 0.5 * P[P_RHO]
+    L = P[P_LREF]
     yv = poly(C, C_YV, Up) * h * L * L * U
     yr = poly(C, C_YR, Up) * h * L ** 3 * U
     nv = poly(C, C_NV, Up) * h * L ** 3 * U
     nr = poly(C, C_NR, Up) * h * L ** 4 * U
     if ahead:
-        res = -resistance(P, rtab, ur)
+        res = -resistance(P, rtab, u_rel)
     else:
-        res = P[P_RAST] * ur * ur               # astern: quadratic, opposes motion
-    fx += res - yvd * vr * r - yrd * r * r      # Eq 8: X_vr = -Y_vdot, X_rr = -Y_rdot
-    fy += (yv * vr + yr * r + P[P_YVV] * vr * abs(vr) + P[P_YPHI] * phi)
-    mn += (nv * vr + nr * r + P[P_NRR] * r * abs(r) + P[P_NPHI] * phi)
-    # attitude rates: roll/pitch damping acts on phi_dot, theta_dot, not on the part of
-    # p, q that a trimmed or heeled hull gets from turning (no bottom velocity there)
+        res = P[P_RAST] * u_rel * u_rel        # astern: quadratic, opposes motion
+    X = res - yvd * v_rel * r - yrd * r * r     # Eq 8: X_vr = -Y_vdot, X_rr = -Y_rdot
+    Y = (yv * v_rel + yr * r + P[P_YVV] * v_rel * abs(v_rel) + P[P_YPHI] * phi)
+    N = (nv * v_rel + nr * r + P[P_NRR] * r * abs(r) + P[P_NPHI] * phi)
+    return X, Y, N, res
+
+
+@njit(cache=True, inline="always")
+def _attitude_rates(p, q, r, sf, cf, st, ct):
+    """phi-dot, theta-dot: roll/pitch damping acts on these, not on the part of p, q that a
+    trimmed or heeled hull gets from turning (no bottom velocity there)."""
     ct_safe = ct if abs(ct) > 1e-6 else 1e-6
-    phidot = p + (sf * q + cf * r) * st / ct_safe
-    thdot = cf * q - sf * r
-    mk += P[P_KPHI] * phi - (P[P_CP0] + P[P_CP1] * U) * phidot
+    return p + (sf * q + cf * r) * st / ct_safe, cf * q - sf * r
 
-    # ---- vertical plane: Z_q, M_w (Eq 7) + heave/pitch damping (estimated) ----
-    fz += P[P_ZQ1] * U * q
-    mm += poly(C, C_MW, Up) * h * L ** 3 * U * wr_ - (P[P_CQ0] + P[P_CQ1] * U) * thdot
-    zdot = R20 * u + R21 * v + R22 * w           # world heave rate of the origin
-    cz = -(P[P_CZ0] + P[P_CZ1] * U) * zdot
-    fx += cz * R20
-    fy += cz * R21
-    fz += cz * R22
 
-    # ---- waterjet, Eqs 10-12 ----
+@njit(cache=True, inline="always")
+def _roll_moment(P, U, phi, phidot):
+    """Eq 7 K row: K_phi phi, with roll damping (estimated) on phi-dot."""
+    return P[P_KPHI] * phi - (P[P_CP0] + P[P_CP1] * U) * phidot
+
+
+@njit(cache=True, inline="always")
+def _vertical_plane(P, C, U, Up, q, w_rel, thdot, zdot):
+    """Eq 7 Z_q q and M_w w, plus heave and pitch damping (estimated).
+
+    Returns Z_q q, the pitch moment, and the heave damping force along world z."""
+    h = 0.5 * P[P_RHO]
+    L = P[P_LREF]
+    pitch = poly(C, C_MW, Up) * h * L ** 3 * U * w_rel - (P[P_CQ0] + P[P_CQ1] * U) * thdot
+    return P[P_ZQ1] * U * q, pitch, -(P[P_CZ0] + P[P_CZ1] * U) * zdot
+
+
+@njit(cache=True, inline="always")
+def _waterjet(P, rtab, n_imp, delta_cmd, u_rel):
+    """Eqs 10-12: waterjet thrust and bucket steering (Z_delta = 0).
+
+    Returns the thrust, the jet speed and X, Y, K, M, N."""
+    rho = P[P_RHO]
     uj = jet_speed(P, rtab, abs(n_imp))
     if n_imp >= 0.0:
-        thrust = rho * P[P_AJ] * uj * (uj - ur)             # Eq 10
+        thrust = rho * P[P_AJ] * uj * (uj - u_rel)             # Eq 10
     else:
         # astern: reversing bucket, reduced efficiency; inlet momentum drag kept
-        thrust = -rho * P[P_AJ] * uj * (P[P_ETAREV] * uj + ur)
+        thrust = -rho * P[P_AJ] * uj * (P[P_ETAREV] * uj + u_rel)
     dl = -delta_cmd                                  # paper's delta: + turns to starboard
     xd = thrust * math.cos(dl)
     yd = thrust * math.sin(dl)
-    xt, yt, zt = P[P_XT], P[P_YT], P[P_ZT]
-    fx += xd
-    fy += yd
-    mk += -zt * yd                                   # Eq 12 (Z_delta = 0)
-    mm += zt * xd
-    mn += xt * yd - yt * xd
+    return thrust, uj, xd, yd, -P[P_ZT] * yd, P[P_ZT] * xd, P[P_XT] * yd - P[P_YT] * xd
 
-    # ---- external wrenches (world force at a body point) ----
-    for k in range(wr.shape[0]):
-        Fw0, Fw1, Fw2 = wr[k, 0], wr[k, 1], wr[k, 2]
-        bx = R00 * Fw0 + R10 * Fw1 + R20 * Fw2
-        by = R01 * Fw0 + R11 * Fw1 + R21 * Fw2
-        bz = R02 * Fw0 + R12 * Fw1 + R22 * Fw2
-        rx, ry, rz = wr[k, 3], wr[k, 4], wr[k, 5]
-        fx += bx
-        fy += by
-        fz += bz
-        mk += ry * bz - rz * by + R00 * wr[k, 6] + R10 * wr[k, 7] + R20 * wr[k, 8]
-        mm += rz * bx - rx * bz + R01 * wr[k, 6] + R11 * wr[k, 7] + R21 * wr[k, 8]
-        mn += rx * by - ry * bx + R02 * wr[k, 6] + R12 * wr[k, 7] + R22 * wr[k, 8]
 
-    # ---- rigid body about the origin, CG at rg (Eq 1 in vector form) ----
+@njit(cache=True, inline="always")
+def _wrench_in_body(wrench, R):
+    """One external wrench [F_world, r_body, M_world] (9,): its X, Y, Z, K, M, N."""
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
+    bx = R00 * wrench[0] + R10 * wrench[1] + R20 * wrench[2]
+    by = R01 * wrench[0] + R11 * wrench[1] + R21 * wrench[2]
+    bz = R02 * wrench[0] + R12 * wrench[1] + R22 * wrench[2]
+    rx, ry, rz = wrench[3], wrench[4], wrench[5]
+    return (bx, by, bz,
+            ry * bz - rz * by + R00 * wrench[6] + R10 * wrench[7] + R20 * wrench[8],
+            rz * bx - rx * bz + R01 * wrench[6] + R11 * wrench[7] + R21 * wrench[8],
+            rx * by - ry * bx + R02 * wrench[6] + R12 * wrench[7] + R22 * wrench[8])
+
+
+# ---- rigid body, Eq 1 ------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def _inertia_about_origin(P):
+    """Ixx, Iyy, Izz, Ixy, Ixz, Iyz about the origin: about-CG principal values + parallel axis."""
+    m = P[P_MASS]
     xg, yg, zg = P[P_XG], P[P_YG], P[P_ZG]
-    # inertia about the origin: about-CG principal values + parallel axis
-    Ixx = P[P_IXX] + m * (yg * yg + zg * zg)
-    Iyy = P[P_IYY] + m * (xg * xg + zg * zg)
-    Izz = P[P_IZZ] + m * (xg * xg + yg * yg)
-    Ixy = -m * xg * yg
-    Ixz = -m * xg * zg
-    Iyz = -m * yg * zg
+    return (P[P_IXX] + m * (yg * yg + zg * zg), P[P_IYY] + m * (xg * xg + zg * zg),
+            P[P_IZZ] + m * (xg * xg + yg * yg), -m * xg * yg, -m * xg * zg, -m * yg * zg)
+
+
+@njit(cache=True, inline="always")
+def _rigid_body_rhs(P, inertia, X, Y, Z, K, M, N, u, v, w, p, q, r, b):
+    """Eq 1 in vector form about the origin, CG at rg: b = forces less the velocity terms."""
+    m = P[P_MASS]
+    xg, yg, zg = P[P_XG], P[P_YG], P[P_ZG]
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = inertia
     # omega x v
     wv0 = q * w - r * v
     wv1 = r * u - p * w
     wv2 = p * v - q * u
     # omega x (omega x rg)
-    wr0 = p * (p * xg + q * yg + r * zg) - xg * (p * p + q * q + r * r)
-    wr1 = q * (p * xg + q * yg + r * zg) - yg * (p * p + q * q + r * r)
-    wr2 = r * (p * xg + q * yg + r * zg) - zg * (p * p + q * q + r * r)
+    cen0 = p * (p * xg + q * yg + r * zg) - xg * (p * p + q * q + r * r)
+    cen1 = q * (p * xg + q * yg + r * zg) - yg * (p * p + q * q + r * r)
+    cen2 = r * (p * xg + q * yg + r * zg) - zg * (p * p + q * q + r * r)
     # I omega, omega x I omega
     Iw0 = Ixx * p + Ixy * q + Ixz * r
     Iw1 = Ixy * p + Iyy * q + Iyz * r
     Iw2 = Ixz * p + Iyz * q + Izz * r
-    b[0] = fx - m * (wv0 + wr0)
-    b[1] = fy - m * (wv1 + wr1)
-    b[2] = fz - m * (wv2 + wr2)
-    b[3] = mk - (q * Iw2 - r * Iw1) - m * (yg * wv2 - zg * wv1)
-    b[4] = mm - (r * Iw0 - p * Iw2) - m * (zg * wv0 - xg * wv2)
-    b[5] = mn - (p * Iw1 - q * Iw0) - m * (xg * wv1 - yg * wv0)
+    b[0] = X - m * (wv0 + cen0)
+    b[1] = Y - m * (wv1 + cen1)
+    b[2] = Z - m * (wv2 + cen2)
+    b[3] = K - (q * Iw2 - r * Iw1) - m * (yg * wv2 - zg * wv1)
+    b[4] = M - (r * Iw0 - p * Iw2) - m * (zg * wv0 - xg * wv2)
+    b[5] = N - (p * Iw1 - q * Iw0) - m * (xg * wv1 - yg * wv0)
+
+
+@njit(cache=True, inline="always")
+def _mass_matrix(P, inertia, yvd, yrd, nvd, nrd, A):
+    """Rigid-body mass matrix about the origin plus the added mass (Eq 7's acceleration terms
+    moved to the left; X_udot = 0 by Eq 8)."""
+    m = P[P_MASS]
+    xg, yg, zg = P[P_XG], P[P_YG], P[P_ZG]
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = inertia
     A[:, :] = 0.0
     A[0, 0] = m
     A[1, 1] = m
@@ -280,7 +314,6 @@ def forces(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag, b, A):
     A[5, 3] = Ixz
     A[5, 4] = Iyz
     A[5, 5] = Izz
-    # added mass (Eq 7 acceleration terms moved to the left; X_udot = 0 by Eq 8)
     A[1, 1] -= yvd
     A[1, 5] -= yrd
     A[5, 1] -= nvd
@@ -288,6 +321,75 @@ def forces(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag, b, A):
     A[2, 2] -= P[P_ZWD]
     A[3, 3] -= P[P_KPD]
     A[4, 4] -= P[P_MQD]
+
+
+@njit(cache=True)
+def forces(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag, b, A):
+    """Generalised mass matrix A (6x6) and right-hand side b (6) of A nu_dot = b at state x.
+
+    x = [X, Y, Z, phi, theta, psi, u, v, w, p, q, r]; n_imp: impeller speed fraction (-1..1);
+    delta_cmd: bucket angle, interface sign (+ = port). wrenches: (k, 9) external wrenches
+    [F_world, r_body, M_world]; current: (3,) water current, world. Returns the heave rate of the origin.
+    X..N sum the components in a fixed order (the order is part of the numbers).
+    """
+    phi, th = x[3], x[4]
+    u, v, w, p, q, r = x[6], x[7], x[8], x[9], x[10], x[11]
+    cf, sf = math.cos(phi), math.sin(phi)
+    ct, st = math.cos(th), math.sin(th)
+    R = _rotation_body_to_world(cf, sf, ct, st, math.cos(x[5]), math.sin(x[5]))
+    u_rel, v_rel, w_rel = _water_velocity_in_body(R, current, u, v, w)
+    U = math.sqrt(u_rel * u_rel + v_rel * v_rel)   # resultant speed (paper 3.4)
+    ahead = u_rel > 0.0
+    # Eq 13 coefficients: at the resultant speed ahead, at rest astern (paper 4.1)
+    Up = min(U, P[P_UFIT]) if ahead else 0.0
+
+    z0 = x[2]
+    fx, fy, fz, mk, mm, d1 = _gravity_and_hydrostatics(P, C, z0, phi, th, sf, st, ct, cf, Up)
+    mn = 0.0
+    lift = 0.0
+    if ahead and th < 0.0:                          # Eq 9: only ahead and bow up
+        lift, Xl, Zl, Kl, Ml = _bottom_lift(P, C, U, Up, v_rel, d1, st, ct)
+        fx += Xl
+        fz += Zl
+        mm += Ml
+        mk += Kl
+
+    yvd, yrd, nvd, nrd = _added_mass_derivatives(P, C, Up)
+    Xh, Yh, Nh, res = _horizontal_hydrodynamics(P, C, rtab, U, Up, ahead, u_rel, v_rel, r, phi, yvd, yrd)
+    fx += Xh
+    fy += Yh
+    mn += Nh
+    phidot, thdot = _attitude_rates(p, q, r, sf, cf, st, ct)
+    mk += _roll_moment(P, U, phi, phidot)
+
+    R20, R21, R22 = R[6], R[7], R[8]
+    zdot = R20 * u + R21 * v + R22 * w           # world heave rate of the origin
+    Zq, Mv, cz = _vertical_plane(P, C, U, Up, q, w_rel, thdot, zdot)
+    fz += Zq
+    mm += Mv
+    fx += cz * R20
+    fy += cz * R21
+    fz += cz * R22
+
+    thrust, uj, Xj, Yj, Kj, Mj, Nj = _waterjet(P, rtab, n_imp, delta_cmd, u_rel)
+    fx += Xj
+    fy += Yj
+    mk += Kj
+    mm += Mj
+    mn += Nj
+
+    for k in range(wrenches.shape[0]):
+        Xw, Yw, Zw, Kw, Mw, Nw = _wrench_in_body(wrenches[k], R)
+        fx += Xw
+        fy += Yw
+        fz += Zw
+        mk += Kw
+        mm += Mw
+        mn += Nw
+
+    inertia = _inertia_about_origin(P)
+    _rigid_body_rhs(P, inertia, fx, fy, fz, mk, mm, mn, u, v, w, p, q, r, b)
+    _mass_matrix(P, inertia, yvd, yrd, nvd, nrd, A)
     diag[D_THRUST] = thrust
     diag[D_LIFT] = lift
     diag[D_RISE] = z0
@@ -298,11 +400,11 @@ def forces(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag, b, A):
 
 
 @njit(cache=True)
-def rhs(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag):
+def rhs(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag):
     """Time derivative of x = [X, Y, Z, phi, theta, psi, u, v, w, p, q, r]."""
     b = np.empty(6)
     A = np.empty((6, 6))
-    zdot = forces(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag, b, A)
+    zdot = forces(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag, b, A)
     acc = solve6(A, b)
     phi, th, psi = x[3], x[4], x[5]
     u, v, w, p, q, r = x[6], x[7], x[8], x[9], x[10], x[11]
@@ -324,16 +426,17 @@ def rhs(x, P, C, rtab, n_imp, delta_cmd, wr, cur, diag):
 
 
 @njit(cache=True)
-def _approach(cur, target, max_change):
-    if target > cur + max_change:
-        return cur + max_change
-    if target < cur - max_change:
-        return cur - max_change
+def _approach(value, target, max_change):
+    """value moved toward target by at most max_change (a rate-limited actuator)."""
+    if target > value + max_change:
+        return value + max_change
+    if target < value - max_change:
+        return value - max_change
     return target
 
 
 @njit(cache=True)
-def integrate(x, act, cmd, P, C, rtab, wr, cur, dt, diag):
+def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag):
     """Advance x (12) and actuators act = [impeller fraction, bucket angle] by dt (RK4).
 
     cmd = [engine order, bucket angle ordered]; the impeller speed ramps linearly (paper 2.5)
@@ -346,20 +449,20 @@ def integrate(x, act, cmd, P, C, rtab, wr, cur, dt, diag):
     for _ in range(nsub):
         act[0] = _approach(act[0], cmd[0], P[P_NRAMP] * h)
         act[1] = _approach(act[1], cmd[1], P[P_DRATE] * h)
-        k1 = rhs(x, P, C, rtab, act[0], act[1], wr, cur, diag)
+        k1 = rhs(x, P, C, rtab, act[0], act[1], wrenches, current, diag)
         for i in range(12):
             tmp[i] = x[i] + 0.5 * h * k1[i]
-        k2 = rhs(tmp, P, C, rtab, act[0], act[1], wr, cur, diag)
+        k2 = rhs(tmp, P, C, rtab, act[0], act[1], wrenches, current, diag)
         for i in range(12):
             tmp[i] = x[i] + 0.5 * h * k2[i]
-        k3 = rhs(tmp, P, C, rtab, act[0], act[1], wr, cur, diag)
+        k3 = rhs(tmp, P, C, rtab, act[0], act[1], wrenches, current, diag)
         for i in range(12):
             tmp[i] = x[i] + h * k3[i]
-        k4 = rhs(tmp, P, C, rtab, act[0], act[1], wr, cur, diag)
+        k4 = rhs(tmp, P, C, rtab, act[0], act[1], wrenches, current, diag)
         for i in range(12):
             x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     # diagnostics at the final state
-    rhs(x, P, C, rtab, act[0], act[1], wr, cur, diag)
+    rhs(x, P, C, rtab, act[0], act[1], wrenches, current, diag)
     # keep yaw in (-pi, pi]
     if x[5] > math.pi:
         x[5] -= 2.0 * math.pi

@@ -1,4 +1,5 @@
-"""The manoeuvres of seed 004's section 4, run on a PlaningHull; key figures for PLANING.md.
+"""The manoeuvres of Yoon & Kang's section 4 (planing hull), run on a PlaningHull; key figures
+for PLANING.md.
 
     python -m tug_dynamics.planing_manoeuvres [ship_file]   # prints the markdown tables
 
@@ -36,10 +37,10 @@ def _record(model: PlaningHull, t: float, log: Dict[str, list]) -> None:
     log["u"].append(s.linear_velocity_body[0])
     log["v"].append(s.linear_velocity_body[1])
     log["r"].append(s.angular_velocity_body[2])
-    log["thrust"].append(st["thrust"])
-    log["lift"].append(st["lift"])
-    log["throttle"].append(st["throttle"])
-    log["bucket"].append(st["steering_angle"])
+    log["thrust"].append(st.thrust)
+    log["lift"].append(st.lift)
+    log["throttle"].append(st.throttle)
+    log["bucket"].append(st.steering_angle)
 
 
 def run(model: PlaningHull, orders, duration: float, dt: float = DT) -> Dict[str, np.ndarray]:

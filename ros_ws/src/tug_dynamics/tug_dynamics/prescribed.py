@@ -1,25 +1,28 @@
 """Prescribed motion: a vessel that follows a given track whatever the forces on it, as the tug
-of seed 000 section 4 does (constant speed 4.4 / 4.6, sinusoidal sway 4.5, acceleration).
+of Yoon, Lee, Park & Kim's towing-rope paper ("Dynamic Modeling and Simulation of a Towing Rope
+using Multiple Finite Element Method") does in its section 4 (constant speed 4.4 / 4.6,
+sinusoidal sway 4.5, acceleration).
 
 The track is written in the vessel's initial frame (x along the initial heading, y to port):
   constant_speed     x = U t
-  sinusoidal_sway    x = U t,  y = A sin(2 pi t / T)          (seed 000 4.5: 2 kn, 10 m, 50 s)
+  sinusoidal_sway    x = U t,  y = A sin(2 pi t / T)          (towing-rope paper 4.5: 2 kn, 10 m, 50 s)
   acceleration       x = a t^2 / 2 until U_max is reached, then U_max
   turn               speed U straight, from turn_start a circular arc at turn_rate (positive
-                     to port) for turn_duration, then straight again (seed 001: 1 m/s,
-                     0.5 deg/s to port for 100 s)
+                     to port) for turn_duration, then straight again (Park & Jung's towed-cable
+                     paper: 1 m/s, 0.5 deg/s to port for 100 s)
 The heading follows the track tangent (heading: track) or keeps its initial value (heading:
-fixed). External wrenches are ignored; the attachment kinematics are exact derivatives.
+fixed). The track is over ground: external wrenches and the current do not move the vessel.
+The attachment kinematics are exact derivatives.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Dict, List, Sequence
+from typing import List, Sequence
 
 import numpy as np
 
-from tug_dynamics.vessel import Command, ExternalWrench, Vessel, VesselState
+from tug_dynamics.vessel import Command, ExternalWrench, StatusRecord, Vessel, VesselState, check_current
 
 MOTION_KINDS = ("constant_speed", "sinusoidal_sway", "acceleration", "turn")
 
@@ -94,16 +97,37 @@ class PrescribedMotion(Vessel):
         self.law = law
         self.name = base.name
         self.attachments = base.attachments
-        self.origin = base.state.position.copy()
-        self.yaw0 = float(base.state.rpy[2])
         self.time = 0.0
-        self.state = VesselState(self.origin.copy(), np.array([0.0, 0.0, self.yaw0]), np.zeros(3), np.zeros(3))
-        self._apply()
+        self.set_state(base.state)
+
+    # ---- commands: validated and held by the base model; they do not move this vessel ----
+    @property
+    def command(self) -> Command:
+        return self.base.command
 
     def set_command(self, cmd: Command) -> List[str]:
-        return self.base.set_command(cmd)  # validated and held; it does not move a prescribed vessel
+        return self.base.set_command(cmd)
 
+    def settle_command(self, cmd: Command) -> List[str]:
+        return self.base.settle_command(cmd)
+
+    # ---- state and environment ----------------------------------------------------------
+    def set_state(self, state: VesselState) -> None:
+        """Start the track (time 0) at this state's position and heading."""
+        self.origin = np.array(state.position, float)
+        self.yaw0 = float(state.rpy[2])
+        self.time = 0.0
+        self._apply()
+
+    def set_current(self, current_world: Sequence[float]) -> None:
+        """Checked, then without effect: the track is prescribed over ground, so the water's
+        motion cannot move this vessel (status reports its speed over ground as
+        speed_through_water, as the track defines no speed through the water)."""
+        check_current(current_world)
+
+    # ---- stepping ---------------------------------------------------------------------------
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
+        """Advance along the track; wrenches have no effect on a prescribed motion."""
         self.time += dt
         self._apply()
 
@@ -122,9 +146,8 @@ class PrescribedMotion(Vessel):
         v = -sy * vel_world[0] + cy * vel_world[1]
         self.state = VesselState(pos, np.array([0.0, 0.0, yaw]), np.array([u, v, 0.0]), np.array([0.0, 0.0, yaw_rate]))
 
-    def status(self) -> Dict[str, float]:
-        st = dict(self.base.status())
-        st["speed_through_water"] = float(math.hypot(*self.state.linear_velocity_body[:2]))
-        st["heel"] = 0.0
-        st["prescribed"] = True
-        return st
+    def status(self) -> StatusRecord:
+        """The base model's status (its actuators, held still) with this motion's speed and no heel."""
+        return dataclasses.replace(self.base.status(),
+                                   speed_through_water=float(math.hypot(*self.state.linear_velocity_body[:2])),
+                                   heel=0.0)

@@ -1,6 +1,6 @@
 """Savitsky's (1964) steady planing state of a prismatic hull, ROS-free.
 
-Seed 004 (Yoon & Kang) computes its Table 2 (trim, wetted keel/chine lengths, total
+Yoon & Kang (planing hull) compute their Table 2 (trim, wetted keel/chine lengths, total
 resistance vs speed) with Savitsky's short method: all forces act through the centre of
 gravity, so the trim is the one that puts the centre of pressure on the LCG. This module
 reproduces that so another hull can be added from its particulars.

@@ -13,6 +13,7 @@ used to estimate them; each listed key must exist in the file.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import glob
 import math
 import os
@@ -175,37 +176,63 @@ _POLY_KEYS = ["Xvv", "Xrr", "Xvr", "Yv", "Yvav", "Yr", "Yrar", "Yvrr", "Yrvv",
 _LOW_KEYS = ["Xuu", "Xvr", "Yv", "Yr", "Yvv", "Yvr", "Yrr", "Nv", "Nr", "Nvvr", "Nvrr", "Nrr"]
 
 
+@dataclasses.dataclass(frozen=True)
+class _AddedMass:
+    """Added masses (kg, kg m, kg m^2) of the mass matrix: surge, sway, sway-yaw, yaw-sway, yaw."""
+    mx: float
+    my: float
+    m_yr: float
+    m_nv: float
+    jz: float
+
+
+_NO_ADDED_MASS = _AddedMass(0.0, 0.0, 0.0, 0.0, 0.0)
+
+
 def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[str],
                         initial_state) -> mv.ManeuveringVessel:
     """The model's arrays from a validated file (ship_schema: every value typed and in range)."""
-    vname = name or str(ship.name)
-    rho = ship.water_density
     hp = np.zeros(mv.NHULL)
-    hp[mv.H_RHO] = rho
+    hp[mv.H_RHO] = ship.water_density
+    added, rv, rf, table_v, table_f = _hull_section(hp, ship)
+    M, roll_cfg = _mass_matrix_and_roll(hp, ship, added)
+    props, rated_rps = _engine_and_propellers(hp, ship)
+    ruds, max_steer = _steering_and_rudders(hp, ship, props)
+    anchor_cfg = _anchor_section(hp, ship)
+    _towline_section(hp, ship, table_v, table_f)
+    att = {str(k): np.asarray(v, float) for k, v in (ship.attachments or {}).items()}
+    hmax = ship.integration.max_substep if ship.integration is not None else schema._default_hmax(ship.hull.length)
+    cur = ship.current
+    return mv.ManeuveringVessel(
+        name or str(ship.name), hp, np.array(props) if props else np.zeros((0, mv.NPROP)),
+        np.array(ruds) if ruds else np.zeros((0, mv.NRUD)), rv, rf, M,
+        {"max_steering": max_steer, "rated_rps": rated_rps}, att, anchor=anchor_cfg, roll=roll_cfg,
+        hmax=hmax, initial_state=initial_state, current=(cur[0], cur[1]), source=src)
 
-    # ---- hull ----
+
+def _hull_section(hp: np.ndarray, ship: schema.DisplacementShip):
+    """hull: form and derivatives (Yun & Kim Eq 2 or S. D. Yoon Eq 3), added mass, X(u) table.
+
+    Returns the added masses, the resistance table the hull uses (empty with the hull off) and
+    the file's table, which the towline's X(u_c) needs even with the hull off."""
     h = ship.hull
-    L, B, T, m, xg = h.length, h.beam, h.draft, h.mass, h.x_g
-    kzz = h.yaw_radius_of_gyration
-    hp[mv.H_L], hp[mv.H_T], hp[mv.H_M], hp[mv.H_XG] = L, T, m, xg
+    rho = ship.water_density
+    L, T, m = h.length, h.draft, h.mass
+    hp[mv.H_L], hp[mv.H_T], hp[mv.H_M], hp[mv.H_XG] = L, T, m, h.x_g
     d = h.derivatives
     if h.form == "polynomial":
         keys = _POLY_KEYS
         hp[mv.H_FORM] = mv.FORM_POLY
-        q3 = 0.5 * rho * L ** 3
-        mx = -d.Xudot * q3
-        my = -d.Yvdot * q3
-        m_yr = -d.Yrdot * q3 * L
-        m_nv = -d.Nvdot * q3 * L
-        jz = -d.Nrdot * q3 * L * L
+        q3 = 0.5 * rho * L ** 3       # added-mass derivatives / 0.5 rho L^3 (L^4, L^5), Eq 4
+        added = _AddedMass(mx=-d.Xudot * q3, my=-d.Yvdot * q3, m_yr=-d.Yrdot * q3 * L,
+                           m_nv=-d.Nvdot * q3 * L, jz=-d.Nrdot * q3 * L * L)
         hp[mv.H_MMG_CORIOLIS] = 0.0
     else:
         keys = _LOW_KEYS
         hp[mv.H_FORM] = mv.FORM_LOWSPEED
-        mx = h.added_mass.mx_over_m * m
-        my = h.added_mass.my_over_m * m
-        jz = h.added_mass.Jz_over_mL2 * m * L * L
-        m_yr = m_nv = 0.0
+        am = h.added_mass
+        added = _AddedMass(mx=am.mx_over_m * m, my=am.my_over_m * m, m_yr=0.0, m_nv=0.0,
+                           jz=am.Jz_over_mL2 * m * L * L)
         hp[mv.H_MMG_CORIOLIS] = 1.0
     for i, k in enumerate(keys):
         hp[mv.H_C0 + i] = getattr(d, k)
@@ -214,48 +241,56 @@ def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[
         rf = np.asarray(h.resistance.force, float)
     else:
         rv = rf = np.zeros(0)
-    table_v, table_f = rv, rf          # kept for the towline's X(u_c) even with the hull off
+    table_v, table_f = rv, rf
     if not h.enabled:
         # hull forces off: no damping, no added mass (a pure rigid body)
         hp[mv.H_FORM] = mv.FORM_NONE
-        mx = my = m_yr = m_nv = jz = 0.0
+        added = _NO_ADDED_MASS
         rv = rf = np.zeros(0)
-    hp[mv.H_MX], hp[mv.H_MY] = mx, my
+    hp[mv.H_MX], hp[mv.H_MY] = added.mx, added.my
+    return added, rv, rf, table_v, table_f
 
-    # ---- roll ----
-    roll_cfg = None
+
+def _mass_matrix_and_roll(hp: np.ndarray, ship: schema.DisplacementShip, added: _AddedMass):
+    """The (u, v, r, p) mass matrix about the reference point and, with a roll: section, the
+    roll restoring, damping and girting limits (wall-sided GZ at the deck edge)."""
+    h = ship.hull
+    m, xg = h.mass, h.x_g
     M = np.zeros((4, 4))
-    M[0, 0] = m + mx
-    M[1, 1] = m + my
-    M[1, 2] = m * xg + m_yr
-    M[2, 1] = m * xg + m_nv
-    M[2, 2] = m * kzz ** 2 + m * xg ** 2 + jz
-    hp[mv.H_ZH] = -0.5 * T
+    M[0, 0] = m + added.mx
+    M[1, 1] = m + added.my
+    M[1, 2] = m * xg + added.m_yr
+    M[2, 1] = m * xg + added.m_nv
+    M[2, 2] = m * h.yaw_radius_of_gyration ** 2 + m * xg ** 2 + added.jz
+    hp[mv.H_ZH] = -0.5 * h.draft
     ro = ship.roll
-    if ro is not None:
-        gm, kxx, zg = ro.gm, ro.radius_of_gyration, ro.z_g
-        jx = ro.added_inertia_ratio * m * kxx ** 2
-        hp[mv.H_ZH] = ro.z_lateral_resistance
-        ix = m * kxx ** 2 + m * zg ** 2 + jx
-        M[1, 3] = M[3, 1] = -m * zg
-        M[3, 3] = ix
-        hp[mv.H_ROLL], hp[mv.H_ZG] = 1.0, zg
-        hp[mv.H_GMW] = m * G * gm
-        hp[mv.H_KP] = 2.0 * ro.damping_ratio * math.sqrt(ix * m * G * gm)
-        phi_de = math.atan2(ro.freeboard, 0.5 * B)
-        gz = math.sin(phi_de) * (gm + 0.5 * ro.bm * math.tan(phi_de) ** 2)   # wall-sided, deck edge
-        roll_cfg = {"gm": gm, "deck_edge_angle": phi_de, "max_righting_moment": m * G * gz,
-                    "girting_threshold": ro.girting_threshold, "z_lateral_resistance": hp[mv.H_ZH]}
-    else:
+    if ro is None:
         M[3, 3] = 1.0
+        return M, None
+    gm, kxx, zg = ro.gm, ro.radius_of_gyration, ro.z_g
+    jx = ro.added_inertia_ratio * m * kxx ** 2
+    hp[mv.H_ZH] = ro.z_lateral_resistance
+    ix = m * kxx ** 2 + m * zg ** 2 + jx
+    M[1, 3] = M[3, 1] = -m * zg
+    M[3, 3] = ix
+    hp[mv.H_ROLL], hp[mv.H_ZG] = 1.0, zg
+    hp[mv.H_GMW] = m * G * gm
+    hp[mv.H_KP] = 2.0 * ro.damping_ratio * math.sqrt(ix * m * G * gm)
+    phi_de = math.atan2(ro.freeboard, 0.5 * h.beam)
+    gz = math.sin(phi_de) * (gm + 0.5 * ro.bm * math.tan(phi_de) ** 2)   # wall-sided, deck edge
+    roll_cfg = {"gm": gm, "deck_edge_angle": phi_de, "max_righting_moment": m * G * gz,
+                "girting_threshold": ro.girting_threshold, "z_lateral_resistance": hp[mv.H_ZH]}
+    return M, roll_cfg
 
-    # ---- engine, propellers ----
-    props: List[np.ndarray] = []
+
+def _engine_and_propellers(hp: np.ndarray, ship: schema.DisplacementShip):
+    """engine: (S. D. Yoon Eq 9 lag) and propellers: (Eq 4 rows). Returns the rows, rated rps."""
     rated_rps = 0.0
     hp[mv.H_TN] = 1.0
     if ship.engine is not None:
         rated_rps = ship.engine.rated_rpm / 60.0
         hp[mv.H_TN] = ship.engine.time_constant
+    props: List[np.ndarray] = []
     for p in ship.propellers or []:
         row = np.zeros(mv.NPROP)
         row[mv.P_X], row[mv.P_Y], row[mv.P_Z] = p.position
@@ -267,8 +302,12 @@ def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[
         row[mv.P_AST] = p.astern_factor
         props.append(row)
     hp[mv.H_NPROP] = len(props)
+    return props, rated_rps
 
-    # ---- steering gear, rudders ----
+
+def _steering_and_rudders(hp: np.ndarray, ship: schema.DisplacementShip, props: List[np.ndarray]):
+    """steering: (S. D. Yoon Eq 10 gear) and rudders: (Eq 7-8 rows). Returns the rows and the
+    largest steering angle, rad."""
     max_steer = math.radians(35.0)
     hp[mv.H_TE], hp[mv.H_MAXRATE] = 1.0, 1.0
     if ship.steering is not None:
@@ -282,7 +321,7 @@ def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[
         lam = r.aspect_ratio
         height = r.height if r.height is not None else math.sqrt(lam * r.area)
         row[mv.R_AREA] = r.area
-        row[mv.R_FALPHA] = 6.13 * lam / (lam + 2.25)     # Fujii, seed 003 Eq 8
+        row[mv.R_FALPHA] = 6.13 * lam / (lam + 2.25)     # Fujii, S. D. Yoon Eq 8
         if r.propeller is None:
             row[mv.R_PROP] = -1
             row[mv.R_ETA] = 0.0
@@ -297,42 +336,38 @@ def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[
         row[mv.R_KAPPA0] = r.kappa_factor
         ruds.append(row)
     hp[mv.H_NRUD] = len(ruds)
+    return ruds, max_steer
 
-    # ---- anchor (seed 003 Eq 5-6) ----
+
+def _anchor_section(hp: np.ndarray, ship: schema.DisplacementShip) -> Optional[dict]:
+    """anchor: (S. D. Yoon Eq 5-6). Returns the let-go / heave-up timing and side, or None."""
     a = ship.anchor
-    anchor_cfg = None
-    if a is not None:
-        hp[mv.H_ANC_LW] = a.holding_coefficient * a.weight_in_water
-        hp[mv.H_ANC_LA] = a.moment_lever
-        hp[mv.H_ANC_UEPS] = a.speed_regularisation
-        hp[mv.H_ANC_RON] = a.turning_threshold
-        hp[mv.H_ANC_VUCAP] = a.max_drift_ratio
-        hp[mv.H_ANC_UREF] = a.turning_fade_speed
-        sides = {"auto": 0.0, "port": 1.0, "starboard": -1.0}
-        anchor_cfg = {"let_go_time": a.let_go_time, "heave_up_time": a.heave_up_time, "side": sides[a.side]}
+    if a is None:
+        return None
+    hp[mv.H_ANC_LW] = a.holding_coefficient * a.weight_in_water
+    hp[mv.H_ANC_LA] = a.moment_lever
+    hp[mv.H_ANC_UEPS] = a.speed_regularisation
+    hp[mv.H_ANC_RON] = a.turning_threshold
+    hp[mv.H_ANC_VUCAP] = a.max_drift_ratio
+    hp[mv.H_ANC_UREF] = a.turning_fade_speed
+    sides = {"auto": 0.0, "port": 1.0, "starboard": -1.0}
+    return {"let_go_time": a.let_go_time, "heave_up_time": a.heave_up_time, "side": sides[a.side]}
 
-    # ---- seed 002 Eq 3 simple towline ----
+
+def _towline_section(hp: np.ndarray, ship: schema.DisplacementShip, table_v: np.ndarray,
+                     table_f: np.ndarray) -> None:
+    """towline_simple: (Yun & Kim Eq 3)."""
     t = ship.towline_simple
-    if t is not None:
-        hp[mv.H_TOW_ON] = 1.0 if t.enabled else 0.0
-        if t.force == "resistance":
-            # the paper: X(u_c), the straight-running resistance at the reference speed u_c
-            fval = -mv._interp_resistance.py_func(t.reference_speed, table_v, table_f)
-        else:
-            fval = t.force
-        hp[mv.H_TOW_F] = fval
-        hp[mv.H_TOW_X] = t.lever if t.lever is not None else 0.5 * L
-        hp[mv.H_TOW_DRIFT] = t.drift_sign
-        hp[mv.H_TOW_RATE] = math.radians(t.gamma_rate_deg_s)
-        hp[mv.H_TOW_MAX] = math.radians(t.gamma_max_deg)
-
-    # ---- attachments, integration, current ----
-    att = {str(k): np.asarray(v, float) for k, v in (ship.attachments or {}).items()}
-    hmax = ship.integration.max_substep if ship.integration is not None else schema._default_hmax(L)
-    cur = ship.current
-
-    return mv.ManeuveringVessel(
-        vname, hp, np.array(props) if props else np.zeros((0, mv.NPROP)),
-        np.array(ruds) if ruds else np.zeros((0, mv.NRUD)), rv, rf, M,
-        {"max_steering": max_steer, "rated_rps": rated_rps}, att, anchor=anchor_cfg, roll=roll_cfg,
-        hmax=hmax, initial_state=initial_state, current=(cur[0], cur[1]), source=src)
+    if t is None:
+        return
+    hp[mv.H_TOW_ON] = 1.0 if t.enabled else 0.0
+    if t.force == "resistance":
+        # the paper: X(u_c), the straight-running resistance at the reference speed u_c
+        fval = -mv._interp_resistance.py_func(t.reference_speed, table_v, table_f)
+    else:
+        fval = t.force
+    hp[mv.H_TOW_F] = fval
+    hp[mv.H_TOW_X] = t.lever if t.lever is not None else 0.5 * ship.hull.length
+    hp[mv.H_TOW_DRIFT] = t.drift_sign
+    hp[mv.H_TOW_RATE] = math.radians(t.gamma_rate_deg_s)
+    hp[mv.H_TOW_MAX] = math.radians(t.gamma_max_deg)

@@ -40,7 +40,7 @@ AddedDeriv = Annotated[float, Field(ge=-10.0, le=0.0)]
 
 
 class PolyDerivatives(_S):
-    """seed 002 Eq 2 (prime system of Eq 4)."""
+    """Yun & Kim (barge) Eq 2 (prime system of their Eq 4)."""
     Xudot: AddedDeriv
     Yvdot: AddedDeriv
     Yrdot: Deriv
@@ -64,7 +64,7 @@ class PolyDerivatives(_S):
 
 
 class LowSpeedDerivatives(_S):
-    """seed 003 Eq 3 (forces / 0.5 rho L d V^2)."""
+    """S. D. Yoon (anchor dredging) Eq 3 (forces / 0.5 rho L d V^2)."""
     Xuu: Deriv
     Xvr: Deriv
     Yv: Deriv
@@ -122,7 +122,7 @@ Hull = Annotated[Union[PolynomialHull, LowSpeedHull], Field(discriminator="form"
 
 class Engine(_S):
     rated_rpm: float = _num(1.0, 5000.0)  # propeller rpm: slow-speed diesels 60-100 .. small craft ~3000
-    # engine lag (seed 003 Eq 9): diesels take seconds; 0.05 s is faster than any real engine
+    # engine lag (S. D. Yoon Eq 9): diesels take seconds; 0.05 s is faster than any real engine
     # and keeps the explicit RK4 sub-step stable (also checked against max_substep)
     time_constant: float = _num(0.05, 600.0)
 
@@ -139,7 +139,7 @@ class Propeller(_S):
 
 class Steering(_S):
     max_angle_deg: float = _num(1.0, 90.0)    # rudders 35-45 deg; flap / vector rudders up to 70-90
-    time_constant: float = _num(0.05, 600.0)  # s, steering-gear lag (seed 003 Eq 10); see Engine
+    time_constant: float = _num(0.05, 600.0)  # s, steering-gear lag (S. D. Yoon Eq 10); see Engine
     max_rate_deg_s: float = _num(0.1, 100.0)  # SOLAS minimum 2.3 deg/s; fast tug gear ~10
 
 
@@ -183,7 +183,7 @@ class Anchor(_S):
 
 
 class TowlineSimple(_S):
-    """seed 002 Eq 3: a towline force of fixed size at an angle that swings to gamma_max."""
+    """Yun & Kim (barge) Eq 3: a towline force of fixed size at an angle that swings to gamma_max."""
     enabled: bool = False
     force: Union[Literal["resistance"], Annotated[float, Field(gt=0.0, le=1e8)]] = "resistance"
     reference_speed: Optional[float] = _num(gt=0.0, hi=40.0, default=None)   # m/s, for force: resistance

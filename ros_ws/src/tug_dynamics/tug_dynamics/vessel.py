@@ -16,6 +16,7 @@ One vessel node runs every ship file; it only talks to this interface. Conventio
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 from abc import ABC, abstractmethod
 from typing import Dict, List, Sequence, Tuple
@@ -94,12 +95,70 @@ def check_command(cmd: Command) -> None:
         raise CommandRejected(f"anchor={cmd.anchor!r} is not one of 0 (no change), 1 (let go), 2 (heave up)")
 
 
+class AnchorState(enum.IntEnum):
+    """Anchor states; the values are tug_msgs/VesselStatus's ANCHOR_* constants."""
+    NONE = 0          # the vessel has no anchor
+    STOWED = 1
+    LETTING_GO = 2
+    DREDGING = 3      # on the bottom, dragged
+    HEAVING_UP = 4
+
+
+@dataclasses.dataclass(kw_only=True, slots=True)
+class StatusRecord:
+    """Actuator and safety status, SI units: every field tug_msgs/VesselStatus publishes
+    (sim_plumbing.cdr.VESSEL_STATUS_FLOATS_A/B name the float fields in message order).
+
+    Every field is required: a model states each value, none falls back to a default. Models
+    add their own fields in a subclass (DisplacementStatus, PlaningStatus). A fresh record per
+    call (slots: a misspelt attribute is an error, not a new field).
+    """
+    engine_order: float            # held command, after clamping, [-1, 1]
+    steering_angle_ordered: float  # held command, after clamping, rad (+ port)
+    steering_angle: float          # actual rudder or bucket angle, rad (+ port)
+    shaft_speed: float             # actual shaft or impeller speed, rad/s (negative astern)
+    thrust: float                  # propulsion thrust along body x, N (negative astern)
+    anchor_state: AnchorState
+    speed_through_water: float     # m/s, relative to the current
+    heel: float                    # rad, + starboard side down (REP-103 roll)
+    trim: float                    # rad, + bow down (REP-103 pitch)
+    rise: float                    # m, of the reference point above its static position
+    girting_ratio: float           # towline heeling moment / largest righting moment
+    girting_threshold: float       # girting_ratio at which girting_warning is raised
+    girting_warning: bool
+
+    def __getitem__(self, key: str):
+        """Read a field by name, status["heel"], for callers that index by name; an unknown
+        name raises KeyError (never a default)."""
+        if key not in {f.name for f in dataclasses.fields(self)}:
+            raise KeyError(f"{type(self).__name__} has no field {key!r}")
+        return getattr(self, key)
+
+
+def check_current(current_world: Sequence[float]) -> np.ndarray:
+    """A uniform current as a (3,) array, world ENU, m/s; ValueError unless 3 finite numbers."""
+    c = np.asarray(current_world, float)
+    if c.shape != (3,) or not np.all(np.isfinite(c)):
+        raise ValueError(f"current must be 3 finite numbers (world ENU east, north, up; m/s), got {current_world!r}")
+    return c.copy()
+
+
 class Vessel(ABC):
-    """A vessel model: holds its state and steps it in time."""
+    """A vessel model: holds its state and steps it in time.
+
+    This is everything the vessel node calls. Every method is abstract or has a real default,
+    so a model cannot leave out an input (e.g. the current) and be run without it.
+    """
 
     name: str
     state: VesselState
     attachments: Dict[str, np.ndarray]  # name -> (3,) point in body frame, m
+
+    # ---- commands ---------------------------------------------------------------------
+    @property
+    @abstractmethod
+    def command(self) -> Command:
+        """The command held (after clamping)."""
 
     @abstractmethod
     def set_command(self, cmd: Command) -> List[str]:
@@ -114,13 +173,26 @@ class Vessel(ABC):
         half ahead"; models with actuator lags override it."""
         return self.set_command(cmd)
 
+    # ---- state and environment (each environment input is an abstract setter) -------------
+    @abstractmethod
+    def set_state(self, state: VesselState) -> None:
+        """Put the vessel in this kinematic state (the model copies it)."""
+
+    @abstractmethod
+    def set_current(self, current_world: Sequence[float]) -> None:
+        """Uniform current: the water's velocity over ground, (east, north, up) m/s, world ENU.
+
+        Raises ValueError for anything but 3 finite numbers (check_current). A model on which
+        the current has no effect says so in its implementation."""
+
+    # ---- time stepping and outputs -------------------------------------------------------
     @abstractmethod
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         """Advance the state by dt seconds with the given external wrenches held constant."""
 
     @abstractmethod
-    def status(self) -> Dict[str, float]:
-        """Actuator and safety status (engine rpm, rudder angle, thrust, heel, ...), SI units."""
+    def status(self) -> StatusRecord:
+        """Actuator and safety status (engine, steering, thrust, anchor, heel, girting...)."""
 
     def attachment_kinematics(self, name: str) -> Tuple[np.ndarray, np.ndarray]:
         """World position (m) and world velocity (m/s) of a named attachment point."""

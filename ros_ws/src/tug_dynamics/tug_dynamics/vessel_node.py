@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 import math
+import operator
 import os
 import sys
 from typing import List, Optional
@@ -29,7 +30,9 @@ from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
                                  rotation_body_to_world)
 
-_ANCHOR_STATES = {"none": 0, "stowed": 1, "letting_go": 2, "dredging": 3, "heaving_up": 4}
+# the status record's float fields in message order (every model's StatusRecord has them all)
+_STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
+_STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
 
 
 class VesselNode(SteppedNode):
@@ -87,12 +90,12 @@ class VesselNode(SteppedNode):
         if overrides is not None and not isinstance(overrides, dict):
             raise ValueError(f"parameter ship_overrides:={overrides_text!r}: expected a YAML mapping")
         self.model: Vessel = load_ship(path, name=self.vessel_name, initial_state=initial, overrides=overrides)
-        self.command = Command(self.get_parameter("initial_engine_order").value,
-                               self.get_parameter("initial_steering_angle").value)
+        initial_command = Command(self.get_parameter("initial_engine_order").value,
+                                  self.get_parameter("initial_steering_angle").value)
         # 0, 0 keeps the model's own start (at rest: stopped; a planing hull given an initial
         # speed starts in its steady run at the throttle for that speed).
-        if self.command.engine_order or self.command.steering_angle:
-            for note in self.model.settle_command(self.command):
+        if initial_command.engine_order or initial_command.steering_angle:
+            for note in self.model.settle_command(initial_command):
                 self.get_logger().warning(f"initial command clamped: {note}")
         motion = self.get_parameter("motion").value
         if motion:
@@ -106,7 +109,7 @@ class VesselNode(SteppedNode):
                             turn_duration=self.get_parameter("motion_turn_duration").value)
             self.model = PrescribedMotion(self.model, law)
         current = np.array([self.get_parameter("current_east").value, self.get_parameter("current_north").value, 0.0])
-        if np.any(current) and hasattr(self.model, "set_current"):
+        if np.any(current):   # 0, 0 keeps the ship file's own current
             self.model.set_current(current)
 
         self.rejected = 0
@@ -174,8 +177,7 @@ class VesselNode(SteppedNode):
         if order is not None:
             cmd = Command(engine_order=order.engine_order, steering_angle=order.steering_angle, anchor=order.anchor)
             try:
-                notes = self.model.set_command(cmd)
-                self.command = cmd
+                notes = self.model.set_command(cmd)   # the model holds the (clamped) command
             except CommandRejected as exc:
                 notes = []
                 self.rejected += 1
@@ -237,13 +239,9 @@ class VesselNode(SteppedNode):
                                 stamp_ns)
 
         st = self.model.status()
-        floats_a = (float(st.get("engine_order", self.command.engine_order)),
-                    float(st.get("steering_angle_ordered", self.command.steering_angle)),
-                    *(float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_A[2:]))
-        floats_b = [float(st.get(key, 0.0)) for key in cdr.VESSEL_STATUS_FLOATS_B]
         self.status_pub.publish(self._status_cdr.encode(
-            stamp_ns, self.step_index, floats_a, _ANCHOR_STATES.get(str(st.get("anchor_state", "none")), 0),
-            floats_b, bool(st.get("girting_warning", False)), self.rejected, self.clamped), stamp_ns)
+            stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
+            st.girting_warning, self.rejected, self.clamped), stamp_ns)
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
