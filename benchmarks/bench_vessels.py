@@ -19,6 +19,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "tug_dynamics"))
+sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "sim_math"))
 
 from tug_dynamics.ship_file import list_ship_files, load_ship  # noqa: E402
 from tug_dynamics.vessel import Command, ExternalWrench  # noqa: E402

@@ -1,20 +1,57 @@
-"""Test-suite wide checks: the suite runs inside the project environment (./test.sh)."""
+"""Test-suite wide checks: the suite runs inside the project environment (./test.sh).
+
+Imports nothing of ROS: tests/physics runs where the physics packages are importable and ROS
+is not installed (tests/physics/test_physics_without_ros.py proves it). The ROS modules are
+required only when the run includes tests/ros.
+"""
 import importlib.util
 import os
 
 import pytest
 
-_NEEDED = ("rclpy", "tug_msgs", "tug_dynamics", "rope_model", "scenario_runner")
+_TESTS = os.path.dirname(os.path.abspath(__file__))
+_ROS_TESTS = os.path.join(_TESTS, "ros")
+_SRC = os.path.join(os.path.dirname(_TESTS), "ros_ws", "src")
+_PHYSICS = ("tug_dynamics", "rope_model")
+_ROS = ("rclpy", "tug_msgs")
+
+
+def _missing(modules):
+    out = []
+    for m in modules:
+        try:
+            found = importlib.util.find_spec(m) is not None
+        except ImportError:  # a parent package is missing, or an import hook refuses it
+            found = False
+        if not found:
+            out.append(m)
+    return out
+
+
+def _includes_ros_tests(config) -> bool:
+    """True when a path the run was given is tests/ros, lies inside it, or contains it."""
+    args = [a for a in config.args if not a.startswith("-")] or [config.rootpath / p for p in
+                                                                 config.getini("testpaths")]
+    for arg in args:
+        path = os.path.abspath(os.path.join(str(config.invocation_params.dir), str(arg).split("::")[0]))
+        if os.path.commonpath([path, _ROS_TESTS]) in (path, _ROS_TESTS):
+            return True
+    return False
 
 
 def pytest_sessionstart(session):
-    missing = [m for m in _NEEDED if importlib.util.find_spec(m) is None]
+    missing = _missing(_PHYSICS)
+    if _includes_ros_tests(session.config):
+        missing += _missing(_ROS)
     if missing:
+        python_packages = sorted(d for d in os.listdir(_SRC) if os.path.isdir(os.path.join(_SRC, d, d)))
         raise pytest.UsageError(
             f"modules {missing} not importable: run the suite with ./test.sh (it builds the workspace and "
-            "sources ros_ws/install/setup.bash), or source scripts/ensure_env.sh first.")
+            "sources ros_ws/install/setup.bash), or source scripts/ensure_env.sh first. The ROS-free "
+            "physics tests alone need only the Python packages' sources on the path: PYTHONPATH="
+            + ":".join(f"ros_ws/src/{d}" for d in python_packages) + " pytest tests/physics")
 
 
 @pytest.fixture(scope="session")
 def repo_root():
-    return os.environ.get("TUGSIM_ROOT") or os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    return os.environ.get("TUGSIM_ROOT") or os.path.dirname(_TESTS)

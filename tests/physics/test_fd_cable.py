@@ -1,4 +1,5 @@
-"""Physics acceptance tests of the finite-difference towed cable (seed 001, issue 8).
+"""Physics tests of the finite-difference towed cable (Park & Jung, Nonlinear Dynamic Analysis on
+Low-Tension Towed Cable by Finite Difference Method).
 
 Truths are computed here, independently of the library: the straight critical-angle tow from
 the balance of normal drag and normal weight, the hanging-chain frequency from Bessel's J0,
@@ -162,7 +163,9 @@ def test_fd_cable_turning_grid_and_step_convergence():
     fine2 = turning_run(CABLE, 49, 0.05)
     assert np.max(np.abs(fine2[:, 1] - base2[:, 1]) / fine2[:, 1]) < 0.01
     # the case is meaningful: the top follows the circle, the free end lags far behind in y,
-    # the top tension drops during the turn (the paper's observation) and the end sinks
+    # the top tension drops during the turn (the paper's observation) and the end sinks; the
+    # paper's values are withheld, so 0.25, 1 % and 1 m are regression bands (measured: lag
+    # 4.3 of 40.9 m, -1.6 %, 2.4 m)
     r = math.radians(0.5)
     assert fine[-1, 3] == pytest.approx((1 - math.cos(r * 100)) / r, rel=1e-9)
     assert fine[-1, 5] < 0.25 * fine[-1, 3]

@@ -1,4 +1,4 @@
-"""Issue 13 item 7: one home for the shared node plumbing; physics packages stay free of ROS.
+"""One home for the shared node plumbing; physics packages stay free of ROS.
 
 Reads the sources (ast, no import), so it holds whatever is installed."""
 import ast

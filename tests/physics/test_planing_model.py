@@ -1,8 +1,9 @@
-"""PlaningHull (seed 004) unit physics: rest, hydrostatics, steady runs, commands, config errors.
+"""PlaningHull (Yoon & Kang) unit physics: rest, hydrostatics, steady runs, commands, config errors.
 
-Truths used: analytic hydrostatics of the ship file's displacement law V(d) = V0 (d/d0)^2,
-the paper's Table 2 trims and Table 5 lift polynomial (evaluated here independently of the
-model code), and sign/direction physics. Never the model's own earlier output.
+Truths used: analytic hydrostatics of the ship file's displacement law V(d) = V0 (d/d0)^2, the
+paper's Table 5 lift polynomial (evaluated here independently of the model code), and
+sign/direction physics. The paper's Table 2 trims at 17.5-35 kn are a calibration (M_w was fitted
+to them), not an independent check. Never the model's own earlier output.
 """
 import copy
 import math
@@ -123,11 +124,13 @@ def test_steady_runs_settle_at_the_steady_state(cfg, throttle):
     run(m, 90.0)
     u = m.state.linear_velocity_body[0]
     ss = m.steady_state(throttle * m.full_speed)
-    # 1) the time integration settles on the algebraic equilibrium of the same model
+    # 1) the time integration settles on the algebraic equilibrium of the same model (the speed
+    #    itself holds by construction of Eq 11: it only shows the run has settled)
     assert u == pytest.approx(throttle * m.full_speed, rel=0.005)
     assert -math.degrees(m.state.rpy[1]) == pytest.approx(ss["trim_deg"], abs=0.05)
     assert m.state.position[2] == pytest.approx(ss["rise"], abs=0.005)
-    # 2) independent truths: Table 2 trim at that speed, rise from Table 5 lift + hydrostatics
+    # 2) calibration: Table 2 trim (17.5-35 kn, inside the M_w fit); independent truth: the rise
+    #    from Table 5 lift and hydrostatics
     kn = u / KNOT
     trim_t2 = np.interp(kn, [r[0] for r in TABLE2_TRIM], [r[1] for r in TABLE2_TRIM])
     assert -math.degrees(m.state.rpy[1]) == pytest.approx(trim_t2, abs=0.5)

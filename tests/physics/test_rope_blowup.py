@@ -1,4 +1,4 @@
-"""Issue 13: numerical blow-up is never reported as physics, a genuine overload still parts,
+"""Numerical blow-up is never reported as physics, a genuine overload still parts,
 and winch orders are clamped to the rope file's limits (reported to the caller)."""
 import math
 import os

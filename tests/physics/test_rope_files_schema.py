@@ -1,4 +1,4 @@
-"""Issue 13: rope and cable files are checked against a schema (rope_model/schema.py).
+"""Rope and cable files are checked against a schema (rope_model/schema.py).
 
 A corpus of broken files, each written to tmp_path: every one must be refused with a
 RopeParamsError (FdCableParamsError is one) naming the file, the offending key and what was

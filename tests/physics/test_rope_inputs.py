@@ -1,4 +1,4 @@
-"""Bad-input and robustness tests of rope_model (issue 3): clear messages, no silent NaN."""
+"""Bad-input and robustness tests of rope_model: clear messages, no silent NaN."""
 import math
 import os
 import sys

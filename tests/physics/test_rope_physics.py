@@ -1,6 +1,8 @@
-"""Physics acceptance tests of rope_model (issue 3). Truths are computed here, independently
-of the library: the elastic catenary from its closed-form equations, the floating draft from
-Archimedes on a circular section, mass and momentum from first principles."""
+"""Physics tests of rope_model (the element chain of Yoon, Lee, Park & Kim, Dynamic Modeling and
+Simulation of a Towing Rope using Multiple Finite Element Method). Truths are computed here,
+independently of the library: the elastic catenary from its closed-form equations, the floating
+draft from Archimedes on a circular section, mass and momentum from first principles. Bands
+that are measured margins rather than a source are marked "regression band"."""
 import math
 import os
 import sys
@@ -99,7 +101,9 @@ def test_energy_free_swing_without_drag_and_damping():
     print(f"energy drift {drift:.2f} J = {100 * drift / ke_max:.3f} % of the swing energy "
           f"(max KE {ke_max:.0f} J), {100 * drift / e0:.4f} % of E0")
     assert ke_max > 1000.0  # it really swings
-    assert drift < 0.005 * ke_max  # stricter than 0.5 % of the total energy
+    # exact invariant: energy is conserved with drag and damping off; 0.5 % is the tolerance
+    # of the time discretisation (measured 0.33 %)
+    assert drift < 0.005 * ke_max
 
 
 def test_linear_momentum_conserved_without_gravity():
@@ -196,7 +200,8 @@ def test_drag_acts_on_velocity_relative_to_the_current():
     v = rope.velocities.mean(0)
     assert abs(v[0]) < 1e-6 and abs(v[1] - cur[1]) < 0.02
     assert np.abs(still.velocities[:, :2]).max() < 1e-6
-    # the rope in the current has drifted close to 60 m (it starts at rest)
+    # the rope in the current has drifted close to 60 m (it starts at rest): 60 m (the water's
+    # own drift in 60 s) is the physical bound; 45 m is a regression band (the drag spin-up)
     drift = rope.positions.mean(0)[:2] - still.positions.mean(0)[:2]
     assert 45.0 < drift @ cur[:2] < 60.0
 
@@ -210,7 +215,7 @@ def test_rope_between_low_bollards_rests_on_the_surface():
     for _ in range(1500):
         rope.step(0.02)
     z = rope.positions[:, 2]
-    assert z.min() > -0.5
+    assert z.min() > -0.5   # regression band (element centres; the end elements' joints dip ~0.65 m)
     # the rigid 4.8 m element hanging from each bollard ends just under the water; from the
     # third element on the rope floats level at the Archimedes draft (paper: from No. 1)
     inner = z[2:-2]
@@ -296,7 +301,7 @@ def test_payout_at_tug_speed_lays_the_rope_at_rest(n):
             f_a.append(np.linalg.norm(rope.mean_end_force("a")))
             f_b.append(np.linalg.norm(rope.mean_end_force("b")))
     assert rope.unstretched_length < p.length
-    assert np.mean(v_laid) < 0.05 * speed
+    assert np.mean(v_laid) < 0.05 * speed     # 5 %: regression band
     assert max(f_b) < weight * (l_el + 1.0)
     assert max(f_a) < weight * 2.0 * l_el
     assert not rope.events

@@ -1,4 +1,4 @@
-"""Issue 13 item 5: ship files have a schema. Broken files raise ShipFileError naming the file
+"""Ship files have a schema. Broken files raise ShipFileError naming the file
 and the key (never another exception); every shipped file loads; the ranges admit real ships
 from a 10 m harbour tug to a 400 m ship (Froude-scaled shipped files)."""
 import math

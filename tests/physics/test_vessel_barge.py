@@ -1,4 +1,5 @@
-"""Seed 002 barge: simple-towline turns (Eq 3, Table 6) and Froude similarity."""
+"""The barge of Yun & Kim (captive model test): simple-towline turns (Eq 3, Table 6) and Froude
+similarity."""
 import math
 
 import numpy as np

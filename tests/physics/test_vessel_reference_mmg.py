@@ -1,7 +1,9 @@
-"""Independent check against shipmmg (an MMG reference implementation, Yasukawa & Yoshimura
-2015): seed 003's propeller (Eq 4 with the wake law w_P0 exp(-4 (beta - x_P r')^2)),
-thrust deduction, hull resistance X'uu and surge added mass are the MMG surge model, so
-the S-175's straight acceleration must agree with shipmmg fed the same numbers."""
+"""Verification against a reference tool: shipmmg (an implementation of the MMG standard method
+of Yasukawa & Yoshimura 2015). The S-175's propeller of S. D. Yoon's anchor-dredging paper
+(Eq 4 with the wake law w_P0 exp(-4 (beta - x_P r')^2)), thrust deduction, hull resistance X'uu
+and surge added mass are the MMG surge model, so the straight acceleration must agree with
+shipmmg fed the same numbers. (The lateral derivatives passed to shipmmg are placeholders: on a
+straight course with v = r = delta = 0 they do not act.)"""
 
 import numpy as np
 import pytest

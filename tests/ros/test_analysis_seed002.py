@@ -1,4 +1,4 @@
-"""Issue 7: analysis of a seed 002 turning recording (full-scale barge, simple towline force,
+"""Analysis of a turning recording of the Yun & Kim barge (full-scale barge, simple towline force,
 gamma 20 deg) yields the steady turning diameter the vessel library measures directly."""
 import json
 import subprocess

@@ -1,4 +1,4 @@
-"""Issue 7 item 1: the example autopilot (scenario_runner/autopilot.py) as its own process,
+"""The example autopilot (scenario_runner/autopilot.py) as its own process,
 talking to the vessel node only over the topic contract; and outside commands as untrusted input.
 
 - free-running: vessel node and autopilot on their own wall-clock timers bring the tug to an

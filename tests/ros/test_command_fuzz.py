@@ -1,4 +1,4 @@
-"""Issue 13 acceptance: 10,000 random messages per command topic (random bytes sent as the
+"""10,000 random messages per command topic (random bytes sent as the
 type, random field values with NaN, inf, huge and negative ones) during a paced run: no crash,
 no NaN state, overruns reported, the refusals counted."""
 import math

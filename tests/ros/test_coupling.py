@@ -1,5 +1,5 @@
-"""Issue 6 item 2: the vessel-rope coupling converges with the exchange rate. Halving the
-exchange period changes the steady towline tension of the seed 000 straight tow by < 1 %."""
+"""The vessel-rope coupling converges with the exchange rate: halving the exchange period changes
+the steady towline tension of the 5 kn straight tow (Yoon, Lee, Park & Kim, towing rope, 4.4) by < 1 %."""
 import subprocess
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Issue 13 item 8: parameters that can change while running take effect through on-set
+"""Parameters that can change while running take effect through on-set
 callbacks (the autopilot's orders, gains and limits, the rope's marker rate); every other
 parameter is fixed at start-up and a change is refused with the reason, leaving the old value.
 Parameters are set here through the standard rcl_interfaces services (rclpy's client), as

@@ -1,4 +1,4 @@
-"""Issue 7: the example autopilot as a lockstep participant declared in the scenario: it brings
+"""The example autopilot as a lockstep participant declared in the scenario: it brings
 the tug to the ordered heading and speed, and the run is reproducible (identical decoded
 states twice)."""
 import math

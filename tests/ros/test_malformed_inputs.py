@@ -1,4 +1,4 @@
-"""Issue 13 item 5: every input a node would refuse is refused before any node starts.
+"""Every input a node would refuse is refused before any node starts.
 
 A corpus of malformed scenarios (and of the ship and rope files they name), each run through
 the real command line `run_scenario <file> --no-record --quiet`. Each must exit 2 with a

@@ -1,5 +1,5 @@
-"""Issue 2 acceptance: a tug_msgs message crosses between two node processes over DDS, and a
-run in another domain does not see it. Issue 4: the vessel node rejects NaN commands."""
+"""A tug_msgs message crosses between two node processes over DDS, and a run in another domain
+does not see it; the vessel node rejects NaN commands."""
 import math
 import subprocess
 

@@ -1,4 +1,4 @@
-"""Issue 13 item 6: output and log paths are checked before anything starts; a recording is
+"""Output and log paths are checked before anything starts; a recording is
 never replaced without saying so; the log folder follows the recording's name."""
 import subprocess
 
@@ -39,8 +39,8 @@ def test_logs_follow_the_output_name_and_replacing_is_said(tmp_path, ros_domain)
 
 @pytest.fixture
 def small_disk(tmp_path):
-    """A 1 MiB file system (tmpfs; the tests run as root, as CI does): the seed 000 tow fills
-    it after some 12 s of simulated time (about 80 kB/s of recording)."""
+    """A 1 MiB file system (tmpfs; the tests run as root, as CI does): the 5 kn straight tow of the
+    towing-rope paper fills it after some 12 s of simulated time (about 80 kB/s of recording)."""
     mount = tmp_path / "small_disk"
     mount.mkdir()
     subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(mount)], check=True)

@@ -1,4 +1,4 @@
-"""Issue 13 items 1, 2, 4: a lockstep that trusts no stranger (run identity, refused and counted
+"""A lockstep that trusts no stranger (run identity, refused and counted
 stray, duplicate and untriggered messages, one run per domain), no orphans whatever kills the
 runner, SIGTERM like Ctrl-C, orders that cannot stall or grow a node."""
 import os

@@ -1,4 +1,4 @@
-"""Issue 6: recordings read back with two third-party readers; identical decoded physics on
+"""Recordings read back with two third-party readers; identical decoded physics on
 repeated runs and in both process layouts; a killed node stops the run cleanly."""
 import os
 import signal

@@ -1,4 +1,4 @@
-"""Issue 13 item 8: the runner's recording is what rosbag2's MCAP storage plugin (Jazzy) writes.
+"""The runner's recording is what rosbag2's MCAP storage plugin (Jazzy) writes.
 
 A short real run is recorded once; then, with readers that share no code with the recorder:
 

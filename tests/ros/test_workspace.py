@@ -1,4 +1,4 @@
-"""Issue 2: the workspace backbone (packages, interfaces, executables, isolation, set-up errors)."""
+"""The workspace backbone (packages, interfaces, executables, isolation, set-up errors)."""
 import os
 import shutil
 import subprocess

@@ -6,9 +6,11 @@ world frame (ENU, m, m/s, N).
 """
 from __future__ import annotations
 
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 import numpy as np
+
+from sim_math.rotations import yaw_pitch_quaternions
 
 from rope_model.chain import RopeChain, RopeDivergedError
 from rope_model.fd_cable import FdCable, FdCableConvergenceError, load_cable_params
@@ -29,15 +31,6 @@ def rope_file_model(path: str) -> str:
     if model not in MODELS:
         raise RopeParamsError(f"{src}: key 'model': expected one of {', '.join(MODELS)}, got {model!r}")
     return model
-
-
-def yaw_pitch_quaternions(axes: np.ndarray) -> np.ndarray:
-    """(N, 4) quaternions (x, y, z, w) of R = Rz(yaw) Ry(pitch) with R e_x = axis (no roll)."""
-    axes = np.asarray(axes, float).reshape(-1, 3)
-    yaw = np.arctan2(axes[:, 1], axes[:, 0])
-    pitch = np.arctan2(-axes[:, 2], np.hypot(axes[:, 0], axes[:, 1]))
-    cy, sy, cp, sp = np.cos(yaw / 2), np.sin(yaw / 2), np.cos(pitch / 2), np.sin(pitch / 2)
-    return np.stack([-sy * sp, cy * sp, sy * cp, cy * cp], axis=1)
 
 
 class ChainAdapter:
@@ -73,7 +66,7 @@ class ChainAdapter:
     def step(self, dt: float) -> None:
         self.rope.step(dt)
 
-    def new_events(self) -> List[str]:
+    def new_events(self) -> List[Tuple[str, float]]:
         """Partings since the last call, as (description, tension N)."""
         out = [(f"rope parted at connection {e.connection} (t = {e.time:.3f} s) with tension "
                 f"{e.tension / 1e3:.1f} kN", e.tension) for e in self.rope.events[self.reported:]]
@@ -120,8 +113,8 @@ class CableAdapter:
     def step(self, dt: float) -> None:
         self.cable.step(dt)
 
-    def new_events(self):
-        return []
+    def new_events(self) -> List[Tuple[str, float]]:
+        return []  # the cable model does not part
 
     def end_force(self, label: str, averaged: bool) -> np.ndarray:
         return self.cable.top_force() if label == "a" else np.zeros(3)

@@ -10,16 +10,25 @@ import numpy as np
 from numba import njit
 
 
+@njit(cache=True, inline="always")
+def matrix_entries_from_trig(cf: float, sf: float, ct: float, st: float, cp: float, sp: float):
+    """R = Rz(yaw) Ry(pitch) Rx(roll) as the tuple (R00, R01, R02, R10, ..., R22) from the cosines
+    and sines of roll (f), pitch (t) and yaw (p): for kernels that have the trig values already
+    and want no array allocation."""
+    return (cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf,
+            sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
+            -st, ct * sf, ct * cf)
+
+
 @njit(cache=True)
 def matrix_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """3x3 R = Rz(yaw) Ry(pitch) Rx(roll), body -> world."""
-    cf, sf = math.cos(roll), math.sin(roll)
-    ct, st = math.cos(pitch), math.sin(pitch)
-    cp, sp = math.cos(yaw), math.sin(yaw)
+    e = matrix_entries_from_trig(math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                                 math.cos(yaw), math.sin(yaw))
     R = np.empty((3, 3))
-    R[0, 0], R[0, 1], R[0, 2] = cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf
-    R[1, 0], R[1, 1], R[1, 2] = sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf
-    R[2, 0], R[2, 1], R[2, 2] = -st, ct * sf, ct * cf
+    R[0, 0], R[0, 1], R[0, 2] = e[0], e[1], e[2]
+    R[1, 0], R[1, 1], R[1, 2] = e[3], e[4], e[5]
+    R[2, 0], R[2, 1], R[2, 2] = e[6], e[7], e[8]
     return R
 
 

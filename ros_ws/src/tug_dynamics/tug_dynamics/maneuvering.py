@@ -32,6 +32,8 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 from numba import njit
 
+from sim_math.integration import rk4_stage, rk4_update
+
 from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, AnchorState, Command, ExternalWrench, StatusRecord,
                      Vessel, VesselState, check_command, check_current)
 
@@ -456,14 +458,16 @@ def _integrate(s, dt, hmax, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, w
     if nsub < 1:
         nsub = 1
     h = dt / nsub
+    stage = np.empty_like(s)
     for _ in range(nsub):
         k1 = _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out)
-        k2 = _deriv(s + 0.5 * h * k1, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point,
+        k2 = _deriv(rk4_stage(s, 0.5 * h, k1, stage), hp, props, ruds, rv, rf, minv, ctrl, wrench_force,
+                    wrench_point, wrench_moment, out)
+        k3 = _deriv(rk4_stage(s, 0.5 * h, k2, stage), hp, props, ruds, rv, rf, minv, ctrl, wrench_force,
+                    wrench_point, wrench_moment, out)
+        k4 = _deriv(rk4_stage(s, h, k3, stage), hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point,
                     wrench_moment, out)
-        k3 = _deriv(s + 0.5 * h * k2, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point,
-                    wrench_moment, out)
-        k4 = _deriv(s + h * k3, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out)
-        s += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        rk4_update(s, h, k1, k2, k3, k4)
         if hp[H_TOW_ON] > 0.0:
             ctrl[C_GAMMA] = _towline_angle_ramp(ctrl[C_GAMMA], hp[H_TOW_MAX], hp[H_TOW_RATE] * h)
     _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out)   # diagnostics

@@ -21,6 +21,9 @@ import math
 import numpy as np
 from numba import njit
 
+from sim_math.integration import rk4_stage, rk4_update
+from sim_math.rotations import matrix_entries_from_trig
+
 # --- scalar parameter slots -------------------------------------------------------------
 (P_RHO, P_G, P_MASS, P_XG, P_YG, P_ZG, P_IXX, P_IYY, P_IZZ,
  P_LREF, P_BLIFT, P_D0, P_V0, P_NEXP, P_LIFT_FADE, P_UFIT,
@@ -109,14 +112,6 @@ def solve6(A, b):
 
 
 # ---- force components: each returns its contribution in the body frame ----------------------
-
-@njit(cache=True, inline="always")
-def _rotation_body_to_world(cf, sf, ct, st, cp, sp):
-    """R = Rz Ry Rx (vessel.rotation_body_to_world) as the tuple R00, R01, ..., R22."""
-    return (cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf,
-            sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
-            -st, ct * sf, ct * cf)
-
 
 @njit(cache=True, inline="always")
 def _water_velocity_in_body(R, current, u, v, w):
@@ -336,7 +331,7 @@ def forces(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag, b, A):
     u, v, w, p, q, r = x[6], x[7], x[8], x[9], x[10], x[11]
     cf, sf = math.cos(phi), math.sin(phi)
     ct, st = math.cos(th), math.sin(th)
-    R = _rotation_body_to_world(cf, sf, ct, st, math.cos(x[5]), math.sin(x[5]))
+    R = matrix_entries_from_trig(cf, sf, ct, st, math.cos(x[5]), math.sin(x[5]))
     u_rel, v_rel, w_rel = _water_velocity_in_body(R, current, u, v, w)
     U = math.sqrt(u_rel * u_rel + v_rel * v_rel)   # resultant speed (paper 3.4)
     ahead = u_rel > 0.0
@@ -450,17 +445,10 @@ def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag):
         act[0] = _approach(act[0], cmd[0], P[P_NRAMP] * h)
         act[1] = _approach(act[1], cmd[1], P[P_DRATE] * h)
         k1 = rhs(x, P, C, rtab, act[0], act[1], wrenches, current, diag)
-        for i in range(12):
-            tmp[i] = x[i] + 0.5 * h * k1[i]
-        k2 = rhs(tmp, P, C, rtab, act[0], act[1], wrenches, current, diag)
-        for i in range(12):
-            tmp[i] = x[i] + 0.5 * h * k2[i]
-        k3 = rhs(tmp, P, C, rtab, act[0], act[1], wrenches, current, diag)
-        for i in range(12):
-            tmp[i] = x[i] + h * k3[i]
-        k4 = rhs(tmp, P, C, rtab, act[0], act[1], wrenches, current, diag)
-        for i in range(12):
-            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        k2 = rhs(rk4_stage(x, 0.5 * h, k1, tmp), P, C, rtab, act[0], act[1], wrenches, current, diag)
+        k3 = rhs(rk4_stage(x, 0.5 * h, k2, tmp), P, C, rtab, act[0], act[1], wrenches, current, diag)
+        k4 = rhs(rk4_stage(x, h, k3, tmp), P, C, rtab, act[0], act[1], wrenches, current, diag)
+        rk4_update(x, h, k1, k2, k3, k4)
     # diagnostics at the final state
     rhs(x, P, C, rtab, act[0], act[1], wrenches, current, diag)
     # keep yaw in (-pi, pi]

@@ -23,6 +23,8 @@ from typing import Dict, List, Sequence, Tuple
 
 import numpy as np
 
+from sim_math.rotations import matrix_from_rpy
+
 ANCHOR_NO_CHANGE = 0
 ANCHOR_LET_GO = 1
 ANCHOR_HEAVE_UP = 2
@@ -73,16 +75,8 @@ class VesselState:
 
 
 def rotation_body_to_world(rpy: Sequence[float]) -> np.ndarray:
-    """R such that v_world = R @ v_body, R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    phi, theta, psi = rpy
-    cf, sf = math.cos(phi), math.sin(phi)
-    ct, st = math.cos(theta), math.sin(theta)
-    cp, sp = math.cos(psi), math.sin(psi)
-    return np.array([
-        [cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
-        [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],
-        [-st, ct * sf, ct * cf],
-    ])
+    """R such that v_world = R @ v_body, R = Rz(yaw) Ry(pitch) Rx(roll) (sim_math.rotations)."""
+    return matrix_from_rpy(float(rpy[0]), float(rpy[1]), float(rpy[2]))
 
 
 def check_command(cmd: Command) -> None:

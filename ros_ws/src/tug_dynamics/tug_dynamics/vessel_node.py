@@ -24,6 +24,7 @@ from nav_msgs.msg import Odometry
 from tug_msgs.msg import AttachmentArray, ScenarioEvent, VesselCommand, VesselStatus
 
 from sim_plumbing import cdr
+from sim_math.rotations import quaternion_from_rpy
 from sim_plumbing import ros_common as rc
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
 from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
@@ -225,7 +226,7 @@ class VesselNode(SteppedNode):
     def publish_outputs(self) -> None:
         stamp_ns = self.stamp_ns()
         s = self.model.state
-        q = rc.quaternion_xyzw_from_rpy(s.rpy)
+        q = quaternion_from_rpy(*s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
         self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, s.position.tolist(), q, v.tolist(), w.tolist()),
                               stamp_ns)

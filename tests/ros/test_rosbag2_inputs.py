@@ -1,4 +1,4 @@
-"""Issue 13 item 8: rosbag2 inputs to `analyze`, and the rosbag2 forms the recorder writes.
+"""rosbag2 inputs to `analyze`, and the rosbag2 forms the recorder writes.
 DDS-free: bags are written with the rosbags library (an independent rosbag2 writer).
 
 - a sqlite3 bag (a .db3 file, or a rosbag2 directory of one) is refused with exit status 2 and
