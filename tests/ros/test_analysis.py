@@ -1,4 +1,4 @@
-"""Issue 7 acceptance, analysis (`analyze`, scenario_runner/analysis.py):
+"""Acceptance of the analysis tool (`analyze`, scenario_runner/analysis.py):
 
 - a turning recording (harbour tug, engine order 0.6, 20 deg helm from rest, 120 s at 20 Hz)
   gives the steady turning diameter the vessel library measures: the analysis of the MCAP
@@ -11,7 +11,9 @@
 - bad input: a recording cut in the middle is reported with its path and "truncated" (exit
   status 1) and its readable part is still analysed (same turn measures as the full file); a
   file damaged in the middle is reported and the messages after the damage are analysed; a
-  file that is not MCAP is refused with its path (exit status 2).
+  file that is not MCAP is refused with its path (exit status 2); messages that do not decode
+  are reported with their topic and count; an error while reading a decoded message is not
+  turned into a note, except a field an older version of a type lacks.
 """
 import json
 import math
@@ -205,3 +207,86 @@ def test_not_an_mcap_file_is_refused_with_its_path(tmp_path):
     assert out.returncode == 2 and str(junk) in out.stderr and "not an MCAP file" in out.stderr
     out = analyze(tmp_path / "missing.mcap")
     assert out.returncode == 2 and "missing.mcap" in out.stderr
+
+
+# -- errors surface: corrupt messages are reported, a bug is not turned into a note ----------------
+OLD_STATUS_SCHEMA = "std_msgs/Header header\nfloat64 engine_order\n"  # a VesselStatus of long ago
+
+
+def _old_status_cdr(t_ns):
+    """CDR of OLD_STATUS_SCHEMA: header (stamp, empty frame_id), engine_order 0.5."""
+    import struct
+    body = struct.pack("<iII", t_ns // 10 ** 9, t_ns % 10 ** 9, 1) + b"\0"
+    body += b"\0" * (-len(body) % 8) + struct.pack("<d", 0.5)
+    return b"\x00\x01\x00\x00" + body
+
+
+def _write_odom_recording(path, n=50, corrupt=(), old_status=False):
+    """/tug/odom: n Odometry messages at 10 Hz along x, those at the indices in corrupt cut short;
+    with old_status also /tug/status in an older VesselStatus (OLD_STATUS_SCHEMA)."""
+    from mcap.writer import Writer
+    from nav_msgs.msg import Odometry
+    from rclpy.serialization import serialize_message
+    from scenario_runner.recorder import message_definition
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2", library="test")
+        sid = w.register_schema(name="nav_msgs/msg/Odometry", encoding="ros2msg",
+                                data=message_definition("nav_msgs/msg/Odometry").encode())
+        odom = w.register_channel(topic="/tug/odom", message_encoding="cdr", schema_id=sid)
+        if old_status:
+            old = OLD_STATUS_SCHEMA + "=" * 80 + "\nMSG: std_msgs/Header\n" + message_definition("std_msgs/msg/Header")
+            sid = w.register_schema(name="tug_msgs/msg/VesselStatus", encoding="ros2msg", data=old.encode())
+            status = w.register_channel(topic="/tug/status", message_encoding="cdr", schema_id=sid)
+        for k in range(n):
+            t = k * 100_000_000
+            msg = Odometry()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = t // 10 ** 9, t % 10 ** 9
+            msg.pose.pose.position.x, msg.pose.pose.orientation.w, msg.twist.twist.linear.x = 0.5 * k, 1.0, 5.0
+            data = serialize_message(msg)
+            w.add_message(channel_id=odom, log_time=t, publish_time=t, sequence=k,
+                          data=data[:10] if k in corrupt else data)
+            if old_status:
+                w.add_message(channel_id=status, log_time=t, publish_time=t, sequence=k, data=_old_status_cdr(t))
+        w.finish()
+    return path
+
+
+def test_undecodable_messages_are_reported_with_their_topic_and_count(tmp_path, capsys):
+    from scenario_runner import analysis
+    path = _write_odom_recording(str(tmp_path / "rec.mcap"), corrupt={3, 17, 30})
+    assert analysis.main([path, "-o", str(tmp_path / "an"), "--no-figures", "--quiet"]) == analysis.EXIT_OK
+    err = capsys.readouterr().err
+    assert "/tug/odom: 3 message(s) do not decode" in err, err
+    summary = json.loads((tmp_path / "an" / "summary.json").read_text())
+    assert summary["file"]["undecodable_messages"] == {"/tug/odom": 3}
+    assert summary["vessels"]["tug"]["samples"] == 47
+
+
+def test_a_programming_error_while_reading_is_not_turned_into_a_note(tmp_path, monkeypatch):
+    from scenario_runner import analysis
+    path = _write_odom_recording(str(tmp_path / "rec.mcap"))
+
+    def typo(msg):
+        return msg.pose.pose.positon  # AttributeError, as a typo in the reader would raise
+    monkeypatch.setattr(analysis.Recording, "_odom_row", staticmethod(typo))
+    with pytest.raises(AttributeError, match="positon"):
+        analysis.Recording(path)
+
+
+def test_an_older_message_without_a_field_read_is_left_out_with_a_note(tmp_path, monkeypatch):
+    """A type that does not import here is decoded with the file's own schema; an older version
+    of it lacks fields the analysis reads: its topic is left out, and a note names the fields."""
+    from scenario_runner import analysis, mcap_io
+    installed = mcap_io.message_class
+
+    def without_tug_msgs(type_name):
+        if type_name.startswith("tug_msgs/"):
+            raise ImportError(f"type {type_name} is not importable here")
+        return installed(type_name)
+    monkeypatch.setattr(mcap_io, "message_class", without_tug_msgs)
+    rec = analysis.Recording(_write_odom_recording(str(tmp_path / "rec.mcap"), old_status=True))
+    assert "status" not in rec.vessels["tug"] and rec.vessels["tug"]["t"].size == 50
+    note = [n for n in rec.decoder.notes if n.startswith("/tug/status: its tug_msgs/msg/VesselStatus")]
+    assert note and "girting_ratio" in note[0] and "not analysed" in note[0], rec.decoder.notes
+    assert not rec.decoder.errors

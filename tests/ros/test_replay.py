@@ -1,4 +1,4 @@
-"""Issue 7 acceptance, replay (`replay`, scenario_runner/replay.py):
+"""Acceptance of the replay tool (`replay`, scenario_runner/replay.py):
 
 - a recording (default demo, 6 s: two vessels, a rope, 17 topics) replayed and recorded again
   with the project's McapRecorder (log time = wall-clock receive time) gives the same messages
@@ -13,7 +13,9 @@
 - a rosbag2 MCAP file written by another tool (rosbags, rosbag2 format 9: Jazzy's QoS names)
   replays with its own types and QoS; a type that is not importable is reported and skipped;
 - a recording cut in the middle is reported with its path and "truncated" (exit status 1)
-  and its readable part is replayed unchanged.
+  and its readable part is replayed unchanged;
+- a topic played with a default QoS is named with the reason; corrupt messages of a chunk that
+  fails its CRC are reported with their topic and count.
 """
 import json
 import os
@@ -336,3 +338,67 @@ def test_truncated_recording_is_reported_and_its_readable_part_replayed(demo_rec
     junk.write_bytes(b"no recording here")
     out = subprocess.run(replay_cmd(junk), capture_output=True, text=True, timeout=60)
     assert out.returncode == 2 and str(junk) in out.stderr and "not an MCAP file" in out.stderr
+
+
+# -- what used to pass silently: a default QoS, corrupt messages of a damaged chunk ---------------
+def _write_chatter(path, topics, n=12, compression=""):
+    """std_msgs/String messages "MARK<k>" 1 ms apart, round robin over topics {topic: channel
+    metadata}; one uncompressed chunk by default."""
+    from mcap.writer import CompressionType, Writer
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import String
+    comp = {"": CompressionType.NONE, "zstd": CompressionType.ZSTD}[compression]
+    with open(path, "wb") as f:
+        w = Writer(f, compression=comp)
+        w.start(profile="ros2", library="test")
+        sid = w.register_schema(name="std_msgs/msg/String", encoding="ros2msg", data=b"string data\n")
+        chans = [w.register_channel(topic=t, message_encoding="cdr", schema_id=sid, metadata=meta)
+                 for t, meta in topics.items()]
+        for k in range(n):
+            w.add_message(channel_id=chans[k % len(chans)], log_time=k * 1_000_000, publish_time=k * 1_000_000,
+                          sequence=k, data=serialize_message(String(data=f"MARK{k:03d}")))
+        w.finish()
+    return path
+
+
+def test_replay_says_which_topics_get_a_default_qos(tmp_path, ros_domain):
+    from scenario_runner.recorder import qos_yaml
+    from sim_plumbing import ros_common as rc
+    path = _write_chatter(str(tmp_path / "qos.mcap"), {
+        "/good": {"offered_qos_profiles": qos_yaml(rc.STATE_QOS)},
+        "/none": {},
+        "/bad": {"offered_qos_profiles": "- {reliability: [oops"},
+        "/odd": {"offered_qos_profiles": "- {reliability: sometimes, durability: volatile, depth: 5}"}})
+    listing = subprocess.run(replay_cmd(path, "--list"), capture_output=True, text=True, timeout=60)
+    assert listing.returncode == 0, listing.stderr
+    lines = {line.split()[0]: line for line in listing.stdout.splitlines() if line.startswith("/")}
+    assert "default" not in lines["/good"]
+    assert "(default: the recording holds no offered_qos_profiles for it)" in lines["/none"]
+    assert "(default: its offered_qos_profiles is not valid YAML" in lines["/bad"]
+    assert "reliability 'sometimes' not understood" in lines["/odd"]
+
+    proc = start_replay(ros_domain, path, "--delay", "0", "--clock", "none", "--quiet")
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 0, stderr
+    said = [line for line in stderr.splitlines() if "default QoS" in line]
+    assert sorted(line.split()[1] for line in said) == ["/bad:", "/none:", "/odd:"], stderr
+    assert all("publishing it with the default QoS (reliable, volatile, keep last" in line for line in said), stderr
+
+
+def test_corrupt_messages_of_a_damaged_chunk_are_reported_with_topic_and_count(tmp_path, ros_domain):
+    """Messages of a chunk that fails its CRC are sent only if they decode: the others are
+    counted and reported with their topic, not dropped silently."""
+    import struct
+    path = _write_chatter(str(tmp_path / "ok.mcap"), {"/a": {}, "/b": {}})
+    data = bytearray(open(path, "rb").read())
+    for k in (3, 7):  # two messages on /b: their string length now runs far past their data
+        at = data.index(f"MARK{k:03d}".encode()) - 4
+        data[at:at + 4] = struct.pack("<I", 0xFFFFFF00)
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    proc = start_replay(ros_domain, bad, "--delay", "0", "--clock", "none")
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 1, stdout + stderr  # a damaged file: its readable part was replayed
+    assert "CRC" in stderr
+    assert "/b: 2 message(s) from a chunk that failed its CRC do not decode as String; not sent" in stderr, stderr
+    assert "10 messages sent" in stdout and "2 corrupt messages not sent" in stdout, stdout

@@ -1,4 +1,4 @@
-"""Issue 7, bad input: the tolerant MCAP reader shared by `replay` and `analyze`
+"""Bad input: the tolerant MCAP reader shared by `replay` and `analyze`
 (scenario_runner/mcap_io.py). ROS-free and fast: synthetic files written with the mcap
 library (several chunks, every compression), then cut or damaged on purpose.
 
@@ -7,7 +7,9 @@ library (several chunks, every compression), then cut or damaged on purpose.
   every message before the cut that survived is returned unchanged (a prefix of the original);
 - a damaged stretch in the middle is reported (CRC or corrupt data) and the messages after it
   are still read (resynchronisation on the next record);
-- something that is not MCAP, or an empty file, is reported with its path.
+- something that is not MCAP, or an empty file, is reported with its path;
+- decoding (rclpy's serialization, no ROS graph): messages that do not decode are counted per
+  topic, any other error of a decoder propagates; an unreadable rosbag2 metadata.yaml is said.
 """
 import os
 import struct
@@ -130,3 +132,78 @@ def test_not_an_mcap_file_and_empty_file(tmp_path):
     assert _ours(mf) == [] and "empty file" in mf.report() and str(empty) in mf.report()
     with pytest.raises(McapReadError, match="missing.mcap"):
         McapFile(str(tmp_path / "missing.mcap"))
+
+
+# -- decoding: corrupt messages are counted per topic, anything else propagates -----------------
+# (these need rclpy's serialization, not a ROS graph)
+def _write_strings(path, good, corrupt_on, n_corrupt):
+    """/good and /bad: std_msgs/String; n_corrupt messages of topic corrupt_on end inside their
+    string's length field."""
+    from mcap.writer import Writer
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import String
+    with open(path, "wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2", library="test")
+        sid = w.register_schema(name="std_msgs/msg/String", encoding="ros2msg", data=b"string data\n")
+        chans = {t: w.register_channel(topic=t, message_encoding="cdr", schema_id=sid) for t in ("/good", "/bad")}
+        k = 0
+        for topic in ("/good", "/bad"):
+            for i in range(good):
+                w.add_message(channel_id=chans[topic], log_time=k, publish_time=k, sequence=k,
+                              data=serialize_message(String(data=f"hello {i}")))
+                k += 1
+        for i in range(n_corrupt):
+            data = serialize_message(String(data="corrupt"))[:6]
+            w.add_message(channel_id=chans[corrupt_on], log_time=k, publish_time=k, sequence=k, data=data)
+            k += 1
+        w.finish()
+    return path
+
+
+def test_decoder_counts_corrupt_messages_per_topic(tmp_path):
+    from scenario_runner.mcap_io import Decoder
+    mf = McapFile(_write_strings(str(tmp_path / "s.mcap"), good=4, corrupt_on="/bad", n_corrupt=3))
+    dec = Decoder()
+    decoded = [dec.decode(m) for m in mf.messages()]
+    assert [d.data for d in decoded if d is not None] == [f"hello {i}" for i in range(4)] * 2
+    assert dec.errors == {"/bad": 3}
+    assert dec.report() == ["/bad: 3 message(s) do not decode as its type (corrupt data); left out"]
+
+
+def test_decoder_with_the_files_schema_counts_corrupt_messages_too(tmp_path, monkeypatch):
+    from scenario_runner import mcap_io
+
+    def not_installed(type_name):
+        raise ImportError(f"type {type_name} is not importable here")
+    monkeypatch.setattr(mcap_io, "message_class", not_installed)
+    mf = McapFile(_write_strings(str(tmp_path / "s.mcap"), good=2, corrupt_on="/bad", n_corrupt=2))
+    dec = mcap_io.Decoder()
+    decoded = [dec.decode(m) for m in mf.messages()]
+    assert [d.data for d in decoded if d is not None] == ["hello 0", "hello 1"] * 2
+    assert dec.errors == {"/bad": 2}
+    assert any("decoded with the file's own schema" in n for n in dec.notes)
+
+
+def test_decoder_lets_an_error_that_is_not_corrupt_data_propagate(tmp_path, monkeypatch):
+    """A bug (here: the deserializer raising TypeError) is not counted as a corrupt message."""
+    import rclpy.serialization
+    from scenario_runner.mcap_io import Decoder
+
+    def broken(data, cls):
+        raise TypeError("a programming error")
+    monkeypatch.setattr(rclpy.serialization, "deserialize_message", broken)
+    mf = McapFile(_write_strings(str(tmp_path / "s.mcap"), good=1, corrupt_on="/bad", n_corrupt=0))
+    with pytest.raises(TypeError, match="a programming error"):
+        Decoder().decode(next(mf.messages()))
+
+
+def test_unreadable_bag_metadata_is_said_and_the_files_present_used(tmp_path):
+    from scenario_runner.mcap_io import locate_recording
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    _write(str(bag / "bag_0.mcap"))
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information: [unclosed\n")
+    path, note = locate_recording(str(bag))
+    assert path == str(bag / "bag_0.mcap")
+    assert "metadata.yaml is unreadable" in note and "went by the files present" in note

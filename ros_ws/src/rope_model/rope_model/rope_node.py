@@ -63,7 +63,9 @@ class RopeNode(SteppedNode):
         super().__init__(node_name, **kwargs)
         p = self.declare_parameter
         p("rope_file", "table1.yaml", rc.text_param(
-            "Rope file: a path, or a file name in share/rope_model/ropes (default: the seed 000 Table 1 rope)"))
+            "Rope file: a path, or a file name in share/rope_model/ropes (default: the example rope of Table 1 of "
+            "Yoon, Lee, Park, Kim, 'Dynamic Modeling and Simulation of a Towing Rope using Multiple Finite "
+            "Element Method')"))
         p("end_a", "fixed", rc.text_param("End a (tug end, winch end): '<vessel>/<attachment>', 'fixed' or 'free'"))
         p("end_b", "fixed", rc.text_param("End b (tow end): '<vessel>/<attachment>', 'fixed' or 'free'"))
         p("end_a_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end a, m, world (map)"))
@@ -98,7 +100,6 @@ class RopeNode(SteppedNode):
         self.current = (gp("current_east").value, gp("current_north").value, 0.0)
         self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
         self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
-        self.reported_events = 0
         self.rejected = 0  # winch orders refused (NaN, inf)
         self.clamped = 0   # winch orders clamped to the winch's limits
 

@@ -36,7 +36,7 @@ import math
 import os
 import re
 import sys
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
@@ -93,6 +93,17 @@ class _Series:
         return idx[keep], ts[keep] * 1e-9
 
 
+# VesselStatus fields kept per sample, in column order (the figures read rise, column 8; the
+# summary girting_ratio, 9)
+STATUS_FIELDS = ("engine_order", "steering_angle_ordered", "steering_angle", "shaft_speed", "thrust",
+                 "speed_through_water", "heel", "trim", "rise", "girting_ratio")
+
+
+class _Handler(NamedTuple):
+    take: Callable[[object, int], None]  # (decoded message, log time ns)
+    fields: Tuple[str, ...]  # the message fields take() reads
+
+
 class Recording:
     """Everything the figures need, decoded from one MCAP file."""
 
@@ -108,7 +119,8 @@ class Recording:
         self.events: List[dict] = []
         want_v = set(vessels) if vessels else None
         want_r = set(ropes) if ropes else None
-        handlers = {}
+        handlers: Dict[int, object] = {}
+        checked = set()  # channels decoded with the file's schema whose fields were checked
         for msg in self.file.messages():
             ch = msg.channel
             h = handlers.get(ch.id)
@@ -119,43 +131,62 @@ class Recording:
             m = self.decoder.decode(msg)
             if m is None:
                 continue
-            try:
-                h(m, msg.log_time)
-            except (AttributeError, TypeError, ValueError, IndexError) as exc:
-                self.decoder.notes.append(f"{ch.topic}: message not usable ({exc})")
+            if ch.id in self.decoder.from_schema and ch.id not in checked:
+                checked.add(ch.id)  # on the channel's first message: every message has the same fields
+                if not self._has_fields(ch, m, h.fields):
+                    handlers[ch.id] = False
+                    continue
+            h.take(m, msg.log_time)
         self._finish()
 
     # -- reading --------------------------------------------------------------------------
+    def _has_fields(self, ch, msg, fields) -> bool:
+        """A channel decoded with the file's own schema (its type does not import here) may be
+        of an older version of the type: one without a field the analysis reads is left out,
+        with a note."""
+        missing = [f for f in fields if not hasattr(msg, f)]
+        if missing:
+            self.decoder.notes.append(f"{ch.topic}: its {ch.type_name} (the file's own schema) has no field "
+                                      f"{', '.join(missing)}; not analysed")
+        return not missing
+
     def _handler(self, topic: str, tname: str, want_v, want_r):
+        """A _Handler for a topic of the contract (take(msg, log time) and the fields it reads),
+        or False for a topic not analysed."""
         short = tname.replace("/msg/", "/")
         m = re.fullmatch(r"/(.+)/(odom|status|command)", topic)
         if m and (want_v is None or m.group(1) in want_v):
             name, kind = m.groups()
             if kind == "odom" and short == "nav_msgs/Odometry":
                 s = self._odom.setdefault(name, _Series())
-                return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, self._odom_row(msg))
+                return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, self._odom_row(msg)),
+                                ("header", "pose", "twist"))
             if kind == "status" and short == "tug_msgs/VesselStatus":
                 s = self._status.setdefault(name, _Series())
-                return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [
-                    msg.engine_order, msg.steering_angle_ordered, msg.steering_angle, msg.shaft_speed, msg.thrust,
-                    msg.speed_through_water, msg.heel, msg.trim, msg.rise, msg.girting_ratio])
+                return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [
+                    getattr(msg, f) for f in STATUS_FIELDS]), ("header",) + STATUS_FIELDS)
             if kind == "command" and short == "tug_msgs/VesselCommand":
                 s = self._command.setdefault(name, _Series())
-                return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [msg.engine_order, msg.steering_angle])
+                return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [msg.engine_order,
+                                                                                   msg.steering_angle]),
+                                ("header", "engine_order", "steering_angle"))
         m = re.fullmatch(r"/(.+)/state", topic)
         if m and short == "tug_msgs/RopeState" and (want_r is None or m.group(1) in want_r):
             s = self._rope.setdefault(m.group(1), _Series())
-            return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, self._rope_row(msg))
+            return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, self._rope_row(msg)),
+                            ("header", "element_poses", "end_a_force", "end_b_force", "connection_tensions",
+                             "broken", "stretched_length", "unstretched_length"))
         m = re.fullmatch(r"/(.+)/end_([ab])/wrench", topic)
         if m and short == "geometry_msgs/WrenchStamped" and (want_r is None or m.group(1) in want_r):
             s = self._wrench.setdefault(m.group(1), {}).setdefault(m.group(2), _Series())
-            return lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [math.sqrt(
-                msg.wrench.force.x ** 2 + msg.wrench.force.y ** 2 + msg.wrench.force.z ** 2)])
+            return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [math.sqrt(
+                msg.wrench.force.x ** 2 + msg.wrench.force.y ** 2 + msg.wrench.force.z ** 2)]), ("header", "wrench"))
         if topic == "/scenario/events" and short == "tug_msgs/ScenarioEvent":
-            return lambda msg, log: self.events.append({
+            return _Handler(lambda msg, log: self.events.append({
                 "stamp_ns": _stamp_ns(msg), "step": int(msg.step), "source": msg.source, "kind": msg.kind,
                 "target": msg.target, "detail": msg.detail,
-                "value": None if not math.isfinite(msg.value) else float(msg.value)})
+                "value": None if not math.isfinite(msg.value) else float(msg.value)}),
+                ("header", "step", "source", "kind", "target", "detail", "value"))
         return False
 
     @staticmethod
@@ -292,162 +323,199 @@ def _rope_element_series(rope: dict, k: int, key: str):
     return fracs, out
 
 
+class _Figures:
+    """Saves figures as PNG files in out_dir and keeps their paths."""
+
+    def __init__(self, plt, out_dir: str, dpi: int):
+        self.plt, self.out_dir, self.dpi = plt, out_dir, dpi
+        self.files: List[str] = []
+
+    def save(self, fig, name: str) -> None:
+        path = os.path.join(self.out_dir, name)
+        fig.tight_layout()
+        fig.savefig(path, dpi=self.dpi)
+        self.plt.close(fig)
+        self.files.append(path)
+
+
 def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int = 6, dpi: int = 110,
                  turns: Optional[Dict[str, dict]] = None) -> List[str]:
+    """Every figure the recording has data for (see the module docstring); their paths."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    files: List[str] = []
-
-    def save(fig, name):
-        path = os.path.join(out_dir, name)
-        fig.tight_layout()
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        files.append(path)
-
-    title = os.path.basename(rec.path)
+    out = _Figures(plt, out_dir, dpi)
     if rec.vessels or rec.ropes:
-        fig, ax = plt.subplots(figsize=(8, 7))
-        for name, v in rec.vessels.items():
-            line, = ax.plot(v["x"], v["y"], lw=1.6, label=f"{name}")
-            ax.plot(v["x"][0], v["y"][0], "o", color=line.get_color(), ms=4)
-            for j in np.linspace(0, len(v["t"]) - 1, snapshots).astype(int):  # heading arrows
-                ax.annotate("", xy=(v["x"][j] + 8 * math.cos(v["yaw"][j]), v["y"][j] + 8 * math.sin(v["yaw"][j])),
-                            xytext=(v["x"][j], v["y"][j]), arrowprops=dict(arrowstyle="->", color=line.get_color()))
-        for name, rope in rec.ropes.items():
-            if "pos" not in rope or not len(rope["t"]):
-                continue
-            cmap = plt.get_cmap("viridis")
-            js = np.linspace(0, len(rope["t"]) - 1, snapshots).astype(int)
-            for c, j in enumerate(js):
-                p = rope["pos"][j]
-                if len(p):
-                    ax.plot(p[:, 0], p[:, 1], ".-", ms=2, lw=0.8, color=cmap(c / max(1, len(js) - 1)),
-                            label=f"{name} elements t={rope['t'][j]:.0f} s")
-            fr, _ = _rope_element_series(rope, 3, "z")
-            for f in fr:
-                xs = [p[int(round(f * (len(p) - 1))), 0] if len(p) else np.nan for p in rope["pos"]]
-                ys = [p[int(round(f * (len(p) - 1))), 1] if len(p) else np.nan for p in rope["pos"]]
-                ax.plot(xs, ys, ":", lw=0.8, color="gray")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x east (m)")
-        ax.set_ylabel("y north (m)")
-        ax.set_title(f"XY tracks (map frame): {title}")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
-        save(fig, "tracks.png")
+        _tracks_figure(out, rec, snapshots)
     if rec.vessels:
-        fig, ax = plt.subplots(figsize=(8, 4))
-        for name, v in rec.vessels.items():
-            ax.plot(v["t"], np.degrees(v["yaw_unwrapped"]), label=name)
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("yaw (deg, unwrapped, + to port)")
-        ax.set_title("Yaw angles")
-        ax.grid(alpha=0.3)
-        ax.legend()
-        save(fig, "yaw.png")
-
-        fig, axs = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-        for name, v in rec.vessels.items():
-            axs[0].plot(v["t"], v["speed"], label=name)
-            axs[1].plot(v["t"], np.degrees(v["r"]), label=name)
-        axs[0].set_ylabel("speed over ground (m/s)")
-        axs[1].set_ylabel("yaw rate (deg/s)")
-        axs[1].set_xlabel("time (s)")
-        for a in axs:
-            a.grid(alpha=0.3)
-            a.legend()
-        axs[0].set_title("Speed and yaw rate")
-        save(fig, "speed_yaw_rate.png")
-
-        risers = {n: v["status"] for n, v in rec.vessels.items()
-                  if "status" in v and np.any(v["status"]["data"][:, 8] != 0.0)}  # planing hulls
-        rows = 4 if risers else 3
-        fig, axs = plt.subplots(rows, 1, figsize=(8, 2.7 * rows), sharex=True)
-        for name, v in rec.vessels.items():
-            axs[0].plot(v["t"], v["speed"], label=name)
-            axs[1].plot(v["t"], np.degrees(v["roll"]), label=name)
-            axs[2].plot(v["t"], np.degrees(v["pitch"]), label=name)
-        for name, st in risers.items():
-            axs[3].plot(st["t"], st["data"][:, 8], label=name)
-            axs[3].set_ylabel("rise (m)")
-        axs[0].set_ylabel("speed (m/s)")
-        axs[1].set_ylabel("roll (deg, + stbd down)")
-        axs[2].set_ylabel("pitch (deg, + bow down)")
-        axs[-1].set_xlabel("time (s)")
-        for a in axs:
-            a.grid(alpha=0.3)
-            a.legend()
-        axs[0].set_title("Speed, roll and pitch histories")
-        save(fig, "motions.png")
-
+        _yaw_figure(out, rec)
+        _speed_yaw_rate_figure(out, rec)
+        _motions_figure(out, rec)
     ropes = {n: r for n, r in rec.ropes.items() if "t" in r or "wrench_a" in r or "wrench_b" in r}
     if ropes:
-        fig, axs = plt.subplots(len(ropes), 1, figsize=(8, 3.5 * len(ropes)), squeeze=False)
-        for a, (name, rope) in zip(axs[:, 0], ropes.items()):
-            if "t" in rope:
-                a.plot(rope["t"], rope["tension_a"] / 1e3, label=f"{name} end a")
-                a.plot(rope["t"], rope["tension_b"] / 1e3, "--", label=f"{name} end b")
-            else:
-                for end in ("a", "b"):
-                    if f"wrench_{end}" in rope:
-                        w = rope[f"wrench_{end}"]
-                        a.plot(w["t"], w["tension"] / 1e3, label=f"{name} end {end} (wrench)")
-            a.set_ylabel("tension (kN)")
-            a.grid(alpha=0.3)
-            a.legend()
-        axs[-1, 0].set_xlabel("time (s)")
-        axs[0, 0].set_title("Towline tension at both ends")
-        save(fig, "towline_tension.png")
+        _tension_figure(out, ropes)
     chains = {n: r for n, r in rec.ropes.items() if "pos" in r and len(r["t"])}
     if chains:
-        for key, fname, ylabel, ttl in (("z", "rope_heights.png", "element height z (m)", "Rope element heights"),
-                                        ("pitch", "rope_pitch.png", "element pitch (deg, + axis down to end a)",
-                                         "Rope element pitch angles")):
-            fig, axs = plt.subplots(len(chains), 1, figsize=(8, 3.8 * len(chains)), squeeze=False)
-            for a, (name, rope) in zip(axs[:, 0], chains.items()):
-                fracs, vals = _rope_element_series(rope, elements, key)
-                for i, f in enumerate(fracs):
-                    y = vals[:, i] if key == "z" else np.degrees(vals[:, i])
-                    a.plot(rope["t"], y, lw=1, label=f"{name} element at {f:.2f} of length (end a = 0)")
-                if key == "z":
-                    a.plot(rope["t"], rope["min_z"], "k--", lw=1, label=f"{name} lowest element")
-                a.set_ylabel(ylabel)
-                a.grid(alpha=0.3)
-                a.legend(fontsize=7)
-            axs[-1, 0].set_xlabel("time (s)")
-            axs[0, 0].set_title(ttl)
-            save(fig, fname)
+        _rope_element_figures(out, chains, elements)
     for name, m in (turns or {}).items():
-        if "_along" not in m:
+        if "_along" in m:
+            _turn_figure(out, name, m)
+    return out.files
+
+
+def _tracks_figure(out: _Figures, rec: Recording, snapshots: int) -> None:
+    """XY tracks of the vessels (heading arrows) and rope snapshots with paths of three elements."""
+    plt = out.plt
+    fig, ax = plt.subplots(figsize=(8, 7))
+    for name, v in rec.vessels.items():
+        line, = ax.plot(v["x"], v["y"], lw=1.6, label=f"{name}")
+        ax.plot(v["x"][0], v["y"][0], "o", color=line.get_color(), ms=4)
+        for j in np.linspace(0, len(v["t"]) - 1, snapshots).astype(int):  # heading arrows
+            ax.annotate("", xy=(v["x"][j] + 8 * math.cos(v["yaw"][j]), v["y"][j] + 8 * math.sin(v["yaw"][j])),
+                        xytext=(v["x"][j], v["y"][j]), arrowprops=dict(arrowstyle="->", color=line.get_color()))
+    for name, rope in rec.ropes.items():
+        if "pos" not in rope or not len(rope["t"]):
             continue
-        fig, ax = plt.subplots(figsize=(7, 7))
-        ax.plot(m["_across"], m["_along"], lw=1.5, label=f"{name} track from execute (t0 = {m['t0']:.1f} s)")
-        if math.isfinite(m.get("advance", math.nan)):
-            ax.plot([m["transfer"]], [m["advance"]], "o", label=f"90 deg: advance {m['advance']:.1f} m, "
-                                                                 f"transfer {m['transfer']:.1f} m")
-        if math.isfinite(m.get("tactical_diameter", math.nan)):
-            j = int(np.argmax(m["_dpsi"] >= math.pi))
-            ax.plot([m["tactical_diameter"]], [m["_along"][j]], "s",
-                    label=f"180 deg: tactical diameter {m['tactical_diameter']:.1f} m")
-        if math.isfinite(m.get("steady_diameter", math.nan)):
-            psi0, x0, y0 = m["_psi0"], m["_x0"], m["_y0"]
-            c, s, side = math.cos(psi0), math.sin(psi0), m["turn_direction"]
-            dx, dy = m["steady_centre_x"] - x0, m["steady_centre_y"] - y0
-            ca, cx = c * dx + s * dy, side * (-s * dx + c * dy)
-            ang = np.linspace(0, 2 * math.pi, 200)
-            rr = m["steady_diameter"] / 2
-            ax.plot(cx + rr * np.cos(ang), ca + rr * np.sin(ang), "k:", lw=1,
-                    label=f"steady circle: D = {m['steady_diameter']:.1f} m")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("transfer direction: across the approach course, towards the turn (m)")
-        ax.set_ylabel("advance direction: along the approach course (m)")
-        ax.set_title(f"Turning manoeuvre of {name}")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        save(fig, f"turn_{name}.png")
-    return files
+        cmap = plt.get_cmap("viridis")
+        js = np.linspace(0, len(rope["t"]) - 1, snapshots).astype(int)
+        for c, j in enumerate(js):
+            p = rope["pos"][j]
+            if len(p):
+                ax.plot(p[:, 0], p[:, 1], ".-", ms=2, lw=0.8, color=cmap(c / max(1, len(js) - 1)),
+                        label=f"{name} elements t={rope['t'][j]:.0f} s")
+        fr, _ = _rope_element_series(rope, 3, "z")
+        for f in fr:
+            xs = [p[int(round(f * (len(p) - 1))), 0] if len(p) else np.nan for p in rope["pos"]]
+            ys = [p[int(round(f * (len(p) - 1))), 1] if len(p) else np.nan for p in rope["pos"]]
+            ax.plot(xs, ys, ":", lw=0.8, color="gray")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x east (m)")
+    ax.set_ylabel("y north (m)")
+    ax.set_title(f"XY tracks (map frame): {os.path.basename(rec.path)}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    out.save(fig, "tracks.png")
+
+
+def _yaw_figure(out: _Figures, rec: Recording) -> None:
+    fig, ax = out.plt.subplots(figsize=(8, 4))
+    for name, v in rec.vessels.items():
+        ax.plot(v["t"], np.degrees(v["yaw_unwrapped"]), label=name)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("yaw (deg, unwrapped, + to port)")
+    ax.set_title("Yaw angles")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    out.save(fig, "yaw.png")
+
+
+def _speed_yaw_rate_figure(out: _Figures, rec: Recording) -> None:
+    fig, axs = out.plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    for name, v in rec.vessels.items():
+        axs[0].plot(v["t"], v["speed"], label=name)
+        axs[1].plot(v["t"], np.degrees(v["r"]), label=name)
+    axs[0].set_ylabel("speed over ground (m/s)")
+    axs[1].set_ylabel("yaw rate (deg/s)")
+    axs[1].set_xlabel("time (s)")
+    for a in axs:
+        a.grid(alpha=0.3)
+        a.legend()
+    axs[0].set_title("Speed and yaw rate")
+    out.save(fig, "speed_yaw_rate.png")
+
+
+def _motions_figure(out: _Figures, rec: Recording) -> None:
+    """Speed, roll and pitch, and the rise of the vessels that report one (planing hulls)."""
+    risers = {n: v["status"] for n, v in rec.vessels.items()
+              if "status" in v and np.any(v["status"]["data"][:, 8] != 0.0)}
+    rows = 4 if risers else 3
+    fig, axs = out.plt.subplots(rows, 1, figsize=(8, 2.7 * rows), sharex=True)
+    for name, v in rec.vessels.items():
+        axs[0].plot(v["t"], v["speed"], label=name)
+        axs[1].plot(v["t"], np.degrees(v["roll"]), label=name)
+        axs[2].plot(v["t"], np.degrees(v["pitch"]), label=name)
+    for name, st in risers.items():
+        axs[3].plot(st["t"], st["data"][:, 8], label=name)
+        axs[3].set_ylabel("rise (m)")
+    axs[0].set_ylabel("speed (m/s)")
+    axs[1].set_ylabel("roll (deg, + stbd down)")
+    axs[2].set_ylabel("pitch (deg, + bow down)")
+    axs[-1].set_xlabel("time (s)")
+    for a in axs:
+        a.grid(alpha=0.3)
+        a.legend()
+    axs[0].set_title("Speed, roll and pitch histories")
+    out.save(fig, "motions.png")
+
+
+def _tension_figure(out: _Figures, ropes: Dict[str, dict]) -> None:
+    """End tensions from the rope state, else from the end wrenches."""
+    fig, axs = out.plt.subplots(len(ropes), 1, figsize=(8, 3.5 * len(ropes)), squeeze=False)
+    for a, (name, rope) in zip(axs[:, 0], ropes.items()):
+        if "t" in rope:
+            a.plot(rope["t"], rope["tension_a"] / 1e3, label=f"{name} end a")
+            a.plot(rope["t"], rope["tension_b"] / 1e3, "--", label=f"{name} end b")
+        else:
+            for end in ("a", "b"):
+                if f"wrench_{end}" in rope:
+                    w = rope[f"wrench_{end}"]
+                    a.plot(w["t"], w["tension"] / 1e3, label=f"{name} end {end} (wrench)")
+        a.set_ylabel("tension (kN)")
+        a.grid(alpha=0.3)
+        a.legend()
+    axs[-1, 0].set_xlabel("time (s)")
+    axs[0, 0].set_title("Towline tension at both ends")
+    out.save(fig, "towline_tension.png")
+
+
+def _rope_element_figures(out: _Figures, chains: Dict[str, dict], elements: int) -> None:
+    """Heights and pitch angles of `elements` elements spread along each rope."""
+    for key, fname, ylabel, ttl in (("z", "rope_heights.png", "element height z (m)", "Rope element heights"),
+                                    ("pitch", "rope_pitch.png", "element pitch (deg, + axis down to end a)",
+                                     "Rope element pitch angles")):
+        fig, axs = out.plt.subplots(len(chains), 1, figsize=(8, 3.8 * len(chains)), squeeze=False)
+        for a, (name, rope) in zip(axs[:, 0], chains.items()):
+            fracs, vals = _rope_element_series(rope, elements, key)
+            for i, f in enumerate(fracs):
+                y = vals[:, i] if key == "z" else np.degrees(vals[:, i])
+                a.plot(rope["t"], y, lw=1, label=f"{name} element at {f:.2f} of length (end a = 0)")
+            if key == "z":
+                a.plot(rope["t"], rope["min_z"], "k--", lw=1, label=f"{name} lowest element")
+            a.set_ylabel(ylabel)
+            a.grid(alpha=0.3)
+            a.legend(fontsize=7)
+        axs[-1, 0].set_xlabel("time (s)")
+        axs[0, 0].set_title(ttl)
+        out.save(fig, fname)
+
+
+def _turn_figure(out: _Figures, name: str, m: dict) -> None:
+    """A turn in approach-course axes with the 90 and 180 deg points and the steady circle."""
+    fig, ax = out.plt.subplots(figsize=(7, 7))
+    ax.plot(m["_across"], m["_along"], lw=1.5, label=f"{name} track from execute (t0 = {m['t0']:.1f} s)")
+    if math.isfinite(m.get("advance", math.nan)):
+        ax.plot([m["transfer"]], [m["advance"]], "o", label=f"90 deg: advance {m['advance']:.1f} m, "
+                                                             f"transfer {m['transfer']:.1f} m")
+    if math.isfinite(m.get("tactical_diameter", math.nan)):
+        j = int(np.argmax(m["_dpsi"] >= math.pi))
+        ax.plot([m["tactical_diameter"]], [m["_along"][j]], "s",
+                label=f"180 deg: tactical diameter {m['tactical_diameter']:.1f} m")
+    if math.isfinite(m.get("steady_diameter", math.nan)):
+        psi0, x0, y0 = m["_psi0"], m["_x0"], m["_y0"]
+        c, s, side = math.cos(psi0), math.sin(psi0), m["turn_direction"]
+        dx, dy = m["steady_centre_x"] - x0, m["steady_centre_y"] - y0
+        ca, cx = c * dx + s * dy, side * (-s * dx + c * dy)
+        ang = np.linspace(0, 2 * math.pi, 200)
+        rr = m["steady_diameter"] / 2
+        ax.plot(cx + rr * np.cos(ang), ca + rr * np.sin(ang), "k:", lw=1,
+                label=f"steady circle: D = {m['steady_diameter']:.1f} m")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("transfer direction: across the approach course, towards the turn (m)")
+    ax.set_ylabel("advance direction: along the approach course (m)")
+    ax.set_title(f"Turning manoeuvre of {name}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    out.save(fig, f"turn_{name}.png")
 
 
 # ---------------------------------------------------------------------------------------
@@ -616,18 +684,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     args = build_parser().parse_args(argv)
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
     try:
-        path, note = locate_recording(args.recording)  # a rosbag2 directory: its .mcap; sqlite3: what to do
-        if note:
-            say(f"analyze: {note}")
-        rec = Recording(path, args.vessels, args.ropes)
+        rec = read_recording(args, say)
     except McapReadError as exc:
         sys.stderr.write(f"analyze: {exc}\n")
         return EXIT_NOTHING
-    f = rec.file
-    if f.problems:
-        sys.stderr.write(f"analyze: the recording is damaged; analysing its readable part:\n{f.report()}\n")
-    for note in sorted(set(rec.decoder.notes)):
-        sys.stderr.write(f"analyze: {note}\n")
     if not rec.vessels and not rec.ropes:
         sys.stderr.write(f"analyze: {args.recording}: no contract topics with readable messages (/<vessel>/odom "
                          f"nav_msgs/Odometry, /<rope>/state tug_msgs/RopeState); nothing to analyse\n")
@@ -642,8 +702,30 @@ def main(argv: Optional[List[str]] = None) -> int:
     with open(path, "w") as fh:
         json.dump(summary, fh, indent=1, allow_nan=False)
     files = [path] + write_csvs(rec, summary, out_dir)
+    report(say, args.recording, rec.file, summary)
+    say(f"  wrote {len(figures)} figure(s) and {len(files)} summary file(s) to {out_dir}")
+    return EXIT_DAMAGED if rec.file.problems else EXIT_OK
 
-    say(f"analyze: {os.path.abspath(args.recording)}: {f.message_count} messages"
+
+def read_recording(args, say) -> Recording:
+    """The recording args.recording names, decoded; what is wrong with it goes to stderr
+    (damage, undecodable messages, topics not analysed). McapReadError if nothing is readable."""
+    path, note = locate_recording(args.recording)  # a rosbag2 directory: its .mcap; sqlite3: what to do
+    if note:
+        say(f"analyze: {note}")
+    rec = Recording(path, args.vessels, args.ropes)
+    if rec.file.problems:
+        sys.stderr.write(f"analyze: the recording is damaged; analysing its readable part:\n{rec.file.report()}\n")
+    for line in rec.decoder.report():
+        sys.stderr.write(f"analyze: {line}\n")
+    for note in sorted(set(rec.decoder.notes)):
+        sys.stderr.write(f"analyze: {note}\n")
+    return rec
+
+
+def report(say, recording: str, f: McapFile, summary: dict) -> None:
+    """The summary's main numbers, one line per vessel, turn and rope."""
+    say(f"analyze: {os.path.abspath(recording)}: {f.message_count} messages"
         + (" (DAMAGED FILE: readable part only)" if f.problems else ""))
     for name, v in summary["vessels"].items():
         say(f"  vessel {name}: {v['samples']} states, {v['t_start']:.1f} .. {v['t_end']:.1f} s, distance "
@@ -662,8 +744,6 @@ def main(argv: Optional[List[str]] = None) -> int:
             say(f"  rope {name}: max tension end a {r['tension_a_max'] / 1e3:.1f} kN, end b "
                 f"{r['tension_b_max'] / 1e3:.1f} kN, lowest element z {r['min_element_height']:.2f} m"
                 + (f", parted at {r['broken_at']:.1f} s" if r.get("broken") else ""))
-    say(f"  wrote {len(figures)} figure(s) and {len(files)} summary file(s) to {out_dir}")
-    return EXIT_DAMAGED if f.problems else EXIT_OK
 
 
 if __name__ == "__main__":

@@ -521,127 +521,161 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         raise ValueError(f"layout {layout!r}: expected one of {LAYOUTS}")
     run_id = run_id or new_run_id()
     specs = node_specs(sc, scenario_path, run_id)
-    procs = NodeProcesses(specs if layout == "processes" else [], log_dir, recorder)
-    conductor = Conductor(sc, [s.name for s in specs], recorder, run_id)
-    executor = rc.make_executor()
-    executor.add_node(conductor)
-    local_nodes: List[Node] = []
-    stats = RunStats(run_id=run_id)
     n_steps = sc.steps if steps is None else steps
-
-    with StopSignals() as stop:
-        def wait_for(step: int, timeout: float, what: str) -> None:
-            now = time.monotonic()
-            deadline = now + timeout
-            next_check = now  # processes are polled every 20 ms, not after every message
-            rescue_at = now + RESCUE_AFTER
-            expected = conductor.expected
-            done = conductor.done
-            while done.get(step) != expected:
-                try:
-                    executor.spin_once(timeout_sec=0.001)
-                except rclpy.executors.ExternalShutdownException:
-                    raise  # the context was shut down: the caller finalises the recording
-                except Exception as exc:  # an in-process node failed in its callback
-                    raise RunError(f"a node failed while {what}: {exc!r}") from exc
-                if conductor.failures:
-                    raise RunError(conductor.failures[0])
-                now = time.monotonic()
-                if now < next_check:
-                    continue
-                next_check = now + 0.02
-                stop.check()
-                if now > rescue_at:  # the EventsExecutor may sit on an answer (ros_common.take_missed)
-                    rescue_at = now + RESCUE_AFTER
-                    conductor.rescued += rc.take_missed(conductor.done_sub, conductor._on_done_raw)
-                    for node in local_nodes:
-                        node.poll()
-                if recorder:
-                    recorder.flush()  # a node blocked on a full feed pipe must never stall the step
-                dead = procs.dead()
-                if dead:
-                    raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
-                                   f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
-                if now > deadline:
-                    missing = sorted(conductor.expected - conductor.done.get(step, set()))
-                    raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
-                                   f"{timeout:g} s while {what}")
-
+    session = _Session(sc, specs, log_dir, recorder, layout, run_id)
+    with StopSignals() as session.stop:
         try:
-            conductor.check_domain(executor)
-            stop.check()
-            dead = shm_hygiene.remove_dead_fastdds_files()
-            if dead:
-                conductor.get_logger().info(f"removed {len(dead)} dead Fast DDS shared-memory file(s) of killed "
-                                            f"processes from {shm_hygiene.SHM_DIR}")
-            if recorder is not None and layout == "one_process":
-                record_feed.install(recorder.feed_in_process)
-            try:
-                local_nodes = in_process_nodes(specs) if layout == "one_process" else []
-            finally:
-                record_feed.install(None)
-            for node in (extra_nodes or []) + ([recorder] if recorder else []) + local_nodes:
-                executor.add_node(node)
-            procs.start()
-            wait_for(0, ready_timeout, "starting up")
-            # Triggers and orders are volatile: every participant (and the recorder) must have
-            # matched them before step 0 goes out.
-            want = 2 if recorder else 1
-            needs = [(p, want) for p in conductor.order_publishers()]
-            needs.append((conductor.step_pub, len(specs)))
-            deadline = time.monotonic() + ready_timeout
-            while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
-                executor.spin_once(timeout_sec=0.01)
-                stop.check()
-                if time.monotonic() > deadline:
-                    late = [p.topic_name for p, n in needs if p.get_subscription_count() < n]
-                    late += recorder.unmatched_topics() if recorder else []
-                    raise RunError(f"no subscriber matched topic(s) {late} within {ready_timeout:g} s")
-            conductor.event(0, "scenario_started", "", f"scenario '{sc.name}' (run {run_id}): {n_steps} steps at "
-                            f"{sc.exchange_rate:g} Hz, {sc.mode}")
-            t_start = time.monotonic()
-            cpu_start = time.process_time() + procs.cpu_seconds()
-            period = conductor.period_ns * 1e-9
-            for k in range(n_steps):
-                if sc.mode == "realtime":
-                    target = t_start + k * period
-                    while time.monotonic() < target:
-                        executor.spin_once(timeout_sec=max(0.0, min(0.001, target - time.monotonic())))
-                    stop.check()
-                    late = time.monotonic() - target
-                    stats.lateness.append(late)
-                t0 = time.monotonic()
-                conductor.send_step(k)
-                if recorder:
-                    recorder.flush()  # the previous step's messages, written while the nodes compute
-                wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
-                stats.round_trips.append(time.monotonic() - t0)
-                conductor.done.pop(k, None)
-                stats.steps_done = k + 1
-                stop.check()
-                if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
-                    stats.overruns += 1
-                if on_step:
-                    on_step(k + 1)
-            stats.wall_time = time.monotonic() - t_start
-            stats.cpu_time = time.process_time() + procs.cpu_seconds() - cpu_start
-            stats.compute_times = conductor.compute_times
-            conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
-            # let the last messages reach subscribers in this process (recorder, summary)
-            settled = on_finished(n_steps * conductor.period_ns) if on_finished else (lambda: True)
-            start = time.monotonic()
-            while time.monotonic() < start + 0.3 or (not settled() and time.monotonic() < start + 5.0):
-                executor.spin_once(timeout_sec=0.01)
-            return stats
+            session.start(extra_nodes or [], ready_timeout)
+            session.step(n_steps, stall_timeout, on_step)
+            session.settle(on_finished(n_steps * session.conductor.period_ns) if on_finished else (lambda: True))
+            return session.stats
         finally:
-            stats.refused = dict(conductor.refused)
-            stats.node_refused = dict(conductor.node_refused)
-            stats.rescued = conductor.rescued
-            procs.stop()
-            executor.shutdown()
-            for node in local_nodes:
-                node.destroy_node()
-            conductor.destroy_node()
+            session.close()
+
+
+class _Session:
+    """One run of run(): the conductor, its executor and the nodes, from start-up to shutdown."""
+
+    def __init__(self, sc: Scenario, specs: List[NodeSpec], log_dir: str, recorder, layout: str, run_id: str):
+        self.sc, self.specs, self.recorder, self.layout = sc, specs, recorder, layout
+        self.stop: Optional[StopSignals] = None  # set by run() for the time the run handles the signals
+        self.procs = NodeProcesses(specs if layout == "processes" else [], log_dir, recorder)
+        self.conductor = Conductor(sc, [s.name for s in specs], recorder, run_id)
+        self.executor = rc.make_executor()
+        self.executor.add_node(self.conductor)
+        self.local_nodes: List[Node] = []
+        self.stats = RunStats(run_id=run_id)
+
+    def start(self, extra_nodes: List[Node], ready_timeout: float) -> None:
+        """Check the domain, start the nodes, wait for their ready signal and for every
+        subscription the first step needs."""
+        conductor, recorder = self.conductor, self.recorder
+        conductor.check_domain(self.executor)
+        self.stop.check()
+        dead = shm_hygiene.remove_dead_fastdds_files()
+        if dead:
+            conductor.get_logger().info(f"removed {len(dead)} dead Fast DDS shared-memory file(s) of killed "
+                                        f"processes from {shm_hygiene.SHM_DIR}")
+        if recorder is not None and self.layout == "one_process":
+            record_feed.install(recorder.feed_in_process)
+        try:
+            self.local_nodes = in_process_nodes(self.specs) if self.layout == "one_process" else []
+        finally:
+            record_feed.install(None)
+        for node in extra_nodes + ([recorder] if recorder else []) + self.local_nodes:
+            self.executor.add_node(node)
+        self.procs.start()
+        self.wait_for(0, ready_timeout, "starting up")
+        self._wait_for_matches(ready_timeout)
+
+    def _wait_for_matches(self, ready_timeout: float) -> None:
+        """Triggers and orders are volatile: every participant (and the recorder) must have
+        matched them before step 0 goes out."""
+        recorder = self.recorder
+        want = 2 if recorder else 1
+        needs = [(p, want) for p in self.conductor.order_publishers()]
+        needs.append((self.conductor.step_pub, len(self.specs)))
+        deadline = time.monotonic() + ready_timeout
+        while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
+            self.executor.spin_once(timeout_sec=0.01)
+            self.stop.check()
+            if time.monotonic() > deadline:
+                late = [p.topic_name for p, n in needs if p.get_subscription_count() < n]
+                late += recorder.unmatched_topics() if recorder else []
+                raise RunError(f"no subscriber matched topic(s) {late} within {ready_timeout:g} s")
+
+    def step(self, n_steps: int, stall_timeout: float, on_step: Optional[Callable[[int], None]]) -> None:
+        """Steps 0 .. n_steps-1, each once every node has answered the one before (realtime:
+        and its wall-clock time has come); fills self.stats."""
+        sc, conductor, executor, recorder, stats = self.sc, self.conductor, self.executor, self.recorder, self.stats
+        conductor.event(0, "scenario_started", "", f"scenario '{sc.name}' (run {stats.run_id}): {n_steps} steps "
+                        f"at {sc.exchange_rate:g} Hz, {sc.mode}")
+        t_start = time.monotonic()
+        cpu_start = time.process_time() + self.procs.cpu_seconds()
+        period = conductor.period_ns * 1e-9
+        for k in range(n_steps):
+            if sc.mode == "realtime":
+                target = t_start + k * period
+                while time.monotonic() < target:
+                    executor.spin_once(timeout_sec=max(0.0, min(0.001, target - time.monotonic())))
+                self.stop.check()
+                late = time.monotonic() - target
+                stats.lateness.append(late)
+            t0 = time.monotonic()
+            conductor.send_step(k)
+            if recorder:
+                recorder.flush()  # the previous step's messages, written while the nodes compute
+            self.wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
+            stats.round_trips.append(time.monotonic() - t0)
+            conductor.done.pop(k, None)
+            stats.steps_done = k + 1
+            self.stop.check()
+            if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
+                stats.overruns += 1
+            if on_step:
+                on_step(k + 1)
+        stats.wall_time = time.monotonic() - t_start
+        stats.cpu_time = time.process_time() + self.procs.cpu_seconds() - cpu_start
+        stats.compute_times = conductor.compute_times
+        conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
+
+    def settle(self, settled: Callable[[], bool]) -> None:
+        """Let the last messages reach subscribers in this process (recorder, summary): 0.3 s,
+        and up to 5 s until settled() holds."""
+        start = time.monotonic()
+        while time.monotonic() < start + 0.3 or (not settled() and time.monotonic() < start + 5.0):
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def wait_for(self, step: int, timeout: float, what: str) -> None:
+        """Spin until every node has answered StepDone(step); RunError if a node failed, died or
+        stays silent for timeout s, Interrupted on a stop signal."""
+        conductor, executor, procs, recorder = self.conductor, self.executor, self.procs, self.recorder
+        now = time.monotonic()
+        deadline = now + timeout
+        next_check = now  # processes are polled every 20 ms, not after every message
+        rescue_at = now + RESCUE_AFTER
+        expected = conductor.expected
+        done = conductor.done
+        while done.get(step) != expected:
+            try:
+                executor.spin_once(timeout_sec=0.001)
+            except rclpy.executors.ExternalShutdownException:
+                raise  # the context was shut down: the caller finalises the recording
+            except Exception as exc:  # an in-process node failed in its callback
+                raise RunError(f"a node failed while {what}: {exc!r}") from exc
+            if conductor.failures:
+                raise RunError(conductor.failures[0])
+            now = time.monotonic()
+            if now < next_check:
+                continue
+            next_check = now + 0.02
+            self.stop.check()
+            if now > rescue_at:  # the EventsExecutor may sit on an answer (ros_common.take_missed)
+                rescue_at = now + RESCUE_AFTER
+                conductor.rescued += rc.take_missed(conductor.done_sub, conductor._on_done_raw)
+                for node in self.local_nodes:
+                    node.poll()
+            if recorder:
+                recorder.flush()  # a node blocked on a full feed pipe must never stall the step
+            dead = procs.dead()
+            if dead:
+                raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
+                               f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
+            if now > deadline:
+                missing = sorted(conductor.expected - conductor.done.get(step, set()))
+                raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
+                               f"{timeout:g} s while {what}")
+
+    def close(self) -> None:
+        """Protocol counts into the stats, then stop the nodes and the executor."""
+        self.stats.refused = dict(self.conductor.refused)
+        self.stats.node_refused = dict(self.conductor.node_refused)
+        self.stats.rescued = self.conductor.rescued
+        self.procs.stop()
+        self.executor.shutdown()
+        for node in self.local_nodes:
+            node.destroy_node()
+        self.conductor.destroy_node()
 
 
 def percentile(values: List[float], q: float) -> float:

@@ -24,6 +24,7 @@ Nothing here needs ROS; ``message_class`` / ``decoder`` (bottom) import ROS type
 from __future__ import annotations
 
 import dataclasses
+import functools
 import heapq
 import importlib
 import mmap
@@ -554,18 +555,28 @@ def locate_recording(path: str) -> Tuple[str, str]:
     return path, ""
 
 
+def _bag_metadata(meta_path: str) -> Tuple[str, List[str], str]:
+    """(storage_identifier, file names, problem) from a rosbag2 metadata.yaml; problem says why
+    nothing could be taken from it ('' if read), and the caller then goes by the files present."""
+    import yaml
+    try:
+        with open(meta_path) as f:
+            data = yaml.safe_load(f)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        return "", [], f"its metadata.yaml is unreadable: {exc}"
+    info = data.get("rosbag2_bagfile_information") if isinstance(data, dict) else None
+    if not isinstance(info, dict):
+        return "", [], "its metadata.yaml has no rosbag2_bagfile_information mapping"
+    paths = info.get("relative_file_paths")
+    names = [os.path.basename(str(p)) for p in paths] if isinstance(paths, list) else []
+    return str(info.get("storage_identifier") or ""), names, ""
+
+
 def _locate_in_directory(path: str) -> Tuple[str, str]:
     meta_path = os.path.join(path, "metadata.yaml")
-    storage, names = "", []
+    storage, names, meta_problem = "", [], ""
     if os.path.isfile(meta_path):
-        try:
-            import yaml
-            with open(meta_path) as f:
-                info = (yaml.safe_load(f) or {}).get("rosbag2_bagfile_information") or {}
-            storage = str(info.get("storage_identifier") or "")
-            names = [os.path.basename(str(p)) for p in info.get("relative_file_paths") or []]
-        except Exception:  # noqa: BLE001 - unreadable or malformed metadata.yaml: go by the files present
-            storage, names = "", []
+        storage, names, meta_problem = _bag_metadata(meta_path)
     listed = sorted(os.listdir(path))
     files = [n for n in names if os.path.isfile(os.path.join(path, n))] or \
         [n for n in listed if n.endswith((".mcap", ".db3", ".mcap.zstd", ".db3.zstd"))
@@ -586,7 +597,8 @@ def _locate_in_directory(path: str) -> Tuple[str, str]:
     mcaps = [n for n in files if n.endswith(".mcap")]
     if len(mcaps) == 1:
         found = os.path.join(path, mcaps[0])
-        return found, f"{path}: a {kind} (MCAP storage); reading {found}"
+        why = f" ({meta_problem}; went by the files present)" if meta_problem else ""
+        return found, f"{path}: a {kind} (MCAP storage){why}; reading {found}"
     if len(mcaps) > 1:
         raise McapReadError(f"{path}: a {kind} with {len(mcaps)} MCAP files ({', '.join(mcaps)}: a split bag); give "
                             f"one file, or merge them into one: `rosbags-convert --src {path} --dst "
@@ -595,23 +607,29 @@ def _locate_in_directory(path: str) -> Tuple[str, str]:
                         + (", metadata.yaml names " + ", ".join(names) if names else "") + ")")
 
 
+def _decompressor(comp: str):
+    """(decompressor object, the exceptions it raises for corrupt input) for "zstd" or "lz4";
+    ImportError if the package is missing."""
+    if comp == "zstd":
+        import zstandard
+        return zstandard.ZstdDecompressor().decompressobj(), (zstandard.ZstdError,)
+    import lz4.frame
+    return lz4.frame.LZ4FrameDecompressor(), (RuntimeError,)  # python-lz4 reports LZ4F errors so
+
+
 def _decompress(comp: str, buf, start: int, stop: int, usize: int) -> Tuple[bytes, str]:
     """Decompress buf[start:stop] in slices; returns (what could be decompressed, error or '')."""
     if comp == "":
         return bytes(buf[start:stop]), ""
-    parts: List[bytes] = []
     try:
-        if comp == "zstd":
-            import zstandard
-            d = zstandard.ZstdDecompressor().decompressobj()
-        else:
-            import lz4.frame
-            d = lz4.frame.LZ4FrameDecompressor()
-        for s in range(start, stop, SLICE):
-            parts.append(d.decompress(bytes(buf[s:min(s + SLICE, stop)])))
+        d, corrupt = _decompressor(comp)
     except ImportError as exc:
         return b"", f"no decompressor for {comp}: {exc}"
-    except Exception as exc:  # noqa: BLE001 - zstd/lz4 raise their own error types
+    parts: List[bytes] = []
+    try:
+        for s in range(start, stop, SLICE):
+            parts.append(d.decompress(bytes(buf[s:min(s + SLICE, stop)])))
+    except corrupt as exc:
         return b"".join(parts), str(exc) or type(exc).__name__
     return b"".join(parts), ""
 
@@ -643,41 +661,76 @@ def message_class(type_name: str):
         raise ImportError(f"type {type_name}: package {pkg} has no {sub} {name!r} (different version?)") from None
 
 
+@functools.lru_cache(maxsize=None)
+def ros_decode_errors() -> Tuple[type, ...]:
+    """What rclpy's deserialize_message raises for bytes that are not a message of the type: the
+    failing rmw_deserialize comes back as rclpy's RMWError (the Jazzy wheels) or RCLError (newer
+    rclpy), both RuntimeError subclasses from its C extension. Anything else (TypeError for data
+    that are not bytes, AttributeError for a class that is not a ROS message) is a programming
+    error and must propagate."""
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    return tuple(getattr(_rclpy, name) for name in ("RMWError", "RCLError") if hasattr(_rclpy, name))
+
+
+# What a decoder built from a ros2msg schema (mcap_ros2) raises for corrupt CDR: struct.error past
+# the end of the data, ValueError (UnicodeDecodeError among them) for bad strings or a too short
+# buffer, NotImplementedError for the types it cannot decode (wstring).
+SCHEMA_DECODE_ERRORS = (struct.error, ValueError, NotImplementedError)
+
+
 class Decoder:
     """CDR -> message objects for a file's channels: the installed ROS type (fast, C) when it
-    imports, else a decoder built from the file's own ros2msg schema (mcap_ros2, pure Python)."""
+    imports, else a decoder built from the file's own ros2msg schema (mcap_ros2, pure Python).
+
+    Messages that do not decode are counted per topic in ``errors`` (``report()`` says so); any
+    other exception of a decoder propagates. ``from_schema`` holds the ids of the channels decoded
+    with the file's schema, whose messages may lack fields of the installed type (an older
+    recording)."""
 
     def __init__(self):
-        self._by_channel: Dict[int, Callable[[bytes], object]] = {}
+        self._by_channel: Dict[int, Optional[Tuple[Callable[[bytes], object], Tuple[type, ...]]]] = {}
         self.errors: Dict[str, int] = {}
         self.notes: List[str] = []
+        self.from_schema: set = set()
 
-    def for_channel(self, ch: Channel) -> Optional[Callable[[bytes], object]]:
+    def for_channel(self, ch: Channel) -> Optional[Tuple[Callable[[bytes], object], Tuple[type, ...]]]:
+        """(decode function, the exceptions it raises for corrupt data) of a channel, or None
+        (a note says why)."""
         if ch.id in self._by_channel:
             return self._by_channel[ch.id]
-        fn = None
+        entry = None
         if ch.message_encoding != "cdr":
             self.notes.append(f"{ch.topic}: message encoding {ch.message_encoding!r} is not CDR; not decoded")
         else:
             try:
                 cls = message_class(ch.type_name)
                 from rclpy.serialization import deserialize_message
-                fn = lambda data, cls=cls: deserialize_message(data, cls)  # noqa: E731
             except (ImportError, ValueError) as exc:
                 fn = self._from_schema(ch, str(exc))
-        self._by_channel[ch.id] = fn
-        return fn
+                if fn is not None:
+                    entry = (fn, SCHEMA_DECODE_ERRORS)
+                    self.from_schema.add(ch.id)
+            else:
+                entry = (lambda data, cls=cls: deserialize_message(data, cls), ros_decode_errors())
+        self._by_channel[ch.id] = entry
+        return entry
 
     def _from_schema(self, ch: Channel, why: str):
         if ch.schema is None or ch.schema.encoding not in ("ros2msg", "ros2idl"):
             self.notes.append(f"{ch.topic}: {why}; and no ros2msg schema in the file to decode it with")
             return None
         try:
-            from mcap_ros2.decoder import DecoderFactory
+            from mcap.exceptions import McapError
             from mcap.records import Schema as LibSchema
+            from mcap_ros2._vendor.rosidl_adapter.parser import InvalidSpecification
+            from mcap_ros2.decoder import DecoderFactory
+        except ImportError as exc:
+            self.notes.append(f"{ch.topic}: {why}; and no decoder for the file's schema here ({exc})")
+            return None
+        try:
             dec = DecoderFactory().decoder_for("cdr", LibSchema(id=ch.schema.id, name=ch.schema.name,
                                                                 encoding=ch.schema.encoding, data=ch.schema.data))
-        except Exception as exc:  # noqa: BLE001
+        except (McapError, InvalidSpecification, ValueError) as exc:  # the schema text does not parse
             self.notes.append(f"{ch.topic}: {why}; the file's schema does not give a decoder either ({exc})")
             return None
         if dec is None:
@@ -687,12 +740,19 @@ class Decoder:
         return dec
 
     def decode(self, msg: Message):
-        """The message object, or None (counted in errors) if it does not decode."""
-        fn = self.for_channel(msg.channel)
-        if fn is None:
+        """The message object, or None if there is no decoder for its channel (a note says why)
+        or its data do not decode (counted in errors)."""
+        entry = self.for_channel(msg.channel)
+        if entry is None:
             return None
+        fn, corrupt = entry
         try:
             return fn(msg.data)
-        except Exception:  # noqa: BLE001 - corrupt CDR raises from C or Python
+        except corrupt:
             self.errors[msg.channel.topic] = self.errors.get(msg.channel.topic, 0) + 1
             return None
+
+    def report(self) -> List[str]:
+        """One line per topic with messages that did not decode."""
+        return [f"{topic}: {n} message(s) do not decode as its type (corrupt data); left out"
+                for topic, n in sorted(self.errors.items())]

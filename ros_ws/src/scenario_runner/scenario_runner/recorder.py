@@ -36,6 +36,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 
 from rclpy.serialization import deserialize_message
 
+from scenario_runner.mcap_io import ros_decode_errors
 from sim_plumbing.record_feed import PipeReader
 from sim_plumbing.stepping import RateLimitedLog
 
@@ -252,8 +253,10 @@ def readable_extent(path: str) -> str:
             for _, _, message in make_reader(f).iter_messages(log_time_order=False):
                 count += 1
                 last = max(last, message.log_time)
-    except Exception as exc:  # noqa: BLE001 - report, whatever the reader's complaint
-        return f"{count} messages readable, then: {exc}"
+    except Exception as exc:  # noqa: BLE001 - the answer, reported: on damaged files the mcap reader
+        # raises McapError, lz4's RuntimeError, KeyError, OverflowError, MemoryError, OSError, struct.error,
+        # UnicodeDecodeError (measured on cut and corrupted copies)
+        return f"{count} messages readable, then: {type(exc).__name__}: {exc}"
     return f"{count} messages up to t = {last * 1e-9:.2f} s"
 
 
@@ -371,7 +374,7 @@ class McapRecorder(Node):
         are refused (logged, counted in self.refused), so every reader can decode the file."""
         try:
             deserialize_message(data, msg_class)
-        except Exception as exc:  # noqa: BLE001 - whatever the type support says, the bytes are not the type
+        except ros_decode_errors() as exc:
             self.refused[topic] = self.refused.get(topic, 0) + 1
             self.complaints("undecodable " + topic, f"{topic}: {len(data)} bytes that are not a "
                             f"{msg_class.__name__} not recorded: {exc}")

@@ -24,9 +24,10 @@ import re
 import signal
 import sys
 import time
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
-from scenario_runner.mcap_io import Channel, McapFile, McapReadError, locate_recording, message_class
+from scenario_runner.mcap_io import (Channel, McapFile, McapReadError, locate_recording, message_class,
+                                     ros_decode_errors)
 
 CLOCK_TOPIC = "/clock"
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
@@ -51,25 +52,31 @@ def _policy(value, names: Dict[str, int]) -> Optional[int]:
 
 
 def qos_from_metadata(channel: Channel):
-    """The publisher QoS for a channel: from its offered_qos_profiles (rosbag2 YAML, one entry
-    per original publisher). Several publishers: reliable / transient local only if all offered
-    it, the largest depth. Missing or unreadable metadata: reliable, volatile, keep last 10
-    (transient local for /tf_static)."""
+    """(QoS, fallback) of the publisher for a channel: from its offered_qos_profiles (rosbag2 YAML,
+    one entry per original publisher); fallback is '' then, else why the default was taken.
+    Several publishers: reliable / transient local only if all offered it, the largest depth.
+    Missing or unreadable metadata: reliable, volatile, keep last 10 (transient local for
+    /tf_static). A policy value not understood counts as the default (reliable, volatile, keep
+    last) and is named in fallback."""
     import yaml
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-    profiles = []
+    profiles, why = [], ""
     text = channel.metadata.get("offered_qos_profiles", "")
-    if text.strip():
+    if not text.strip():
+        why = "the recording holds no offered_qos_profiles for it"
+    else:
         try:
             data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            why = f"its offered_qos_profiles is not valid YAML ({str(exc).splitlines()[0]})"
+        else:
             profiles = [p for p in (data if isinstance(data, list) else [data]) if isinstance(p, dict)]
-        except yaml.YAMLError:
-            profiles = []
+            why = "" if profiles else "its offered_qos_profiles holds no QoS profile"
     if not profiles:
         tl = channel.topic == "/tf_static"
         return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100 if tl else 10,
                           reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.TRANSIENT_LOCAL if tl else DurabilityPolicy.VOLATILE), False
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL if tl else DurabilityPolicy.VOLATILE), why
     rel = [_policy(p.get("reliability"), _RELIABILITY) for p in profiles]
     dur = [_policy(p.get("durability"), _DURABILITY) for p in profiles]
     hist = [_policy(p.get("history"), _HISTORY) for p in profiles]
@@ -77,10 +84,14 @@ def qos_from_metadata(channel: Channel):
     reliability = ReliabilityPolicy.BEST_EFFORT if any(r == 2 for r in rel) else ReliabilityPolicy.RELIABLE
     durability = DurabilityPolicy.TRANSIENT_LOCAL if all(d == 1 for d in dur) else DurabilityPolicy.VOLATILE
     depth = max(depths) if depths and max(depths) > 0 else 10
+    tables = {"reliability": _RELIABILITY, "durability": _DURABILITY, "history": _HISTORY}
+    unread = [f"{key} {p[key]!r}" for p in profiles for key, names in tables.items()
+              if p.get(key) is not None and _policy(p[key], names) is None]
+    why = f"offered_qos_profiles: {', '.join(unread)} not understood" if unread else ""
     if all(h == 2 for h in hist):
-        return QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=reliability, durability=durability), True
+        return QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=reliability, durability=durability), why
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=reliability,
-                      durability=durability), True
+                      durability=durability), why
 
 
 def qos_text(q) -> str:
@@ -153,16 +164,44 @@ def main(argv: Optional[List[str]] = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     import rclpy
     args = build_parser().parse_args(rclpy.utilities.remove_ros_args(["replay"] + argv)[1:])
+    keep = check_options(args)
+    if keep is None:
+        return EXIT_NOTHING
+    mf = open_recording(args)
+    if mf is None:
+        return EXIT_NOTHING
+    selected, skipped = select_topics(mf, keep, args.clock)
+    if args.list:
+        list_topics(mf, selected, skipped)
+        return EXIT_DAMAGED if mf.problems else EXIT_OK
+    for line in skipped:
+        sys.stderr.write(f"replay: {line}\n")
+    if not selected:
+        sys.stderr.write(f"replay: {args.recording}: no topic left to play (selection, types)\n")
+        return EXIT_NOTHING
+    play(args, argv, mf, selected)
+    if mf.problems:
+        sys.stderr.write(f"replay: {args.recording}: damaged file, its readable part was replayed "
+                         f"({len(mf.problems)} problem(s) above)\n")
+        return EXIT_DAMAGED
+    return EXIT_OK
+
+
+def check_options(args) -> Optional[Callable[[str], bool]]:
+    """The topic filter of --topics / --exclude; None (said on stderr) for unusable options."""
     if not args.rate > 0:
         sys.stderr.write("replay: --rate must be > 0\n")
-        return EXIT_NOTHING
+        return None
     try:
-        keep = topic_filter(args.topics, args.exclude)
+        return topic_filter(args.topics, args.exclude)
     except ValueError as exc:
         sys.stderr.write(f"replay: {exc}\n")
-        return EXIT_NOTHING
+        return None
 
-    # -- first pass: channels, counts, problems --------------------------------------------
+
+def open_recording(args) -> Optional[McapFile]:
+    """The recording scanned once (channels, counts, problems; damage reported on stderr), or
+    None (said on stderr) if there is nothing to replay. args.recording becomes the MCAP file."""
     try:
         path, note = locate_recording(args.recording)  # a rosbag2 directory: its .mcap; sqlite3: what to do
         if note:
@@ -171,21 +210,24 @@ def main(argv: Optional[List[str]] = None) -> int:
         mf = McapFile(path).scan()
     except McapReadError as exc:
         sys.stderr.write(f"replay: {exc}\n")
-        return EXIT_NOTHING
+        return None
     if mf.problems:
         sys.stderr.write(f"replay: the recording is damaged; replaying its readable part:\n{mf.report()}\n")
     if mf.message_count == 0:
         sys.stderr.write(f"replay: {args.recording}: no readable message, nothing to replay\n")
-        return EXIT_NOTHING
+        return None
+    return mf
 
-    # -- publishers ------------------------------------------------------------------------
+
+def select_topics(mf: McapFile, keep: Callable[[str], bool], clock: str) -> Tuple[Dict[str, Channel], List[str]]:
+    """(topic -> channel to play, why each other topic with messages is not played)."""
     selected: Dict[str, Channel] = {}
     skipped: List[str] = []
     for topic, ch in sorted(mf.topics().items()):
         if not keep(topic) or not any(mf.counts.get(c.id) for c in mf.channels.values() if c.topic == topic):
             continue
-        if topic == CLOCK_TOPIC and args.clock != "recorded":
-            skipped.append(f"{topic}: recorded /clock not played (--clock {args.clock})")
+        if topic == CLOCK_TOPIC and clock != "recorded":
+            skipped.append(f"{topic}: recorded /clock not played (--clock {clock})")
             continue
         if ch.message_encoding != "cdr":
             skipped.append(f"{topic}: message encoding {ch.message_encoding!r} is not ROS 2 CDR; skipped")
@@ -196,132 +238,174 @@ def main(argv: Optional[List[str]] = None) -> int:
             skipped.append(f"{topic}: {exc}; skipped")
             continue
         selected[topic] = ch
-    if args.list:
-        for topic, ch in sorted(mf.topics().items()):
-            n = sum(mf.counts.get(c.id, 0) for c in mf.channels.values() if c.topic == topic)
-            q, known = qos_from_metadata(ch)
-            mark = "" if topic in selected else "  (not played)"
-            print(f"{topic}  {ch.type_name}  {n} msgs  QoS {qos_text(q)}{'' if known else ' (default)'}{mark}")
-        for line in skipped:
-            print(f"  {line}")
-        return EXIT_DAMAGED if mf.problems else EXIT_OK
-    for line in skipped:
-        sys.stderr.write(f"replay: {line}\n")
-    if not selected:
-        sys.stderr.write(f"replay: {args.recording}: no topic left to play (selection, types)\n")
-        return EXIT_NOTHING
+    return selected, skipped
 
-    import rclpy.duration
+
+def list_topics(mf: McapFile, selected: Dict[str, Channel], skipped: List[str]) -> None:
+    """--list: every topic with its type, message count and the QoS it would be played with."""
+    for topic, ch in sorted(mf.topics().items()):
+        n = sum(mf.counts.get(c.id, 0) for c in mf.channels.values() if c.topic == topic)
+        q, fallback = qos_from_metadata(ch)
+        mark = "" if topic in selected else "  (not played)"
+        print(f"{topic}  {ch.type_name}  {n} msgs  QoS {qos_text(q)}{f' (default: {fallback})' if fallback else ''}"
+              f"{mark}")
+    for line in skipped:
+        print(f"  {line}")
+
+
+def play(args, argv: List[str], mf: McapFile, selected: Dict[str, Channel]) -> None:
+    """Publish the selected topics (and /clock) at their recorded times until the end, or until
+    Ctrl-C / SIGTERM."""
+    import rclpy
     import rclpy.executors
     from rclpy.signals import SignalHandlerOptions
     # Ctrl-C / SIGTERM stop the playing loop as KeyboardInterrupt (then a clean shutdown)
     rclpy.init(args=["replay"] + argv, signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     from rclpy.node import Node
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from rclpy.serialization import deserialize_message
-    from rosgraph_msgs.msg import Clock
     node = Node("mcap_replay")
-    pubs = {}
-    classes = {}
-    for topic, ch in selected.items():
-        cls = message_class(ch.type_name)
-        q, _ = qos_from_metadata(ch)
-        classes[topic] = cls
-        pubs[topic] = node.create_publisher(cls, topic, q)
-    clock_pub = None
-    if args.clock == "log":
-        clock_ch = mf.topics().get(CLOCK_TOPIC)
-        clock_qos = qos_from_metadata(clock_ch)[0] if clock_ch else QoSProfile(
-            depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        clock_pub = node.create_publisher(Clock, CLOCK_TOPIC, clock_qos)
-
-    def clock_msg(ns: int) -> Clock:
-        c = Clock()
-        c.clock.sec, c.clock.nanosec = ns // 1_000_000_000, ns % 1_000_000_000
-        return c
-
-    status = EXIT_DAMAGED if mf.problems else EXIT_OK
-    sent = 0
-    dropped_suspect = 0
-    lateness: List[float] = []  # s after its due wall time each message went out
+    player = Player(args, mf, node, selected)
     try:
-        all_pubs = list(pubs.values()) + ([clock_pub] if clock_pub else [])
+        player.wait_for_subscribers()
+        player.play()
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        _print(args.quiet, f"replay: stopped after {player.sent} messages")
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+class Player:
+    """The publishers of a replay and its playing loop: message i goes out at wall time
+    start + (log_time_i - log0) / rate, /clock at message times and between them."""
+
+    def __init__(self, args, mf: McapFile, node, selected: Dict[str, Channel]):
+        self.args, self.mf = args, mf
+        self.pubs, self.classes = {}, {}
+        for topic, ch in selected.items():
+            cls = message_class(ch.type_name)
+            q, fallback = qos_from_metadata(ch)
+            if fallback:
+                sys.stderr.write(f"replay: {topic}: {fallback}; publishing it with the default QoS ({qos_text(q)})\n")
+            self.classes[topic] = cls
+            self.pubs[topic] = node.create_publisher(cls, topic, q)
+        self.clock_pub = self._clock_publisher(node) if args.clock == "log" else None
+        self.all_pubs = list(self.pubs.values()) + ([self.clock_pub] if self.clock_pub else [])
+        self.sent = 0
+        self.undecodable: Dict[str, int] = {}  # topic -> suspect messages not sent
+        self.lateness: List[float] = []  # s after its due wall time each message went out
+
+    def _clock_publisher(self, node):
+        """/clock from the log times, with the recorded /clock's QoS (reliable, keep last 10 if none)."""
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
+        clock_ch = self.mf.topics().get(CLOCK_TOPIC)
+        if clock_ch is None:
+            clock_qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        else:
+            clock_qos, fallback = qos_from_metadata(clock_ch)
+            if fallback:
+                sys.stderr.write(f"replay: {CLOCK_TOPIC}: {fallback}; publishing it with the default QoS "
+                                 f"({qos_text(clock_qos)})\n")
+        self._clock_type = Clock
+        return node.create_publisher(Clock, CLOCK_TOPIC, clock_qos)
+
+    def wait_for_subscribers(self) -> None:
+        """--wait-for-subscribers, then --delay (discovery)."""
+        args = self.args
         if args.wait_for_subscribers > 0:
             deadline = time.monotonic() + args.wait_for_subscribers
-            while time.monotonic() < deadline and any(p.get_subscription_count() == 0 for p in all_pubs):
+            while time.monotonic() < deadline and any(p.get_subscription_count() == 0 for p in self.all_pubs):
                 time.sleep(0.02)
-            lonely = [p.topic_name for p in all_pubs if p.get_subscription_count() == 0]
+            lonely = [p.topic_name for p in self.all_pubs if p.get_subscription_count() == 0]
             if lonely:
                 _print(args.quiet, f"replay: no subscriber yet on {len(lonely)} topic(s) after "
                                    f"{args.wait_for_subscribers:g} s; playing anyway")
         if args.delay > 0:
             time.sleep(args.delay)
-        first = mf.start_time or 0
-        log0 = first + int(round(args.start_offset * 1e9))
+
+    def play(self) -> None:
+        """Every pass (one, or until stopped with --loop), then wait for the subscribers'
+        acknowledgements and report."""
+        import rclpy.duration
+        args, mf = self.args, self.mf
+        log0 = (mf.start_time or 0) + int(round(args.start_offset * 1e9))
         log_end = log0 + int(round(args.duration * 1e9)) if args.duration is not None else None
-        _print(args.quiet, f"replay: {args.recording}: {len(pubs)} topic(s), log time "
+        _print(args.quiet, f"replay: {args.recording}: {len(self.pubs)} topic(s), log time "
                            f"{log0 * 1e-9:.3f} .. {((log_end if log_end is not None else mf.end_time) or 0) * 1e-9:.3f}"
                            f" s at rate {args.rate:g}{', looping' if args.loop else ''}")
-        clock_period = 1.0 / args.clock_hz if clock_pub and args.clock_hz > 0 else None
-        wanted = lambda t: t in pubs  # noqa: E731
         t_wall0 = time.monotonic()
         for loop in itertools.count():
-            wall0 = time.monotonic()
-            last_clock = -1
-            next_tick = wall0
-            for msg in mf.messages_in_time_order(wanted):
-                if msg.log_time < log0:
-                    continue
-                if log_end is not None and msg.log_time > log_end:
-                    break
-                target = wall0 + (msg.log_time - log0) * 1e-9 / args.rate
-                while True:
-                    now = time.monotonic()
-                    if now >= target:
-                        break
-                    if clock_period is not None and next_tick < target:
-                        if now >= next_tick:
-                            play_ns = log0 + int((now - wall0) * args.rate * 1e9)
-                            if play_ns > last_clock:
-                                clock_pub.publish(clock_msg(play_ns))
-                                last_clock = play_ns
-                            next_tick = now + clock_period
-                        time.sleep(max(0.0, min(next_tick, target) - time.monotonic()))
-                    else:
-                        time.sleep(target - now)
-                if clock_pub is not None and msg.log_time > last_clock:
-                    clock_pub.publish(clock_msg(msg.log_time))
-                    last_clock = msg.log_time
-                    next_tick = time.monotonic() + (clock_period or 0.0)
-                if msg.suspect:
-                    try:  # from a chunk that failed its CRC: send only what still decodes
-                        deserialize_message(msg.data, classes[msg.topic])
-                    except Exception:  # noqa: BLE001
-                        dropped_suspect += 1
-                        continue
-                pubs[msg.topic].publish(msg.data)
-                lateness.append(time.monotonic() - target)
-                sent += 1
+            self.play_pass(log0, log_end)
             if not args.loop:
                 break
             _print(args.quiet, f"replay: loop {loop + 1} done, starting again")
-        for p in all_pubs:
+        for p in self.all_pubs:
             p.wait_for_all_acked(rclpy.duration.Duration(seconds=2.0))
-        late = sorted(lateness) or [0.0]
-        _print(args.quiet, f"replay: {sent} messages sent in {time.monotonic() - t_wall0:.1f} s wall; sent after "
-                           f"their due time by p50 {1e3 * late[len(late) // 2]:.1f} ms, p95 "
-                           f"{1e3 * late[int(0.95 * (len(late) - 1))]:.1f} ms, max {1e3 * late[-1]:.1f} ms"
-                           + (f"; {dropped_suspect} corrupt messages not sent" if dropped_suspect else ""))
-    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
-        _print(args.quiet, f"replay: stopped after {sent} messages")
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    if mf.problems:
-        sys.stderr.write(f"replay: {args.recording}: damaged file, its readable part was replayed "
-                         f"({len(mf.problems)} problem(s) above)\n")
-    return status
+        self.report(time.monotonic() - t_wall0)
+
+    def play_pass(self, log0: int, log_end: Optional[int]) -> None:
+        """One pass over the messages logged in [log0, log_end]."""
+        from rclpy.serialization import deserialize_message
+        rate = self.args.rate
+        clock_period = 1.0 / self.args.clock_hz if self.clock_pub and self.args.clock_hz > 0 else None
+        corrupt = ros_decode_errors()
+        wall0 = time.monotonic()
+        self._last_clock = -1
+        self._next_tick = wall0
+        for msg in self.mf.messages_in_time_order(lambda t: t in self.pubs):
+            if msg.log_time < log0:
+                continue
+            if log_end is not None and msg.log_time > log_end:
+                break
+            target = wall0 + (msg.log_time - log0) * 1e-9 / rate
+            self._wait_until(target, wall0, log0, clock_period)
+            if self.clock_pub is not None and msg.log_time > self._last_clock:
+                self._publish_clock(msg.log_time)
+                self._next_tick = time.monotonic() + (clock_period or 0.0)
+            if msg.suspect:
+                try:  # from a chunk that failed its CRC: send only what still decodes
+                    deserialize_message(msg.data, self.classes[msg.topic])
+                except corrupt:
+                    self.undecodable[msg.topic] = self.undecodable.get(msg.topic, 0) + 1
+                    continue
+            self.pubs[msg.topic].publish(msg.data)
+            self.lateness.append(time.monotonic() - target)
+            self.sent += 1
+
+    def _wait_until(self, target: float, wall0: float, log0: int, clock_period: Optional[float]) -> None:
+        """Sleep until wall time target, publishing /clock every clock_period meanwhile."""
+        while True:
+            now = time.monotonic()
+            if now >= target:
+                return
+            if clock_period is not None and self._next_tick < target:
+                if now >= self._next_tick:
+                    play_ns = log0 + int((now - wall0) * self.args.rate * 1e9)
+                    if play_ns > self._last_clock:
+                        self._publish_clock(play_ns)
+                    self._next_tick = now + clock_period
+                time.sleep(max(0.0, min(self._next_tick, target) - time.monotonic()))
+            else:
+                time.sleep(target - now)
+
+    def _publish_clock(self, ns: int) -> None:
+        c = self._clock_type()
+        c.clock.sec, c.clock.nanosec = ns // 1_000_000_000, ns % 1_000_000_000
+        self.clock_pub.publish(c)
+        self._last_clock = ns
+
+    def report(self, wall: float) -> None:
+        """How many messages went out and how late; the corrupt ones not sent, per topic (stderr)."""
+        late = sorted(self.lateness) or [0.0]
+        n_bad = sum(self.undecodable.values())
+        _print(self.args.quiet, f"replay: {self.sent} messages sent in {wall:.1f} s wall; sent after "
+                                f"their due time by p50 {1e3 * late[len(late) // 2]:.1f} ms, p95 "
+                                f"{1e3 * late[int(0.95 * (len(late) - 1))]:.1f} ms, max {1e3 * late[-1]:.1f} ms"
+                                + (f"; {n_bad} corrupt messages not sent" if n_bad else ""))
+        for topic, n in sorted(self.undecodable.items()):
+            sys.stderr.write(f"replay: {topic}: {n} message(s) from a chunk that failed its CRC do not decode as "
+                             f"{self.classes[topic].__name__}; not sent\n")
 
 
 if __name__ == "__main__":

@@ -12,11 +12,12 @@ nodes and finalise the recording).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import signal
 import sys
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 import rclpy
@@ -28,7 +29,7 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
 from scenario_runner.recorder import McapRecorder, readable_extent
-from scenario_runner.scenario import ScenarioError, load_scenario
+from scenario_runner.scenario import Scenario, ScenarioError, load_scenario
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 
@@ -155,8 +156,18 @@ def check_writable(path: str, what: str) -> Optional[str]:
     return None
 
 
-def main(argv: Optional[List[str]] = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+@dataclasses.dataclass
+class RunPlan:
+    """What a validated command line runs: the scenario and where its files go."""
+    path: str  # the scenario file
+    sc: Scenario
+    steps: int
+    output: str  # the recording
+    log_dir: str
+    record: bool
+
+
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="run_scenario", description=__doc__.split("\n\n")[0])
     parser.add_argument("scenario", help="scenario file, or a name in share/scenario_runner/scenarios")
     parser.add_argument("--output", help="MCAP file to write (default: output/<scenario name>.mcap)")
@@ -167,17 +178,50 @@ def main(argv: Optional[List[str]] = None) -> int:
                              "one_process: all nodes in this process on one executor")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    args = parser.parse_args(rclpy.utilities.remove_ros_args(argv))
+    return parser
 
+
+def main(argv: Optional[List[str]] = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser().parse_args(rclpy.utilities.remove_ros_args(argv))
+    plan, exit_code = plan_run(args)
+    if plan is None:
+        return exit_code
+    # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
+    # shut the context down under the running loop (an RCLError traceback, or exit 3).
+    rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    try:
+        recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc), fed_topics=cd.fed_topics(plan.sc)) \
+            if plan.record else None
+    except OSError as exc:
+        sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
+        rclpy.try_shutdown()
+        return 2
+    mon = Monitor(plan.sc, recorder)
+    stats, exit_code = execute(plan, args, recorder, mon)
+    if stats is None:
+        return exit_code
+    print(summary(plan.sc, stats, mon))
+    if recorder:
+        print(f"  recording: {os.path.abspath(plan.output)} ({sum(recorder.counts.values())} messages on "
+              f"{len(recorder.counts)} topics)" + (f"; not recorded, undecodable: {recorder.refused}"
+                                                   if recorder.refused else ""))
+    print(f"  node logs: {plan.log_dir}")
+    return 0
+
+
+def plan_run(args) -> Tuple[Optional[RunPlan], int]:
+    """(the run the arguments ask for, 0), or (None, exit status 2) with the reason on stderr:
+    checked before anything starts (scenario, duration, output paths)."""
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         sys.stderr.write(f"run_scenario: --duration {args.duration!r}: expected a finite number of seconds > 0\n")
-        return 2
+        return None, 2
     path = scenario_path(args.scenario)
     try:
         sc = load_scenario(path)
     except ScenarioError as exc:
         sys.stderr.write(f"run_scenario: invalid scenario:\n{exc}\n")
-        return 2
+        return None, 2
     steps = sc.steps if args.duration is None else min(sc.steps, int(round(args.duration * sc.exchange_rate)))
     output = args.output or sc.recording.path or os.path.join("output", f"{sc.name}.mcap")
     stem = os.path.splitext(os.path.basename(output))[0] or sc.name
@@ -188,29 +232,26 @@ def main(argv: Optional[List[str]] = None) -> int:
     problem = problem or check_writable(os.path.join(log_dir, "x.log"), "log folder (--log-dir)")
     if problem:
         sys.stderr.write(f"run_scenario: {problem}\n")
-        return 2
+        return None, 2
     if record and os.path.exists(output):
         sys.stderr.write(f"run_scenario: replacing the existing recording {os.path.abspath(output)} "
                          "(give --output to keep it)\n")
+    return RunPlan(path, sc, steps, output, log_dir, record), 0
 
-    # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
-    # shut the context down under the running loop (an RCLError traceback, or exit 3).
-    rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    try:
-        recorder = McapRecorder(output, cd.contract_topics(sc), fed_topics=cd.fed_topics(sc)) if record else None
-    except OSError as exc:
-        sys.stderr.write(f"run_scenario: cannot write the recording {output}: {exc}\n")
-        rclpy.try_shutdown()
-        return 2
-    mon = Monitor(sc, recorder)
+
+def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor) -> Tuple[Optional[cd.RunStats], int]:
+    """Run the scenario with a progress bar; (stats, 0), or (None, exit status) with the reason
+    on stderr. The recording is finalised and ROS shut down whatever happens."""
+    output = plan.output
     progress = None
     if not args.quiet:
         from tqdm import tqdm
-        progress = tqdm(total=steps, unit="step", desc=sc.name, file=sys.stderr, mininterval=0.5)
+        progress = tqdm(total=plan.steps, unit="step", desc=plan.sc.name, file=sys.stderr, mininterval=0.5)
     finalise_failed = False
     try:
-        stats = cd.run(sc, path, log_dir, steps=steps, extra_nodes=[mon], recorder=recorder, layout=args.layout,
-                       on_step=(lambda k: progress.update(1)) if progress else None, on_finished=mon.finish)
+        stats = cd.run(plan.sc, plan.path, plan.log_dir, steps=plan.steps, extra_nodes=[mon], recorder=recorder,
+                       layout=args.layout, on_step=(lambda k: progress.update(1)) if progress else None,
+                       on_finished=mon.finish)
     except OSError as exc:  # the recording could not be written (disk full, file system gone)
         if progress:
             progress.close()
@@ -218,22 +259,22 @@ def main(argv: Optional[List[str]] = None) -> int:
         if recorder is not None and recorder.failure is not None:
             sys.stderr.write(f"run_scenario: the recording ends readably where the write failed: "
                              f"{readable_extent(output)}\n")
-        return 3
+        return None, 3
     except cd.DomainInUse as exc:
         if progress:
             progress.close()
         sys.stderr.write(f"run_scenario: refused to start: {exc}\n")
-        return 4
+        return None, 4
     except cd.RunError as exc:
         if progress:
             progress.close()
         sys.stderr.write(f"run_scenario: run stopped: {exc}\n")
-        return 3
+        return None, 3
     except (cd.Interrupted, KeyboardInterrupt, rclpy.executors.ExternalShutdownException) as exc:
         signum = exc.args[0] if isinstance(exc, cd.Interrupted) else signal.SIGINT
         sys.stderr.write(f"run_scenario: interrupted by {signal.Signals(signum).name}; nodes stopped"
                          + (f", partial recording finalised: {os.path.abspath(output)}" if recorder else "") + "\n")
-        return 128 + int(signum)
+        return None, 128 + int(signum)
     finally:
         if progress:
             progress.close()
@@ -248,14 +289,8 @@ def main(argv: Optional[List[str]] = None) -> int:
         mon.destroy_node()
         rclpy.try_shutdown()
     if finalise_failed:
-        return 3
-    print(summary(sc, stats, mon))
-    if recorder:
-        print(f"  recording: {os.path.abspath(output)} ({sum(recorder.counts.values())} messages on "
-              f"{len(recorder.counts)} topics)" + (f"; not recorded, undecodable: {recorder.refused}"
-                                                   if recorder.refused else ""))
-    print(f"  node logs: {log_dir}")
-    return 0
+        return None, 3
+    return stats, 0
 
 
 if __name__ == "__main__":

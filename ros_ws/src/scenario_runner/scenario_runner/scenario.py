@@ -69,7 +69,8 @@ class InitialState(_Strict):
 
 
 class Motion(_Strict):
-    """Prescribed motion (seed 000 section 4 tug tracks), in the initial frame."""
+    """Prescribed motion of a tug, in the initial frame: the tug tracks of section 4 of Yoon, Lee,
+    Park, Kim, "Dynamic Modeling and Simulation of a Towing Rope using Multiple Finite Element Method"."""
     type: Literal["constant_speed", "sinusoidal_sway", "acceleration", "turn"]
     speed: float = Field(ge=0.0, le=40.0)  # m/s, U or U_max
     amplitude: float = Field(0.0, ge=0.0, le=1e3)  # m

@@ -1,4 +1,5 @@
-"""Pieces every simulator node shares: frames, QoS, step <-> time, quaternions, parameters.
+"""Pieces every simulator node shares: frames, QoS, step <-> time, quaternions, parameter
+descriptors, data files, the executor and spin loop, and main() (run_node).
 
 Time: step k of a run with exchange period T (integer nanoseconds) is stamped k*T exactly, so
 a stamp names its step without rounding doubt.
@@ -18,17 +19,17 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 WORLD_FRAME = "map"  # REP-105 world-fixed frame, ENU (REP-103), still-water surface at z = 0
 EVENTS_TOPIC = "/scenario/events"
 
-# State and wrench topics: reliable so a lockstep participant never misses a step.
+# State topics read off the step protocol (a free-running autopilot): reliable, volatile, so it
+# matches any publisher of the contract; lockstep participants read LATCHED_STATE_QOS.
 STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
                        reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 # Commands as offered by a sender: reliable, a few deep; late joiners do not get stale orders.
 COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-# Commands as a node takes them: keep-all, so the node's own history never drops an order
-# silently (a keep-last-10 reader handed on 422 of a burst of 10,000 and counted none of the
-# rest). What a sender's own keep-last history overwrites before delivery never reaches the node;
-# DDS's sample-lost report of it cannot be taken safely on Jazzy (see stepping.py). Per message
-# the node does constant work.
+# Commands as a node takes them: keep-all, so the node's own reader history never drops an order
+# (measured: a keep-last-10 reader passed on 422 of a burst of 10,000). Orders a sender's own
+# keep-last history overwrites before delivery never reach the node, unseen: DDS's sample-lost
+# event would report them but deadlocks rmw_fastrtps on Jazzy, so no node takes it (stepping.py).
 COMMAND_SUB_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.VOLATILE)
 EVENTS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
@@ -132,20 +133,39 @@ def make_executor(kind: str | None = None):
     return SingleThreadedExecutor()
 
 
-def spin_forever(executor, poll: Optional[Callable[[], None]] = None) -> None:
+def ran_into_shutdown(exc: Exception) -> bool:
+    """Is exc what a spin round raises when the context is shut down under it (SIGTERM, or
+    Ctrl-C through rclpy's signal handler)? Measured here by stopping nodes at random moments:
+    RCLError from a callback publishing on the shut-down context ("publisher's context is
+    invalid"), the executor's ExternalShutdownException, and a plain RuntimeError from pybind11
+    when the signal's KeyboardInterrupt lands while it converts a call argument."""
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    if isinstance(exc, (ExternalShutdownException, _rclpy.RCLError)):
+        return True
+    return type(exc) is RuntimeError and "Unable to convert call argument" in str(exc)
+
+
+def spin_forever(executor, poll: Optional[Callable[[], None]] = None,
+                 say: Optional[Callable[[str], None]] = None) -> None:
     """Spin until shutdown. spin_once in a loop: the Jazzy EventsExecutor's spin() does not
     fire timers (measured here), spin_once does. poll() runs after every round, whatever the
-    executor's timers do."""
+    executor's timers do. A round that ran into the shutdown (ran_into_shutdown) ends the loop
+    and say() tells what it raised (not a ROS logger: /rosout is gone by then); any other
+    exception propagates."""
     import rclpy
     while rclpy.ok(context=executor.context):
         try:
             executor.spin_once(timeout_sec=0.1)
             if poll is not None:
                 poll()
-        except Exception:
-            if rclpy.ok(context=executor.context):
+        except Exception as exc:
+            if rclpy.ok(context=executor.context) or not ran_into_shutdown(exc):
                 raise
-            return  # a callback ran into the shutdown (Ctrl-C / SIGTERM): not an error
+            if say is not None:
+                what = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+                say(f"stopped: the last round ran into the shutdown ({what})")
+            return
 
 
 def take_missed(subscription, callback, limit: int = 10_000) -> int:
@@ -184,7 +204,7 @@ def die_with_parent() -> None:
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
-        pass
+        pass  # no libc to load, or no prctl in it (not Linux): the watch thread below covers it
     if os.getppid() != parent:
         os.kill(os.getpid(), signal.SIGTERM)
 
@@ -222,7 +242,7 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
     executor = make_executor()
     executor.add_node(node)
     try:
-        spin_forever(executor, getattr(node, "poll", None))
+        spin_forever(executor, getattr(node, "poll", None), lambda text: sys.stderr.write(f"{program}: {text}\n"))
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
     except failures as exc:
