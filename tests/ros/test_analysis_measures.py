@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from scenario_runner.analysis_measures import circle_fit, turning_measures
+from sim_math.turning import circle_fit, turning_measures
 
 
 def circle_track(radius=50.0, speed=4.0, psi0=2.8, side=-1.0, turns=2.2, dt=0.1, lead=5.0):

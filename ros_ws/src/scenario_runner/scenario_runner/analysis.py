@@ -24,7 +24,7 @@ Writes to the output directory (default: <recording without .mcap>_analysis/):
                        tactical diameter and the fitted steady circle
   summary.json, summary.csv (entity, quantity, value, unit), vessel_<name>.csv, rope_<name>.csv
 
-The manoeuvre measures are defined in scenario_runner/analysis_measures.py (and docs/tools.md).
+The manoeuvre measures are defined once in sim_math/turning.py (and docs/tools.md).
 Exit status: 0 done; 1 done on the readable part of a damaged file; 2 nothing to analyse.
 """
 from __future__ import annotations
@@ -40,7 +40,7 @@ from typing import Callable, Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
-from scenario_runner.analysis_measures import turning_measures
+from sim_math.turning import turning_measures
 from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
 
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
