@@ -28,6 +28,7 @@ from visualization_msgs.msg import MarkerArray
 from rope_model.models import ModelFailure, make_model, rope_file_model
 from rope_model.state_cdr import rope_state_cdr
 from sim_plumbing import cdr
+from sim_math.rotations import matrix_from_quaternion
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
 
@@ -245,7 +246,7 @@ class RopeNode(SteppedNode):
             if end.mode != "pinned":
                 continue
             # Attachment frame axes are the vessel's body axes: rotate the world force into them.
-            rot = rc.rotation_from_quaternion(end.orientation)
+            rot = matrix_from_quaternion(*end.orientation)
             f_body = rot.T @ forces[end.label]
             publisher, encoder = self.wrench_outputs[end.label]
             publisher.publish(encoder.encode(stamp_ns, f_body.tolist()), stamp_ns)

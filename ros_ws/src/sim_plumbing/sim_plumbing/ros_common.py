@@ -6,12 +6,10 @@ a stamp names its step without rounding doubt.
 """
 from __future__ import annotations
 
-import math
 import os
 import time
-from typing import Callable, Optional, Sequence
+from typing import Callable, Optional
 
-import numpy as np
 from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -50,28 +48,6 @@ def step_time(step: int, period: int) -> Time:
 
 def time_to_ns(t: Time) -> int:
     return t.sec * 1_000_000_000 + t.nanosec
-
-
-def quaternion_xyzw_from_rpy(rpy: Sequence[float]) -> tuple:
-    """(x, y, z, w) of the quaternion of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103 convention)."""
-    r, p, y = (0.5 * float(a) for a in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
-            cr * cp * cy + sr * sp * sy)
-
-
-def rotation_from_quaternion(q: Sequence[float]) -> np.ndarray:
-    """3x3 rotation matrix (frame -> world) of a unit quaternion (x, y, z, w)."""
-    x, y, z, w = q
-    n = w * w + x * x + y * y + z * z
-    if not (math.isfinite(n) and n > 1e-12):
-        raise ValueError(f"quaternion ({x}, {y}, {z}, {w}) is not a rotation")
-    s = 2.0 / n
-    return np.array([
-        [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
-        [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)],
-        [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)],
-    ])
 
 
 def float_param(description: str, lo: float, hi: float, unit: str = "") -> ParameterDescriptor:
