@@ -207,3 +207,31 @@ def test_unreadable_bag_metadata_is_said_and_the_files_present_used(tmp_path):
     path, note = locate_recording(str(bag))
     assert path == str(bag / "bag_0.mcap")
     assert "metadata.yaml is unreadable" in note and "went by the files present" in note
+
+
+def test_false_record_in_damaged_data_does_not_swallow_later_chunks(tmp_path):
+    """Damage after a chunk that happens to hold a plausible message header (0x05, a known
+    channel, a length ending on a real record) must not make the reader jump over the chunks
+    between: the resynchronisation takes the first real chunk."""
+    path = _write(str(tmp_path / "a.mcap"), "lz4", chunk_size=4096)
+    full = _library_messages(path)
+    data = bytearray(open(path, "rb").read())
+    chunks, pos = [], 8
+    while data[pos] != 0x0F:  # data end
+        length = struct.unpack_from("<Q", data, pos + 1)[0]
+        if data[pos] == 0x06:
+            chunks.append((pos, pos + 9 + length))
+        pos += 9 + length
+    assert len(chunks) >= 6
+    first_end, last_start = chunks[1][1], chunks[-1][0]
+    fake_at = first_end + 40
+    data[first_end:fake_at] = b"\xa5" * 40
+    fake_len = last_start - (fake_at + 9)  # ends exactly where the last chunk begins
+    data[fake_at:fake_at + 11] = b"\x05" + struct.pack("<Q", fake_len) + struct.pack("<H", 1)
+    bad = str(tmp_path / "bad.mcap")
+    with open(bad, "wb") as f:
+        f.write(data)
+    mf = McapFile(bad)
+    got = _ours(mf)
+    assert mf.problems and "corrupt" in mf.report()
+    assert got == full, f"{len(full) - len(got)} of {len(full)} messages lost: {mf.report()}"

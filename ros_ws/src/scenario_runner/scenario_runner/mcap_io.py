@@ -501,10 +501,13 @@ class McapFile:
                     break
                 i = buf.find(comp, i + 1)
         if self.channels:
+            # a message record found in damaged data must end before the first chunk found: records
+            # do not overlap, and a false one (a 0x05 byte in index entries) would otherwise swallow
+            # every chunk up to its bogus end
             i = buf.find(b"\x05", start)
             limit = min(candidates) if candidates else size
             while i != -1 and i < limit:
-                if self._valid_record_at(buf, i):
+                if i + 9 <= size and i + 9 + _u64(buf, i + 1) <= limit and self._valid_record_at(buf, i):
                     candidates.append(i)
                     break
                 i = buf.find(b"\x05", i + 1)
