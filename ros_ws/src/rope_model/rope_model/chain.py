@@ -1,4 +1,7 @@
-"""RopeChain: the towing rope as a chain of rigid cylinders (seed 000). No ROS here.
+"""RopeChain: the towing rope as a chain of rigid cylinders after Yoon, Lee, Park, Kim,
+"Dynamic Modeling and Simulation of a Towing Rope using Multiple Finite Element Method"
+(2012). No ROS here. The sub-steps run in kernels.run_substeps; the winch's link insertion
+and removal (_winch, _split0, _merge01, _drop0, _halve) happen here between kernel calls.
 
 See rope_model/__init__.py for the API summary and README.md for the model.
 """

@@ -1,4 +1,5 @@
-"""Numba kernels of the finite-difference towed cable (seed 001, Eq 2-21). No ROS here.
+"""Numba kernels of the finite-difference towed cable of Park, Jung, "Nonlinear Dynamic
+Analysis on Low-Tension Towed Cable by Finite Difference Method" (Eq 2-21).
 
 Paper frame (Ablow-Schechter convention, used by the paper): X vertical UP (weight is -w0 X,
 that is what the signs of the w0 terms of Eq 2 imply), Y and Z horizontal. Local triad from
@@ -141,20 +142,26 @@ def k_matrices(H, P):
     return K
 
 
+@njit(cache=True, inline="always")
+def _load_node(H, j, Hc):
+    """Hc = H[j] (into a complex buffer, for the complex-step derivatives)."""
+    for i in range(NV):
+        Hc[i] = H[j, i]
+
+
 @njit(cache=True)
 def linearise_nodes(H, Hold, P, cur, use_k, Lv, gv, dL, dg):
-    """Per node: L, g and their exact Jacobians d/dH by complex step."""
+    """Per node: L, g and their exact Jacobians d/dH by complex step: perturbing unknown
+    k by i CSTEP gives d/dH_k = imaginary part / CSTEP, exact to rounding."""
     n = H.shape[0]
     Hc = np.empty(NV, np.complex128)
     Ho = np.empty(NV, np.complex128)
     Lc = np.empty(NV, np.complex128)
     gc = np.empty(NV, np.complex128)
     for j in range(n):
-        for i in range(NV):
-            Ho[i] = Hold[j, i]
+        _load_node(Hold, j, Ho)
         for k in range(NV):
-            for i in range(NV):
-                Hc[i] = H[j, i]
+            _load_node(H, j, Hc)
             Hc[k] += 1j * CSTEP
             node_terms(Hc, Ho, P, cur, use_k, Lc, gc)
             for i in range(NV):
@@ -173,19 +180,28 @@ def node_values(H, P, cur, Lv):
     Lc = np.empty(NV, np.complex128)
     gc = np.empty(NV, np.complex128)
     for j in range(n):
-        for i in range(NV):
-            Hc[i] = H[j, i]
+        _load_node(H, j, Hc)
         node_terms(Hc, Hc, P, cur, False, Lc, gc)
         for i in range(NV):
             Lv[j, i] = Lc[i].real
 
 
-@njit(cache=True)
-def _jx(H, x, i):
-    """(J x)_i with J = diag(1,1,1,1,1,1,cos theta,1,EI,EI) (Eq 11; EI applied by caller)."""
+@njit(cache=True, inline="always")
+def _jbar_diag(i, ca, cb, EI):
+    """Row i of the diagonal J_bar of a cell, J = diag(1,1,1,1,1,1,cos theta,1,EI,EI) (Eq 11)
+    with cos theta averaged over the two nodes (ca, cb)."""
     if i == 6:
-        return math.cos(H[7]) * x[6]
-    return x[i]
+        return 0.5 * (ca + cb)
+    if i >= 8:
+        return EI
+    return 1.0
+
+
+@njit(cache=True, inline="always")
+def _cell_balance(i, x, ca, cb, EI, ds, La, Lb):
+    """Row i of J_bar dH/ds - L_bar over a cell (Eq 13): x = H_b - H_a of unknown i, La, Lb
+    = row i of L at the two nodes."""
+    return _jbar_diag(i, ca, cb, EI) * x / ds - 0.5 * (La + Lb)
 
 
 @njit(cache=True)
@@ -197,15 +213,10 @@ def old_level(Ho, P, cur, ds, alpha):
     C = np.zeros((n - 1, NV))
     EI = P[P_EI]
     for j in range(n - 1):
+        ca, cb = math.cos(Ho[j, 7]), math.cos(Ho[j + 1, 7])
         for i in range(NV):
-            x = Ho[j + 1, i] - Ho[j, i]
-            if i == 6:
-                jx = 0.5 * (math.cos(Ho[j, 7]) + math.cos(Ho[j + 1, 7])) * x
-            elif i >= 8:
-                jx = EI * x
-            else:
-                jx = x
-            C[j, i] = (1.0 - alpha) * (jx / ds - 0.5 * (Lo[j, i] + Lo[j + 1, i]))
+            C[j, i] = (1.0 - alpha) * _cell_balance(i, Ho[j + 1, i] - Ho[j, i], ca, cb, EI, ds,
+                                                    Lo[j, i], Lo[j + 1, i])
     return C
 
 
@@ -243,13 +254,7 @@ def assemble(H, Ho, Ko, Cold, P, cur, vtop, ds, dt, alpha, dynamic, A, D, C, r):
             x[i] = H[j + 1, i] - H[j, i]
         ca, cb = math.cos(H[j, 7]), math.cos(H[j + 1, 7])
         for i in range(NV):
-            if i == 6:
-                jx = 0.5 * (ca + cb) * x[6]
-            elif i >= 8:
-                jx = EI * x[i]
-            else:
-                jx = x[i]
-            v = a * (jx / ds - 0.5 * (Lv[j, i] + Lv[j + 1, i]))
+            v = a * _cell_balance(i, x[i], ca, cb, EI, ds, Lv[j, i], Lv[j + 1, i])
             if dynamic:
                 v += Cold[j, i]
                 v -= ka * (a * (gv[j, i] + gv[j + 1, i])
@@ -260,7 +265,7 @@ def assemble(H, Ho, Ko, Cold, P, cur, vtop, ds, dt, alpha, dynamic, A, D, C, r):
                 resmax = abs(v)
         # d Phi / d H_a (Ja) and d Phi / d H_b (Jb)
         for i in range(NV):
-            jd = 0.5 * (ca + cb) if i == 6 else (EI if i >= 8 else 1.0)
+            jd = _jbar_diag(i, ca, cb, EI)
             for k in range(NV):
                 va = -0.5 * a * dL[j, i, k]
                 vb = -0.5 * a * dL[j + 1, i, k]

@@ -1,4 +1,5 @@
-"""Numba kernels of the element-chain rope (seed 000, Eq 1-26).
+"""Numba kernels of the element-chain rope of Yoon, Lee, Park, Kim, "Dynamic Modeling and
+Simulation of a Towing Rope using Multiple Finite Element Method" (2012), Eq 1-26.
 
 State per element j (world frame ENU, z up, water surface z = 0):
   X[j]  centre of mass (R of Eq 5)            V[j]  its velocity
@@ -19,18 +20,24 @@ stiffness), of the connection dampers, of drag and of the water-entry term; the 
 
 is block tri-diagonal (5x5 blocks) and solved in O(N) by block Thomas elimination.
 
-Everything runs in one call per exchange step, run_substeps(): per sub-step it writes the
-system directly (diagonal blocks Ad, upper blocks Ao, lower = Ao^T; the spring part of
-h^2 theta K nu + attachment terms is -h^2 theta k J^T times the relative velocity of the
-two connection points, so no K blocks are stored), eliminates, and advances the state; at
-the end only the connections are evaluated (tensions, end forces and the parting check do
-not depend on the element forces). The arguments are few and packed (numba's dispatch costs
-about 50 ns per array argument, and every array handed to a called function costs atomic
-reference counting, which is why the kernel is one function whose helpers take scalars):
-the state S and flags F (RopeChain's X, E, V, W, ... are views into them), one float array
-io for parameters, attachment data and outputs, and the work space ws.
+Everything runs in one call per exchange step, run_substeps(). Per sub-step one pass over
+j = 0..N writes element j's block (_element_terms), connection j's terms (spring-damper
+_tension_only_spring_damper, bending damper _bending_damper, their Jacobians
+_add_connection_to_element and _coupling_block) and eliminates block j - 1
+(_eliminate_block); the back substitution then advances every element (_advance_element).
+Each force component or equation group is a helper named after it, compiled into the one
+entry point (inline="always"). Numba counts references (atomic operations) for every array
+a helper takes unless the helper's uses of it are straight-line or end in one place: so
+helpers that branch take scalars, the ones that touch arrays do not branch on them, and
+the loops and branches over the arrays stay in run_substeps (a helper branching on its
+arrays per connection made the kernel 14-70 % slower). The arguments are few and packed
+(numba's dispatch costs about 50 ns per array argument): the state S and flags F
+(RopeChain's X, E, V, W, ... are views into them), one float array io for parameters,
+attachment data and outputs, and the work space ws. kernels_reference.py is a plain numpy
+transcription of the same sub-step, used as a test oracle.
 """
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
@@ -40,7 +47,7 @@ OK = 0
 DIVERGED = 1
 NEED_WS = 2  # ws holds fewer than N + 1 element slots: pass new_workspace(N)
 PARTED = 4  # flag or-ed into OK: parting events were recorded (io[IO_NEV] of them)
-STRICT_EQ25 = False  # compile-time switch, see the connections in run_substeps()
+STRICT_EQ25 = False  # compile-time switch, see run_substeps()
 # Parting or blow-up. A rope breaks when its material strain reaches the strain at break, so
 # at a genuine parting the spring part of the connection force, EA x strain (along the rope),
 # carries most of the breaking load; the axial damper (Eq 16, c = 2 zeta sqrt(EA mu)) only adds
@@ -93,6 +100,27 @@ def new_workspace(n):
     return np.zeros((WS_SLOTS, n + 5, 5, 5))
 
 
+# scalar parameters of one call, read from io once (a tuple of floats: no reference counting)
+KernelParams = namedtuple("KernelParams", (
+    "mu", "radius", "EA", "Cd", "Cf", "tfac", "Ca", "rho_w", "rho_a", "g", "z_ax", "z_tr",
+    "z_rot", "P_rot", "cur0", "cur1", "cur2", "relax", "theta", "vmax2", "wmax2", "pmax2",
+    "D", "r2", "h", "hth", "h2t", "h2t2"))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _read_params(io, h):
+    """The scalar parameters and the sub-step factors h theta, h^2 theta, (h theta)^2."""
+    radius = io[P_RADIUS]
+    theta = io[P_THETA]
+    hth = h * theta
+    return KernelParams(io[P_MU], radius, io[P_EA], io[P_CD], io[P_CF], io[P_TFAC], io[P_CA],
+                        io[P_RHO_W], io[P_RHO_A], io[P_G], io[P_Z_AX], io[P_Z_TR], io[P_Z_ROT],
+                        io[P_P_ROT], io[IO_CUR, 0], io[IO_CUR, 1], io[IO_CUR, 2], io[P_RELAX],
+                        theta, io[P_VMAX] ** 2, io[P_WMAX] ** 2, io[P_PMAX] ** 2, 2.0 * radius,
+                        radius * radius, h, hth, h * h * theta, hth * hth)
+
+
+# ------------------------------------------------------------------ geometry
 @njit(cache=True)
 def _segment(z, R):
     """Submerged fraction of a circle of radius R centred at height z (water at 0), d/dz."""
@@ -140,14 +168,10 @@ def immersion(z, ez, half_len, r):
     return f, df, m1
 
 
-# The kernel below is one function on purpose: numba counts references (atomic increments
-# and decrements) of every array passed to a called function, even an inlined one, which
-# costs more than the work of a connection. The helpers it calls take scalars only.
-
-
 @njit(cache=True, inline="always", fastmath=FMA)
 def _basis(ex, ey, ez):
-    """Right-handed (e, b1, b2) as basis(): returns b1, b2 (6 scalars)."""
+    """Right-handed orthonormal (e, b1, b2): b1 is z (x for a near-vertical e) made normal
+    to e, b2 = e x b1. Returns b1, b2 (6 scalars)."""
     if abs(ez) < 0.9:
         hx, hy, hz = 0.0, 0.0, 1.0
     else:
@@ -161,6 +185,419 @@ def _basis(ex, ey, ez):
     p1 /= nb
     p2 /= nb
     return p0, p1, p2, ey * p2 - ez * p1, ez * p0 - ex * p2, ex * p1 - ey * p0
+
+
+@njit(cache=True, inline="always")
+def _stored_basis(B1, B2, j):
+    """(b1, b2) of element j as written by _store_element this sub-step (6 scalars)."""
+    return B1[j, 0], B1[j, 1], B1[j, 2], B2[j, 0], B2[j, 1], B2[j, 2]
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _rodrigues(k0, k1, k2, co, sa, x0, x1, x2):
+    """x rotated about the unit axis k by the angle of cosine co and sine sa."""
+    kv = (k0 * x0 + k1 * x1 + k2 * x2) * (1.0 - co)
+    return (x0 * co + (k1 * x2 - k2 * x1) * sa + k0 * kv,
+            x1 * co + (k2 * x0 - k0 * x2) * sa + k1 * kv,
+            x2 * co + (k0 * x1 - k1 * x0) * sa + k2 * kv)
+
+
+# ------------------------------------------------------------------ constants of a call
+@njit(cache=True, inline="always", fastmath=FMA)
+def _update_length_constants(S, ws, cc, misc, N, p):
+    """Element I_y (Eq 4) and connection constants: spring k, axial and transverse dampers
+    c_x, c_t (Eq 16-17) and bending damper c_m (Eq 19). They depend on the lengths only
+    (fixed during a call, changed by the winch) and are recomputed when those differ from
+    the last call."""
+    same = ws[5, 1, 0, 0] == N
+    for j in range(N):
+        same = same and cc[j, 4] == S[j, SL]
+    for j in range(0 if same else N):
+        l = S[j, SL]
+        cc[j, 4] = l
+        misc[j, 0] = p.mu * l * ((l * l + 3.0 * p.r2) / 12.0)  # I_y, Eq (4)
+    ws[5, 1, 0, 0] = N
+    for c in range(0 if same else N + 1):
+        # spring: stiffness equivalent to EA over the rope length it represents
+        lrep = 0.0
+        msum = 0.0
+        cnt = 0.0
+        if c > 0:
+            lrep += 0.5 * S[c - 1, SL]
+            msum += p.mu * S[c - 1, SL]
+            cnt += 1.0
+        if c < N:
+            lrep += 0.5 * S[c, SL]
+            msum += p.mu * S[c, SL]
+            cnt += 1.0
+        kc = p.EA / lrep
+        skm = math.sqrt(kc * (msum / cnt))
+        cc[c, 0] = kc
+        cc[c, 1] = 2.0 * p.z_ax * skm  # Eq (16): c_x = 2 zeta_x sqrt(k m)
+        cc[c, 2] = 2.0 * p.z_tr * skm  # Eq (17): transverse ratio
+        cc[c, 3] = 0.0
+        if 0 < c < N:  # bending damper, Eq (19)
+            cc[c, 3] = 2.0 * p.z_rot * math.sqrt(p.P_rot * 0.5 * (misc[c - 1, 0] + misc[c, 0]))
+
+
+# ------------------------------------------------------------------ element forces, Eq (1)
+@njit(cache=True, inline="always", fastmath=FMA)
+def _element_inertia(p, l, fr):
+    """Mass m, volume, added mass m_y = m_z (Eq 9, scaled by the immersed fraction fr),
+    rot_fac = (l^2 + 3 r^2) / 12 and the rotational inertia I_y + J_y (Eq 4, 9)."""
+    m = p.mu * l
+    vol = math.pi * p.r2 * l
+    ma = p.Ca * p.rho_w * vol * fr
+    rot_fac = (l * l + 3.0 * p.r2) / 12.0
+    Ip = m * rot_fac + p.Ca * p.rho_w * vol * rot_fac * fr
+    return m, vol, ma, rot_fac, Ip
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _mass_matrix(m, ma, ex, ey, ez):
+    """Translational M + M_A of Eq (3) in world axes: m I + m_y (I - e e^T), m_x ~ 0 (Eq 9).
+    Returns the entries 00, 11, 22, 01, 02, 12."""
+    return ((m + ma) - ma * ex * ex, (m + ma) - ma * ey * ey, (m + ma) - ma * ez * ez,
+            -(ma * ex * ey), -(ma * ex * ez), -(ma * ey * ez))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _gravity_and_buoyancy(p, m, vol, fr, m1, ex, ey):
+    """Gravity Eq (13) plus buoyancy Eq (12) on the immersed fraction: vertical force, and
+    the x, y moment of the buoyancy distributed along the axis, rho Vol g m1 (e x z)."""
+    Fz = -m * p.g + p.rho_w * vol * p.g * fr
+    return Fz, p.rho_w * vol * p.g * m1 * ey, -(p.rho_w * vol * p.g * m1 * ex)
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _morison_drag(p, rho, l, r0, r1, r2, ex, ey, ez):
+    """Drag Eq (10)-(11) on the velocity r relative to the fluid of density rho: normal
+    part 1/2 rho D l C_D |r_n| r_n, tangential 1/2 rho D l C_f tfac |u| u. Returns the force
+    and its Jacobian dF/dV (entries 00, 11, 22, 01, 02, 12), which is treated implicitly."""
+    u = r0 * ex + r1 * ey + r2 * ez
+    n0 = r0 - u * ex
+    n1 = r1 - u * ey
+    n2 = r2 - u * ez
+    sn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    cn = 0.5 * rho * p.D * l * p.Cd
+    ct = 0.5 * rho * p.D * l * p.Cf * p.tfac
+    cs = cn * sn
+    ca = ct * abs(u)
+    k2 = 2.0 * ca
+    k3 = cn / sn if sn > 1e-12 else 0.0
+    return (-cs * n0 - ca * u * ex, -cs * n1 - ca * u * ey, -cs * n2 - ca * u * ez,
+            -cs * (1.0 - ex * ex) - k2 * ex * ex - k3 * n0 * n0,
+            -cs * (1.0 - ey * ey) - k2 * ey * ey - k3 * n1 * n1,
+            -cs * (1.0 - ez * ez) - k2 * ez * ez - k3 * n2 * n2,
+            cs * ex * ey - k2 * ex * ey - k3 * n0 * n1,
+            cs * ex * ez - k2 * ex * ez - k3 * n0 * n2,
+            cs * ey * ez - k2 * ey * ez - k3 * n1 * n2)
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _fluid_inertia_forces(ma, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz):
+    """Fluid Coriolis force C_A of Eq (8) in world form, -(dM_A/dt) V_r with dE/dt = W x E,
+    and the Munk moment of Eq (8) rows 4-5, (m_z - m_x) w u, (m_x - m_y) u v. r: velocity
+    relative to the current, ue = r.e. Returns the force and the moment."""
+    ed0 = wy * ez - wz * ey
+    ed1 = wz * ex - wx * ez
+    ed2 = wx * ey - wy * ex
+    ued = r0 * ed0 + r1 * ed1 + r2 * ed2
+    return (ma * (ed0 * ue + ex * ued), ma * (ed1 * ue + ey * ued), ma * (ed2 * ue + ez * ued),
+            ma * ue * (r1 * ez - r2 * ey), ma * ue * (r2 * ex - r0 * ez),
+            ma * ue * (r0 * ey - r1 * ex))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _water_entry_impact(mdot, rot_fac, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz):
+    """Water entry, Eq (14): H = -dm_a/dt * v_normal (mdot > 0: entering), and its moment
+    -dJ/dt W. Returns the force, its Jacobian dF/dV (00, 11, 22, 01, 02, 12), the moment and
+    its Jacobian on the rotations."""
+    jdot = mdot * rot_fac
+    return (-mdot * (r0 - ue * ex), -mdot * (r1 - ue * ey), -mdot * (r2 - ue * ez),
+            -mdot * (1.0 - ex * ex), -mdot * (1.0 - ey * ey), -mdot * (1.0 - ez * ez),
+            mdot * ex * ey, mdot * ex * ez, mdot * ey * ez,
+            -jdot * wx, -jdot * wy, -jdot * wz, -jdot)
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _relaxation_forces(relax, m00, m11, m22, m01, m02, m12, Ip, vx, vy, vz, wx, wy, wz):
+    """Numerical relaxation (0 in normal use, speeds up settling): -relax * M nu. Returns
+    the force, its Jacobian (00, 11, 22, 01, 02, 12), the moment and its Jacobian."""
+    return (-relax * (m00 * vx + m01 * vy + m02 * vz),
+            -relax * (m01 * vx + m11 * vy + m12 * vz),
+            -relax * (m02 * vx + m12 * vy + m22 * vz),
+            -relax * m00, -relax * m11, -relax * m22, -relax * m01, -relax * m02, -relax * m12,
+            -relax * Ip * wx, -relax * Ip * wy, -relax * Ip * wz, -relax * Ip)
+
+
+@njit(cache=True, inline="always")
+def _element_state(S, j):
+    """Length, centre height, axis e, velocity V and angular velocity W of element j."""
+    return (S[j, SL], S[j, SX + 2], S[j, SE], S[j, SE + 1], S[j, SE + 2], S[j, SV], S[j, SV + 1],
+            S[j, SV + 2], S[j, SW], S[j, SW + 1], S[j, SW + 2])
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _element_terms(state, p):
+    """Element part of the system for one element (state from _element_state): the forces
+    of Eq (1) on the element itself (gravity, buoyancy, drag, fluid Coriolis and Munk,
+    water entry, relaxation) and their velocity Jacobian C. Returns its basis b1, b2, the
+    right-hand side h f (5) and the upper triangle of M - h theta C: entries 00, 11, 22,
+    01, 02, 12 and 33 = 44 (no translation-rotation coupling, 34 = 0)."""
+    l, z, ex, ey, ez, vx, vy, vz, wx, wy, wz = state
+    p0, p1, p2, q0, q1, q2 = _basis(ex, ey, ez)
+    fr, dfr, m1 = immersion(z, ez, 0.5 * l, p.radius)
+    m, vol, ma, rot_fac, Ip = _element_inertia(p, l, fr)
+    m00, m11, m22, m01, m02, m12 = _mass_matrix(m, ma, ex, ey, ez)
+    # force F, moment t and the velocity Jacobian C (symmetric) of the element forces
+    c00 = c01 = c02 = c11 = c12 = c22 = crot = 0.0
+    F0 = 0.0
+    F1 = 0.0
+    F2, t0, t1 = _gravity_and_buoyancy(p, m, vol, fr, m1, ex, ey)
+    t2 = 0.0
+    for part in range(2):  # water part on the velocity relative to the current, air on V
+        if part == 0:
+            rho = p.rho_w * fr
+            r0 = vx - p.cur0
+            r1 = vy - p.cur1
+            r2 = vz - p.cur2
+        else:
+            rho = p.rho_a * (1.0 - fr)
+            r0 = vx
+            r1 = vy
+            r2 = vz
+        if rho <= 0.0:
+            continue
+        d0, d1, d2, e00, e11, e22, e01, e02, e12 = _morison_drag(p, rho, l, r0, r1, r2, ex, ey, ez)
+        F0 += d0
+        F1 += d1
+        F2 += d2
+        c00 += e00
+        c11 += e11
+        c22 += e22
+        c01 += e01
+        c02 += e02
+        c12 += e12
+    r0 = vx - p.cur0
+    r1 = vy - p.cur1
+    r2 = vz - p.cur2
+    ue = r0 * ex + r1 * ey + r2 * ez
+    d0, d1, d2, u0, u1, u2 = _fluid_inertia_forces(ma, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz)
+    F0 += d0
+    F1 += d1
+    F2 += d2
+    t0 += u0
+    t1 += u1
+    t2 += u2
+    mdot = p.Ca * p.rho_w * vol * dfr * vz
+    if mdot > 0.0:
+        (d0, d1, d2, e00, e11, e22, e01, e02, e12, u0, u1, u2,
+         erot) = _water_entry_impact(mdot, rot_fac, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz)
+        F0 += d0
+        F1 += d1
+        F2 += d2
+        c00 += e00
+        c11 += e11
+        c22 += e22
+        c01 += e01
+        c02 += e02
+        c12 += e12
+        t0 += u0
+        t1 += u1
+        t2 += u2
+        crot += erot
+    if p.relax > 0.0:
+        (d0, d1, d2, e00, e11, e22, e01, e02, e12, u0, u1, u2,
+         erot) = _relaxation_forces(p.relax, m00, m11, m22, m01, m02, m12, Ip, vx, vy, vz, wx,
+                                    wy, wz)
+        F0 += d0
+        F1 += d1
+        F2 += d2
+        c00 += e00
+        c01 += e01
+        c02 += e02
+        c11 += e11
+        c12 += e12
+        c22 += e22
+        t0 += u0
+        t1 += u1
+        t2 += u2
+        crot += erot
+    h = p.h
+    hth = p.hth
+    return (p0, p1, p2, q0, q1, q2,
+            h * F0, h * F1, h * F2, h * (t0 * p0 + t1 * p1 + t2 * p2),
+            h * (t0 * q0 + t1 * q1 + t2 * q2),
+            m00 - hth * c00, m11 - hth * c11, m22 - hth * c22, m01 - hth * c01, m02 - hth * c02,
+            m12 - hth * c12, Ip - hth * crot)
+
+
+@njit(cache=True, inline="always")
+def _store_element(Ad, rhs, B1, B2, j, terms):
+    """Writes _element_terms into B1[j], B2[j], rhs[j] and Ad[j] (upper triangle: Ad is
+    symmetric, only that part is written and read)."""
+    (B1[j, 0], B1[j, 1], B1[j, 2], B2[j, 0], B2[j, 1], B2[j, 2],
+     rhs[j, 0], rhs[j, 1], rhs[j, 2], rhs[j, 3], rhs[j, 4],
+     Ad[j, 0, 0], Ad[j, 1, 1], Ad[j, 2, 2], Ad[j, 0, 1], Ad[j, 0, 2], Ad[j, 1, 2],
+     Ad[j, 3, 3]) = terms
+    Ad[j, 4, 4] = Ad[j, 3, 3]
+    Ad[j, 3, 4] = 0.0
+    Ad[j, 0, 3] = Ad[j, 1, 3] = Ad[j, 2, 3] = 0.0
+    Ad[j, 0, 4] = Ad[j, 1, 4] = Ad[j, 2, 4] = 0.0
+
+
+# ------------------------------------------------------------------ connections, Eq (15)-(26)
+@njit(cache=True, inline="always", fastmath=FMA)
+def _element_end_point(S, j, s):
+    """Point at lever s on the axis of element j (front s = l/2, aft s = -l/2), R + C r of
+    Eq (20): position R + s e and velocity V + W x (s e)."""
+    a0 = s * S[j, SE]
+    a1 = s * S[j, SE + 1]
+    a2 = s * S[j, SE + 2]
+    return ((S[j, SX] + a0, S[j, SX + 1] + a1, S[j, SX + 2] + a2),
+            (S[j, SV] + (S[j, SW + 1] * a2 - S[j, SW + 2] * a1),
+             S[j, SV + 1] + (S[j, SW + 2] * a0 - S[j, SW] * a2),
+             S[j, SV + 2] + (S[j, SW] * a1 - S[j, SW + 1] * a0)))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _attachment_point(io, end, t):
+    """Attachment a (end 0) or b (end 1) at time t into the call: pos + vel t, vel."""
+    v0 = io[IO_VEL + end, 0]
+    v1 = io[IO_VEL + end, 1]
+    v2 = io[IO_VEL + end, 2]
+    return ((io[IO_POS + end, 0] + v0 * t, io[IO_POS + end, 1] + v1 * t,
+             io[IO_POS + end, 2] + v2 * t), (v0, v1, v2))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _drum_sliding(S, Vp, Pn, Vn, payout_a, t):
+    """Winch at end a (drum connection c = 0): rope slides through the drum at the pay-out
+    rate, and the drum end of element 0 extends (retracts) along it during the call;
+    chain._winch then grows (shrinks) the element by that length, so the drum connection
+    never sees the flow of rope. Returns g (the next point's velocity relative to the
+    attachment without the sliding, J nu) and the next point moved on by the sliding."""
+    e0 = S[0, SE]
+    e1 = S[0, SE + 1]
+    e2 = S[0, SE + 2]
+    g = (Vn[0] - (Vp[0] - payout_a * e0), Vn[1] - (Vp[1] - payout_a * e1),
+         Vn[2] - (Vp[2] - payout_a * e2))
+    Pn = (Pn[0] + payout_a * t * e0, Pn[1] + payout_a * t * e1, Pn[2] + payout_a * t * e2)
+    Vn = (Vn[0] + payout_a * e0, Vn[1] + payout_a * e1, Vn[2] + payout_a * e2)
+    return g, Pn, Vn
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _connection_points(S, io, c, N, t, payout_a):
+    """The two points connection c joins: prev = aft point of element c - 1 (attachment a
+    when c = 0), next = front point of element c (attachment b when c = N). Returns their
+    levers si, sk (0 at an attachment), positions and velocities, and g, the velocity of the
+    next point relative to the prev one without the pay-out sliding (J nu)."""
+    si = 0.0
+    sk = 0.0
+    if c > 0:
+        si = -0.5 * S[c - 1, SL]
+        Pp, Vp = _element_end_point(S, c - 1, si)
+    else:
+        Pp, Vp = _attachment_point(io, 0, t)
+    if c < N:
+        sk = 0.5 * S[c, SL]
+        Pn, Vn = _element_end_point(S, c, sk)
+    else:
+        Pn, Vn = _attachment_point(io, 1, t)
+    if c > 0:
+        g = (Vn[0] - Vp[0], Vn[1] - Vp[1], Vn[2] - Vp[2])
+    else:
+        g, Pn, Vn = _drum_sliding(S, Vp, Pn, Vn, payout_a, t)
+    return si, sk, Pp, Vp, Pn, Vn, g
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _bending_damper(S, Ad, rhs, i, k, cm, bi, bk, h, hth):
+    """Rotational damper c_m of Eq (15), (18)-(19) on the relative angular velocity of
+    elements i and k: its torque into rhs, its Jacobian into Ad; returns the rotation block
+    of the coupling Ao[i] (d torque_i / d w_k = cm B_i^T B_k): 33, 34, 43, 44."""
+    i10, i11, i12, i20, i21, i22 = bi
+    k10, k11, k12, k20, k21, k22 = bk
+    dw0 = S[i, SW] - S[k, SW]
+    dw1 = S[i, SW + 1] - S[k, SW + 1]
+    dw2 = S[i, SW + 2] - S[k, SW + 2]
+    v = h * cm
+    rhs[k, 3] += v * (dw0 * k10 + dw1 * k11 + dw2 * k12)
+    rhs[k, 4] += v * (dw0 * k20 + dw1 * k21 + dw2 * k22)
+    rhs[i, 3] -= v * (dw0 * i10 + dw1 * i11 + dw2 * i12)
+    rhs[i, 4] -= v * (dw0 * i20 + dw1 * i21 + dw2 * i22)
+    v = hth * cm
+    Ad[k, 3, 3] += v
+    Ad[k, 4, 4] += v
+    Ad[i, 3, 3] += v
+    Ad[i, 4, 4] += v
+    return (-v * (i10 * k10 + i11 * k11 + i12 * k12), -v * (i10 * k20 + i11 * k21 + i12 * k22),
+            -v * (i20 * k10 + i21 * k11 + i22 * k12), -v * (i20 * k20 + i21 * k21 + i22 * k22))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _point_inside_neighbour(S, c, N, Pp, Pn):
+    """Eq (25)-(26): one point of connection c within half a length of the other element's
+    centre (the all-or-nothing switch, used only with STRICT_EQ25)."""
+    if c > 0 and math.sqrt((Pn[0] - S[c - 1, SX]) ** 2 + (Pn[1] - S[c - 1, SX + 1]) ** 2
+                           + (Pn[2] - S[c - 1, SX + 2]) ** 2) <= 0.5 * S[c - 1, SL]:
+        return True
+    return c < N and math.sqrt((Pp[0] - S[c, SX]) ** 2 + (Pp[1] - S[c, SX + 1]) ** 2
+                               + (Pp[2] - S[c, SX + 2]) ** 2) <= 0.5 * S[c, SL]
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _rope_axis(S, c, N, Pp, Pn):
+    """Local rope axis n at connection c: the mean of the adjacent element axes, or the gap
+    direction where the links fold back on themselves."""
+    i = max(c - 1, 0)  # rows read before branching (numba then counts no references)
+    k = min(c, N - 1)
+    ei0, ei1, ei2, ek0, ek1, ek2 = (S[i, SE], S[i, SE + 1], S[i, SE + 2], S[k, SE], S[k, SE + 1],
+                                    S[k, SE + 2])
+    n0 = 0.0
+    n1 = 0.0
+    n2 = 0.0
+    if c > 0:
+        n0 += ei0
+        n1 += ei1
+        n2 += ei2
+    if c < N:
+        n0 += ek0
+        n1 += ek1
+        n2 += ek2
+    nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    if nn < 1e-9:  # folded back on itself: use the gap direction
+        n0 = Pp[0] - Pn[0]
+        n1 = Pp[1] - Pn[1]
+        n2 = Pp[2] - Pn[2]
+        nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) + 1e-300
+    return n0 / nn, n1 / nn, n2 / nn
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _tension_only_spring_damper(kc, cax, ctr, Pp, Pn, Vp, Vn, n):
+    """Force on the next point: spring k (Pp - Pn) (Eq 21-22) plus the axial and transverse
+    dampers c_x, c_t on the relative velocity (Eq 15-17). A rope cannot push: a compressive
+    axial part is removed, the continuous form of the slack switch of Eq (25). Returns the
+    force, its magnitude (the tension) and the axial damping it carries (c_x or 0)."""
+    n0, n1, n2 = n
+    dv0 = Vp[0] - Vn[0]
+    dv1 = Vp[1] - Vn[1]
+    dv2 = Vp[2] - Vn[2]
+    ndv = n0 * dv0 + n1 * dv1 + n2 * dv2
+    F0 = kc * (Pp[0] - Pn[0]) + cax * n0 * ndv + ctr * (dv0 - n0 * ndv)
+    F1 = kc * (Pp[1] - Pn[1]) + cax * n1 * ndv + ctr * (dv1 - n1 * ndv)
+    F2 = kc * (Pp[2] - Pn[2]) + cax * n2 * ndv + ctr * (dv2 - n2 * ndv)
+    ax = F0 * n0 + F1 * n1 + F2 * n2
+    axd = cax
+    if ax < 0.0:  # a rope cannot push: drop the compressive axial part
+        F0 -= ax * n0
+        F1 -= ax * n1
+        F2 -= ax * n2
+        axd = 0.0
+    return F0, F1, F2, math.sqrt(F0 * F0 + F1 * F1 + F2 * F2), axd
 
 
 @njit(cache=True, inline="always", fastmath=FMA)
@@ -180,6 +617,152 @@ def _jsj(s, b10, b11, b12, b20, b21, b22, beta, gamma, n0, n1, n2):
             ss * (beta + gamma * nb1 * nb1))
 
 
+@njit(cache=True, inline="always", fastmath=FMA)
+def _add_connection_to_element(S, Ad, rhs, j, s, sg, b, Q, Fc, n, beta, gamma, h2t, h2t2):
+    """Terms of a connection point at lever s on element j (sg = +1: the next point, -1:
+    the prev one): rhs += sg J^T Q (the tension and its moment, Eq 24), Ad += J^T S J; and
+    the geometric stiffness of the moment of the end force, -l/2 F.e on both rotations
+    (K), entering rhs with the angular velocity (nu) and Ad."""
+    b10, b11, b12, b20, b21, b22 = b
+    Q0, Q1, Q2 = Q
+    F0, F1, F2 = Fc
+    n0, n1, n2 = n
+    geo = -0.5 * S[j, SL] * (F0 * S[j, SE] + F1 * S[j, SE + 1] + F2 * S[j, SE + 2])
+    rhs[j, 0] += sg * Q0
+    rhs[j, 1] += sg * Q1
+    rhs[j, 2] += sg * Q2
+    rhs[j, 3] += sg * (-s * (b20 * Q0 + b21 * Q1 + b22 * Q2)) + h2t * geo * (
+        S[j, SW] * b10 + S[j, SW + 1] * b11 + S[j, SW + 2] * b12)
+    rhs[j, 4] += sg * (s * (b10 * Q0 + b11 * Q1 + b12 * Q2)) + h2t * geo * (
+        S[j, SW] * b20 + S[j, SW + 1] * b21 + S[j, SW + 2] * b22)
+    (v00, v01, v02, v03, v04, v11, v12, v13, v14, v22, v23, v24, v33, v34,
+     v44) = _jsj(s, b10, b11, b12, b20, b21, b22, beta, gamma, n0, n1, n2)
+    Ad[j, 0, 0] += v00
+    Ad[j, 0, 1] += v01
+    Ad[j, 0, 2] += v02
+    Ad[j, 0, 3] += v03
+    Ad[j, 0, 4] += v04
+    Ad[j, 1, 1] += v11
+    Ad[j, 1, 2] += v12
+    Ad[j, 1, 3] += v13
+    Ad[j, 1, 4] += v14
+    Ad[j, 2, 2] += v22
+    Ad[j, 2, 3] += v23
+    Ad[j, 2, 4] += v24
+    Ad[j, 3, 3] += v33 - h2t2 * geo
+    Ad[j, 3, 4] += v34
+    Ad[j, 4, 4] += v44 - h2t2 * geo
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _add_connection_to_elements(S, Ad, rhs, c, N, si, sk, bi, bk, Q, Fc, n, beta, gamma, h2t,
+                                h2t2):
+    """_add_connection_to_element for the next point of connection c (on element c) and
+    its prev point (on element c - 1), where they are elements."""
+    i10, i11, i12, i20, i21, i22 = bi
+    k10, k11, k12, k20, k21, k22 = bk
+    for side in range(2):
+        if side == 0:
+            if c >= N:
+                continue
+            j, s, sg = c, sk, 1.0
+            b10, b11, b12, b20, b21, b22 = k10, k11, k12, k20, k21, k22
+        else:
+            if c == 0:
+                continue
+            j, s, sg = c - 1, si, -1.0
+            b10, b11, b12, b20, b21, b22 = i10, i11, i12, i20, i21, i22
+        _add_connection_to_element(S, Ad, rhs, j, s, sg, (b10, b11, b12, b20, b21, b22), Q, Fc,
+                                   n, beta, gamma, h2t, h2t2)
+
+
+@njit(cache=True, inline="always")
+def _set_vec3(a, row, x, y, z):
+    a[row, 0] = x
+    a[row, 1] = y
+    a[row, 2] = z
+
+
+@njit(cache=True, inline="always")
+def _set_rotation_block(Ao, i, a33, a34, a43, a44):
+    Ao[i, 3, 3] = a33
+    Ao[i, 3, 4] = a34
+    Ao[i, 4, 3] = a43
+    Ao[i, 4, 4] = a44
+
+
+@njit(cache=True, inline="always")
+def _clear_block(Ao, i):
+    for a in range(5):
+        for q in range(5):
+            Ao[i, a, q] = 0.0
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _coupling_block(Ao, i, si, sk, bi, bk, n, beta, gamma, bo):
+    """Ao[i], the block coupling elements i and k = i + 1 through connection i + 1:
+    bending damper part bo minus Jp^T S Jn (Jp at the aft point of i, Jn at the front of k)."""
+    i10, i11, i12, i20, i21, i22 = bi
+    k10, k11, k12, k20, k21, k22 = bk
+    n0, n1, n2 = n
+    nk1 = n0 * k10 + n1 * k11 + n2 * k12
+    nk2 = n0 * k20 + n1 * k21 + n2 * k22
+    ni1 = n0 * i10 + n1 * i11 + n2 * i12
+    ni2 = n0 * i20 + n1 * i21 + n2 * i22
+    Ao[i, 0, 0] = -(beta + gamma * n0 * n0)
+    Ao[i, 1, 1] = -(beta + gamma * n1 * n1)
+    Ao[i, 2, 2] = -(beta + gamma * n2 * n2)
+    Ao[i, 0, 1] = Ao[i, 1, 0] = -(gamma * n0 * n1)
+    Ao[i, 0, 2] = Ao[i, 2, 0] = -(gamma * n0 * n2)
+    Ao[i, 1, 2] = Ao[i, 2, 1] = -(gamma * n1 * n2)
+    Ao[i, 0, 3] = sk * (beta * k20 + gamma * n0 * nk2)
+    Ao[i, 1, 3] = sk * (beta * k21 + gamma * n1 * nk2)
+    Ao[i, 2, 3] = sk * (beta * k22 + gamma * n2 * nk2)
+    Ao[i, 0, 4] = -sk * (beta * k10 + gamma * n0 * nk1)
+    Ao[i, 1, 4] = -sk * (beta * k11 + gamma * n1 * nk1)
+    Ao[i, 2, 4] = -sk * (beta * k12 + gamma * n2 * nk1)
+    Ao[i, 3, 0] = si * (beta * i20 + gamma * ni2 * n0)
+    Ao[i, 3, 1] = si * (beta * i21 + gamma * ni2 * n1)
+    Ao[i, 3, 2] = si * (beta * i22 + gamma * ni2 * n2)
+    Ao[i, 4, 0] = -si * (beta * i10 + gamma * ni1 * n0)
+    Ao[i, 4, 1] = -si * (beta * i11 + gamma * ni1 * n1)
+    Ao[i, 4, 2] = -si * (beta * i12 + gamma * ni1 * n2)
+    ss = si * sk
+    d11 = i10 * k10 + i11 * k11 + i12 * k12  # b_x of i . b_y of k
+    d12 = i10 * k20 + i11 * k21 + i12 * k22
+    d21 = i20 * k10 + i21 * k11 + i22 * k12
+    d22 = i20 * k20 + i21 * k21 + i22 * k22
+    Ao[i, 3, 3] = bo[0] - ss * (beta * d22 + gamma * ni2 * nk2)
+    Ao[i, 3, 4] = bo[1] + ss * (beta * d21 + gamma * ni2 * nk1)
+    Ao[i, 4, 3] = bo[2] + ss * (beta * d12 + gamma * ni1 * nk2)
+    Ao[i, 4, 4] = bo[3] - ss * (beta * d11 + gamma * ni1 * nk1)
+
+
+# ------------------------------------------------------------------ parting
+@njit(cache=True, inline="always", fastmath=FMA)
+def _elastic_tension(kc, Pp, Pn, n):
+    """Elastic part of a connection's tension, EA x strain along the rope, k (Pp - Pn).n
+    (see PART_MIN_ELASTIC)."""
+    return kc * ((Pp[0] - Pn[0]) * n[0] + (Pp[1] - Pn[1]) * n[1] + (Pp[2] - Pn[2]) * n[2])
+
+
+@njit(cache=True)
+def _part(best_c, best_T, t, N, S, F, io):
+    """The rope parts at the most overloaded connection only; the others that carry the
+    same overload survived it (they are disarmed until they unload)."""
+    F[best_c, 0] = 0
+    ne = int(io[IO_NEV])
+    if ne < N_EVENTS_MAX:
+        io[IO_EVENTS + ne, 0] = t
+        io[IO_EVENTS + ne, 1] = best_c
+        io[IO_EVENTS + ne, 2] = best_T
+    io[IO_NEV] = ne + 1
+    for c in range(N + 1):
+        if S[c, ST] > S[c, SB]:
+            F[c, 1] = 0
+
+
+# ------------------------------------------------------------------ block tri-diagonal solve
 @njit(cache=True, inline="always", fastmath=FMA)
 def _ldl5(a00, a01, a02, a03, a04, a11, a12, a13, a14, a22, a23, a24, a33, a34, a44):
     """L diag L^T of a symmetric 5x5 (upper triangle a). Returns ok (every pivot > 0: the
@@ -289,22 +872,258 @@ def _lu_solve(D, R, r, m):
     return True
 
 
-@njit(cache=True)
-def _part(best_c, best_T, t, N, S, F, io):
-    """The rope parts at the most overloaded connection only; the others that carry the
-    same overload survived it (they are disarmed until they unload)."""
-    F[best_c, 0] = 0
-    ne = int(io[IO_NEV])
-    if ne < N_EVENTS_MAX:
-        io[IO_EVENTS + ne, 0] = t
-        io[IO_EVENTS + ne, 1] = best_c
-        io[IO_EVENTS + ne, 2] = best_T
-    io[IO_NEV] = ne + 1
+@njit(cache=True, inline="always", fastmath=FMA)
+def _eliminate_block(Ad, Ao, Wm, rhs, j, N):
+    """Forward elimination of block j (block Thomas on the symmetric system: diagonal Ad,
+    upper Ao, lower Ao^T): D_j = Ad_j - Ao_{j-1}^T Wm_{j-1} (symmetric), Wm_j = D_j^-1 Ao_j,
+    rhs_j <- D_j^-1 (rhs_j - Ao_{j-1}^T rhs_{j-1}), D_j factored as L diag L^T. Returns False
+    if D_j is not positive definite: Ad[j] then holds D_j in full and rhs[j] the right-hand
+    side, for _eliminate_block_pivoting."""
+    a00 = Ad[j, 0, 0]
+    a01 = Ad[j, 0, 1]
+    a02 = Ad[j, 0, 2]
+    a03 = Ad[j, 0, 3]
+    a04 = Ad[j, 0, 4]
+    a11 = Ad[j, 1, 1]
+    a12 = Ad[j, 1, 2]
+    a13 = Ad[j, 1, 3]
+    a14 = Ad[j, 1, 4]
+    a22 = Ad[j, 2, 2]
+    a23 = Ad[j, 2, 3]
+    a24 = Ad[j, 2, 4]
+    a33 = Ad[j, 3, 3]
+    a34 = Ad[j, 3, 4]
+    a44 = Ad[j, 4, 4]
+    y0 = rhs[j, 0]
+    y1 = rhs[j, 1]
+    y2 = rhs[j, 2]
+    y3 = rhs[j, 3]
+    y4 = rhs[j, 4]
+    if j > 0:
+        i = j - 1
+        for q in range(5):
+            o0 = Ao[i, q, 0]
+            o1 = Ao[i, q, 1]
+            o2 = Ao[i, q, 2]
+            o3 = Ao[i, q, 3]
+            o4 = Ao[i, q, 4]
+            w0 = Wm[i, q, 0]
+            w1 = Wm[i, q, 1]
+            w2 = Wm[i, q, 2]
+            w3 = Wm[i, q, 3]
+            w4 = Wm[i, q, 4]
+            a00 -= o0 * w0
+            a01 -= o0 * w1
+            a02 -= o0 * w2
+            a03 -= o0 * w3
+            a04 -= o0 * w4
+            a11 -= o1 * w1
+            a12 -= o1 * w2
+            a13 -= o1 * w3
+            a14 -= o1 * w4
+            a22 -= o2 * w2
+            a23 -= o2 * w3
+            a24 -= o2 * w4
+            a33 -= o3 * w3
+            a34 -= o3 * w4
+            a44 -= o4 * w4
+            yq = rhs[i, q]
+            y0 -= o0 * yq
+            y1 -= o1 * yq
+            y2 -= o2 * yq
+            y3 -= o3 * yq
+            y4 -= o4 * yq
+    m = 5 if j < N - 1 else 0  # the last block has no upper neighbour
+    (ok, i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42,
+     l43) = _ldl5(a00, a01, a02, a03, a04, a11, a12, a13, a14, a22, a23, a24, a33, a34, a44)
+    if ok:
+        for c in range(m):
+            x0, x1, x2, x3, x4 = _ldl5_solve(
+                i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
+                Ao[j, 0, c], Ao[j, 1, c], Ao[j, 2, c], Ao[j, 3, c], Ao[j, 4, c])
+            Wm[j, 0, c] = x0
+            Wm[j, 1, c] = x1
+            Wm[j, 2, c] = x2
+            Wm[j, 3, c] = x3
+            Wm[j, 4, c] = x4
+        y0, y1, y2, y3, y4 = _ldl5_solve(
+            i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
+            y0, y1, y2, y3, y4)
+    else:  # D_j in full for the pivoting fallback
+        Ad[j, 0, 0] = a00
+        Ad[j, 0, 1] = Ad[j, 1, 0] = a01
+        Ad[j, 0, 2] = Ad[j, 2, 0] = a02
+        Ad[j, 0, 3] = Ad[j, 3, 0] = a03
+        Ad[j, 0, 4] = Ad[j, 4, 0] = a04
+        Ad[j, 1, 1] = a11
+        Ad[j, 1, 2] = Ad[j, 2, 1] = a12
+        Ad[j, 1, 3] = Ad[j, 3, 1] = a13
+        Ad[j, 1, 4] = Ad[j, 4, 1] = a14
+        Ad[j, 2, 2] = a22
+        Ad[j, 2, 3] = Ad[j, 3, 2] = a23
+        Ad[j, 2, 4] = Ad[j, 4, 2] = a24
+        Ad[j, 3, 3] = a33
+        Ad[j, 3, 4] = Ad[j, 4, 3] = a34
+        Ad[j, 4, 4] = a44
+    rhs[j, 0] = y0
+    rhs[j, 1] = y1
+    rhs[j, 2] = y2
+    rhs[j, 3] = y3
+    rhs[j, 4] = y4
+    return ok
+
+
+@njit(cache=True, fastmath=FMA)
+def _eliminate_block_pivoting(Ad, Ao, Wm, rhs, j, N):
+    """_eliminate_block for a D_j that is not positive definite (Ad[j] = D_j in full):
+    Gaussian elimination with partial pivoting. Returns False if D_j is singular."""
+    m = 5 if j < N - 1 else 0
+    for r in range(5):
+        for c in range(m):
+            Wm[j, r, c] = Ao[j, r, c]
+    return _lu_solve(Ad[j], Wm[j], rhs[j], m)
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _back_substitute(rhs, dnu, Wm, j, N):
+    """dnu_j = y_j - Wm_j dnu_{j+1}: the velocity change of element j (5 scalars)."""
+    d0 = rhs[j, 0]
+    d1 = rhs[j, 1]
+    d2 = rhs[j, 2]
+    d3 = rhs[j, 3]
+    d4 = rhs[j, 4]
+    if j < N - 1:
+        for q in range(5):
+            xq = dnu[j + 1, q]
+            d0 -= Wm[j, 0, q] * xq
+            d1 -= Wm[j, 1, q] * xq
+            d2 -= Wm[j, 2, q] * xq
+            d3 -= Wm[j, 3, q] * xq
+            d4 -= Wm[j, 4, q] * xq
+    dnu[j, 0] = d0
+    dnu[j, 1] = d1
+    dnu[j, 2] = d2
+    dnu[j, 3] = d3
+    dnu[j, 4] = d4
+    return d0, d1, d2, d3, d4
+
+
+# ------------------------------------------------------------------ integration step
+@njit(cache=True, inline="always", fastmath=FMA)
+def _advance_element(S, B1, B2, j, d0, d1, d2, d3, d4, p):
+    """Theta-method step of element j with its velocity change dnu = (d0..d4), the
+    kinematics of Eq (5)-(6): X advanced by h ((1 - theta) V + theta V_new); e and W rotated
+    (Rodrigues) by h ((1 - theta) W + theta W_new), W kept perpendicular to e. Returns False
+    if the new state is non-finite or absurd (NaN fails every comparison)."""
+    h = p.h
+    theta = p.theta
+    Vn0 = S[j, SV] + d0
+    Vn1 = S[j, SV + 1] + d1
+    Vn2 = S[j, SV + 2] + d2
+    S[j, SX] += h * ((1.0 - theta) * S[j, SV] + theta * Vn0)
+    S[j, SX + 1] += h * ((1.0 - theta) * S[j, SV + 1] + theta * Vn1)
+    S[j, SX + 2] += h * ((1.0 - theta) * S[j, SV + 2] + theta * Vn2)
+    S[j, SV] = Vn0
+    S[j, SV + 1] = Vn1
+    S[j, SV + 2] = Vn2
+    Wn0 = S[j, SW] + d3 * B1[j, 0] + d4 * B2[j, 0]
+    Wn1 = S[j, SW + 1] + d3 * B1[j, 1] + d4 * B2[j, 1]
+    Wn2 = S[j, SW + 2] + d3 * B1[j, 2] + d4 * B2[j, 2]
+    f0 = h * ((1.0 - theta) * S[j, SW] + theta * Wn0)
+    f1 = h * ((1.0 - theta) * S[j, SW + 1] + theta * Wn1)
+    f2 = h * ((1.0 - theta) * S[j, SW + 2] + theta * Wn2)
+    e0 = S[j, SE]
+    e1 = S[j, SE + 1]
+    e2 = S[j, SE + 2]
+    ang = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+    if ang < 1e-300:
+        en0, en1, en2 = e0, e1, e2
+        wr0, wr1, wr2 = Wn0, Wn1, Wn2
+    else:
+        k0 = f0 / ang
+        k1 = f1 / ang
+        k2 = f2 / ang
+        co = math.cos(ang)
+        sa = math.sin(ang)
+        en0, en1, en2 = _rodrigues(k0, k1, k2, co, sa, e0, e1, e2)
+        wr0, wr1, wr2 = _rodrigues(k0, k1, k2, co, sa, Wn0, Wn1, Wn2)
+    nrm = math.sqrt(en0 * en0 + en1 * en1 + en2 * en2)
+    en0 /= nrm
+    en1 /= nrm
+    en2 /= nrm
+    we = wr0 * en0 + wr1 * en1 + wr2 * en2
+    S[j, SE] = en0
+    S[j, SE + 1] = en1
+    S[j, SE + 2] = en2
+    S[j, SW] = wr0 - we * en0
+    S[j, SW + 1] = wr1 - we * en1
+    S[j, SW + 2] = wr2 - we * en2
+    sv = Vn0 * Vn0 + Vn1 * Vn1 + Vn2 * Vn2
+    sw = S[j, SW] * S[j, SW] + S[j, SW + 1] * S[j, SW + 1] + S[j, SW + 2] * S[j, SW + 2]
+    sx = S[j, SX] * S[j, SX] + S[j, SX + 1] * S[j, SX + 1] + S[j, SX + 2] * S[j, SX + 2]
+    se = en0 * en0 + en1 * en1 + en2 * en2
+    return sv <= p.vmax2 and sw <= p.wmax2 and sx <= p.pmax2 and se <= 2.0
+
+
+# ------------------------------------------------------------------ call bookkeeping
+@njit(cache=True, inline="always")
+def _save_call_state(S, F, io, bk, misc, bF, N):
+    """Last good state (X, E, V, W, tensions, flags, end forces), restored on divergence;
+    the impulses of the call start from zero."""
+    for j in range(N):
+        for a in range(3):
+            bk[j, 0, a] = S[j, SX + a]
+            bk[j, 1, a] = S[j, SE + a]
+            bk[j, 2, a] = S[j, SV + a]
+            bk[j, 3, a] = S[j, SW + a]
     for c in range(N + 1):
-        if S[c, ST] > S[c, SB]:
-            F[c, 1] = 0
+        misc[c, 1] = S[c, ST]
+        misc[c, 2] = F[c, 0]
+        misc[c, 3] = F[c, 1]
+    for s in range(2):
+        for a in range(3):
+            bF[s, a] = io[IO_FORCE + s, a]
+            io[IO_IMPULSE + s, a] = 0.0
 
 
+@njit(cache=True, inline="always")
+def _restore_call_state(S, F, io, bk, misc, bF, N, b_nev):
+    """Undo the call: the state saved by _save_call_state and the event count."""
+    for j in range(N):
+        for a in range(3):
+            S[j, SX + a] = bk[j, 0, a]
+            S[j, SE + a] = bk[j, 1, a]
+            S[j, SV + a] = bk[j, 2, a]
+            S[j, SW + a] = bk[j, 3, a]
+    for c in range(N + 1):
+        S[c, ST] = misc[c, 1]
+        F[c, 0] = np.int64(misc[c, 2])
+        F[c, 1] = np.int64(misc[c, 3])
+    for s in range(2):
+        for a in range(3):
+            io[IO_FORCE + s, a] = bF[s, a]
+    io[IO_NEV] = b_nev
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _add_end_impulses(io, w8):
+    """Impulse of the end forces, trapezoidal: weight w8 = h / 2 at the ends of the call."""
+    for s in range(2):
+        for a in range(3):
+            io[IO_IMPULSE + s, a] += w8 * io[IO_FORCE + s, a]
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _finish_exchange_step(io, dt):
+    """Mean end force = impulse / dt; the attachments move on by att_vel * dt."""
+    inv = 1.0 / dt
+    for s in range(2):
+        for a in range(3):
+            io[IO_MEAN + s, a] = io[IO_IMPULSE + s, a] * inv
+            io[IO_POS + s, a] = io[IO_POS + s, a] + io[IO_VEL + s, a] * dt
+
+
+# ------------------------------------------------------------------ entry point
 @njit(cache=True, fastmath=FMA)
 def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
     """Advance n_sub sub-steps of size h in place. Attachments move as
@@ -322,7 +1141,10 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
     -h^2 theta k J^T g with g the velocity of the next connection point relative to the
     previous one, so no K blocks are stored. After the last sub-step only the connections
     are evaluated: tensions, end forces and the parting check do not depend on the
-    element forces."""
+    element forces.
+
+    Longer than the other functions on purpose: the loops and branches over the arrays
+    stay here, the physics is in the helpers (see the module docstring)."""
     N = S.shape[0] - 1
     if ws.shape[1] < N + 1:
         return NEED_WS
@@ -337,85 +1159,13 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
     bk = ws[4]  # backup of X, E, V, W (rows 0-3)
     cc = ws[4, :, 4, :]  # connection constants: k, c_x, c_t, c_m; element length
     bF = ws[5, 0]  # backup of the end forces (rows 0, 1)
-    # parameters
-    mu = io[P_MU]
-    radius = io[P_RADIUS]
-    EA = io[P_EA]
-    Cd = io[P_CD]
-    Cf = io[P_CF]
-    tfac = io[P_TFAC]
-    Ca = io[P_CA]
-    rho_w = io[P_RHO_W]
-    rho_a = io[P_RHO_A]
-    g = io[P_G]
-    z_ax = io[P_Z_AX]
-    z_tr = io[P_Z_TR]
-    z_rot = io[P_Z_ROT]
-    P_rot = io[P_P_ROT]
-    cur0 = io[IO_CUR, 0]
-    cur1 = io[IO_CUR, 1]
-    cur2 = io[IO_CUR, 2]
-    relax = io[P_RELAX]
-    theta = io[P_THETA]
-    vmax2 = io[P_VMAX] ** 2
-    wmax2 = io[P_WMAX] ** 2
-    pmax2 = io[P_PMAX] ** 2
+    p = _read_params(io, h)
     att_a = io[IO_ATT, 1] != 0.0
     att_b = io[IO_ATT, 2] != 0.0
-    pi = math.pi
-    D = 2.0 * radius
-    r2 = radius * radius
-    hth = h * theta
-    h2t = h * h * theta
-    h2t2 = hth * hth
-    # last good state, restored on divergence
-    for j in range(N):
-        for a in range(3):
-            bk[j, 0, a] = S[j, SX + a]
-            bk[j, 1, a] = S[j, SE + a]
-            bk[j, 2, a] = S[j, SV + a]
-            bk[j, 3, a] = S[j, SW + a]
-    for c in range(N + 1):
-        misc[c, 1] = S[c, ST]
-        misc[c, 2] = F[c, 0]
-        misc[c, 3] = F[c, 1]
-    for s in range(2):
-        for a in range(3):
-            bF[s, a] = io[IO_FORCE + s, a]
-            io[IO_IMPULSE + s, a] = 0.0
+    _save_call_state(S, F, io, bk, misc, bF, N)
     b_nev = io[IO_NEV]
     io[IO_DIAG, 0] = -1.0
-    # constants of the elements and connections: they depend on the lengths only (fixed
-    # during the call, changed by the winch), recomputed when those differ from the last call
-    same = ws[5, 1, 0, 0] == N
-    for j in range(N):
-        same = same and cc[j, 4] == S[j, SL]
-    for j in range(0 if same else N):
-        l = S[j, SL]
-        cc[j, 4] = l
-        misc[j, 0] = mu * l * ((l * l + 3.0 * r2) / 12.0)  # I_y, Eq (4)
-    ws[5, 1, 0, 0] = N
-    for c in range(0 if same else N + 1):
-        # spring: stiffness equivalent to EA over the rope length it represents
-        lrep = 0.0
-        msum = 0.0
-        cnt = 0.0
-        if c > 0:
-            lrep += 0.5 * S[c - 1, SL]
-            msum += mu * S[c - 1, SL]
-            cnt += 1.0
-        if c < N:
-            lrep += 0.5 * S[c, SL]
-            msum += mu * S[c, SL]
-            cnt += 1.0
-        kc = EA / lrep
-        skm = math.sqrt(kc * (msum / cnt))
-        cc[c, 0] = kc
-        cc[c, 1] = 2.0 * z_ax * skm  # Eq (16): c_x = 2 zeta_x sqrt(k m)
-        cc[c, 2] = 2.0 * z_tr * skm
-        cc[c, 3] = 0.0
-        if 0 < c < N:  # bending damper, Eq (19)
-            cc[c, 3] = 2.0 * z_rot * math.sqrt(P_rot * 0.5 * (misc[c - 1, 0] + misc[c, 0]))
+    _update_length_constants(S, ws, cc, misc, N, p)
     bad = -1
     for step in range(n_sub + 1):
         t = step * h
@@ -429,543 +1179,83 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                 io[IO_FORCE, a] = 0.0
                 io[IO_FORCE + 1, a] = 0.0
             bad = -1
-            # block Thomas on the symmetric system (diag Ad, upper Ao, lower Ao^T):
-            # D_j = Ad_j - Ao_{j-1}^T Wm_{j-1} (symmetric), Wm_j = D_j^-1 Ao_j,
-            # rhs_j <- D_j^-1 (rhs_j - Ao_{j-1}^T rhs_{j-1}). D_j is factored as L diag L^T
-            # when it is positive definite (the normal case), else by Gaussian elimination
-            # with partial pivoting.
-            # One pass over j = 0..N: element j, connection j (joins elements j - 1 and j),
-            # then the forward elimination of block j - 1, complete now. A parting found
-            # later in the pass discards it (the pass is repeated without that connection).
+            # One pass over jc = 0..N: element jc, connection jc (joins elements jc - 1 and
+            # jc), then the forward elimination of block jc - 1, complete now. A parting
+            # found later in the pass discards it (the pass is repeated without that
+            # connection).
             for jc in range(N + 1):
-                if full and jc < N:
-                    j = jc
-                    # ------------------------------------------------------------ element j
-                    # Ad = M - h theta C_el, rhs = h f_el (gravity, buoyancy Eq 12-13, drag
-                    # Eq 10, fluid Coriolis and Munk Eq 8, water entry Eq 14, relaxation)
-                    l = S[j, SL]
-                    ex = S[j, SE]
-                    ey = S[j, SE + 1]
-                    ez = S[j, SE + 2]
-                    vx = S[j, SV]
-                    vy = S[j, SV + 1]
-                    vz = S[j, SV + 2]
-                    wx = S[j, SW]
-                    wy = S[j, SW + 1]
-                    wz = S[j, SW + 2]
-                    p0, p1, p2, q0, q1, q2 = _basis(ex, ey, ez)
-                    B1[j, 0] = p0
-                    B1[j, 1] = p1
-                    B1[j, 2] = p2
-                    B2[j, 0] = q0
-                    B2[j, 1] = q1
-                    B2[j, 2] = q2
-                    m = mu * l
-                    vol = pi * r2 * l
-                    fr, dfr, m1 = immersion(S[j, SX + 2], ez, 0.5 * l, radius)
-                    ma = Ca * rho_w * vol * fr  # Eq (9), scaled by the immersed fraction
-                    rot_fac = (l * l + 3.0 * r2) / 12.0  # Eq (4)
-                    Ip = m * rot_fac + Ca * rho_w * vol * rot_fac * fr  # I_y + J_y, Eq (4), (9)
-                    # mass matrix, Eq (3), in world axes: m*I + m_y*(I - e e^T), m_x ~ 0
-                    m00 = (m + ma) - ma * ex * ex
-                    m11 = (m + ma) - ma * ey * ey
-                    m22 = (m + ma) - ma * ez * ez
-                    m01 = -(ma * ex * ey)
-                    m02 = -(ma * ex * ez)
-                    m12 = -(ma * ey * ez)
-                    # velocity Jacobian C (symmetric) of the element forces
-                    c00 = c01 = c02 = c11 = c12 = c22 = crot = 0.0
-                    # gravity Eq (13) and buoyancy Eq (12) (distributed immersion)
-                    F0 = 0.0
-                    F1 = 0.0
-                    F2 = -m * g + rho_w * vol * g * fr
-                    t0 = rho_w * vol * g * m1 * ey  # moment of the buoyancy: m1 (e x z)
-                    t1 = -(rho_w * vol * g * m1 * ex)
-                    t2 = 0.0
-                    # drag Eq (10): water part on velocity relative to current, air part on V
-                    for part in range(2):
-                        if part == 0:
-                            rho = rho_w * fr
-                            r0 = vx - cur0
-                            r1 = vy - cur1
-                            rz = vz - cur2
-                        else:
-                            rho = rho_a * (1.0 - fr)
-                            r0 = vx
-                            r1 = vy
-                            rz = vz
-                        if rho <= 0.0:
-                            continue
-                        u = r0 * ex + r1 * ey + rz * ez
-                        n0 = r0 - u * ex
-                        n1 = r1 - u * ey
-                        n2 = rz - u * ez
-                        sn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-                        cn = 0.5 * rho * D * l * Cd
-                        ct = 0.5 * rho * D * l * Cf * tfac
-                        cs = cn * sn
-                        ca = ct * abs(u)
-                        F0 += -cs * n0 - ca * u * ex
-                        F1 += -cs * n1 - ca * u * ey
-                        F2 += -cs * n2 - ca * u * ez
-                        # drag Jacobian dF/dV (treated implicitly)
-                        k2 = 2.0 * ca
-                        k3 = cn / sn if sn > 1e-12 else 0.0
-                        c00 += -cs * (1.0 - ex * ex) - k2 * ex * ex - k3 * n0 * n0
-                        c11 += -cs * (1.0 - ey * ey) - k2 * ey * ey - k3 * n1 * n1
-                        c22 += -cs * (1.0 - ez * ez) - k2 * ez * ez - k3 * n2 * n2
-                        c01 += cs * ex * ey - k2 * ex * ey - k3 * n0 * n1
-                        c02 += cs * ex * ez - k2 * ex * ez - k3 * n0 * n2
-                        c12 += cs * ey * ez - k2 * ey * ez - k3 * n1 * n2
-                    # fluid Coriolis, Eq (8) C_A, in world form: -(dM_A/dt) V_r, dE/dt = W x E
-                    r0 = vx - cur0
-                    r1 = vy - cur1
-                    rz = vz - cur2
-                    ed0 = wy * ez - wz * ey
-                    ed1 = wz * ex - wx * ez
-                    ed2 = wx * ey - wy * ex
-                    ue = r0 * ex + r1 * ey + rz * ez
-                    ued = r0 * ed0 + r1 * ed1 + rz * ed2
-                    F0 += ma * (ed0 * ue + ex * ued)
-                    F1 += ma * (ed1 * ue + ey * ued)
-                    F2 += ma * (ed2 * ue + ez * ued)
-                    # Munk moment, Eq (8) rows 4-5: (m_z - m_x) w u, (m_x - m_y) u v
-                    t0 += ma * ue * (r1 * ez - rz * ey)
-                    t1 += ma * ue * (rz * ex - r0 * ez)
-                    t2 += ma * ue * (r0 * ey - r1 * ex)
-                    # water entry, Eq (14): H = -dm_a/dt * v_normal, only while entering
-                    mdot = Ca * rho_w * vol * dfr * vz
-                    if mdot > 0.0:
-                        F0 += -mdot * (r0 - ue * ex)
-                        F1 += -mdot * (r1 - ue * ey)
-                        F2 += -mdot * (rz - ue * ez)
-                        c00 += -mdot * (1.0 - ex * ex)
-                        c11 += -mdot * (1.0 - ey * ey)
-                        c22 += -mdot * (1.0 - ez * ez)
-                        c01 += mdot * ex * ey
-                        c02 += mdot * ex * ez
-                        c12 += mdot * ey * ez
-                        jdot = mdot * rot_fac
-                        t0 += -jdot * wx
-                        t1 += -jdot * wy
-                        t2 += -jdot * wz
-                        crot += -jdot
-                    # numerical relaxation (0 in normal use): -relax * M nu
-                    if relax > 0.0:
-                        F0 += -relax * (m00 * vx + m01 * vy + m02 * vz)
-                        F1 += -relax * (m01 * vx + m11 * vy + m12 * vz)
-                        F2 += -relax * (m02 * vx + m12 * vy + m22 * vz)
-                        c00 += -relax * m00
-                        c01 += -relax * m01
-                        c02 += -relax * m02
-                        c11 += -relax * m11
-                        c12 += -relax * m12
-                        c22 += -relax * m22
-                        t0 += -relax * Ip * wx
-                        t1 += -relax * Ip * wy
-                        t2 += -relax * Ip * wz
-                        crot += -relax * Ip
-                    rhs[j, 0] = h * F0
-                    rhs[j, 1] = h * F1
-                    rhs[j, 2] = h * F2
-                    rhs[j, 3] = h * (t0 * p0 + t1 * p1 + t2 * p2)
-                    rhs[j, 4] = h * (t0 * q0 + t1 * q1 + t2 * q2)
-                    # (Ad is symmetric: only its upper triangle is written and read)
-                    Ad[j, 0, 0] = m00 - hth * c00
-                    Ad[j, 1, 1] = m11 - hth * c11
-                    Ad[j, 2, 2] = m22 - hth * c22
-                    Ad[j, 0, 1] = m01 - hth * c01
-                    Ad[j, 0, 2] = m02 - hth * c02
-                    Ad[j, 1, 2] = m12 - hth * c12
-                    Ad[j, 3, 3] = Ad[j, 4, 4] = Ip - hth * crot
-                    Ad[j, 3, 4] = 0.0
-                    for a in range(3):
-                        Ad[j, a, 3] = 0.0
-                        Ad[j, a, 4] = 0.0
-                # ------------------------------------------------------------ connection c
-                # tension-only spring (Eq 20-26) with damper (Eq 15-19); c joins the aft
-                # point of element i = c - 1 (prev) and the front point of element k = c
-                # (next)
+                if full and jc < N:  # element jc
+                    _store_element(Ad, rhs, B1, B2, jc, _element_terms(_element_state(S, jc), p))
+                # connection c = jc: aft point of element i = c - 1 (prev) to the front point
+                # of element c (next); its terms of rhs and Ad, and the coupling block Ao[i]
                 c = jc
-                S[c, ST] = 0.0
+                i = c - 1
                 hp = c > 0
                 hn = c < N
-                on = F[c, 0] != 0 and (hp or att_a) and (hn or att_b)
-                if full and hp and hn and not on:  # parted: no coupling block
-                    for a in range(5):
-                        for q in range(5):
-                            Ao[c - 1, a, q] = 0.0
-                for _once in range(1 if on else 0):  # ('continue' ends the connection)
-                    i = c - 1
-                    k = c
-                    si = 0.0  # lever of the aft point of i / front point of k
-                    sk = 0.0
-                    if hp:
-                        si = -0.5 * S[i, SL]
-                        a0 = si * S[i, SE]
-                        a1 = si * S[i, SE + 1]
-                        a2 = si * S[i, SE + 2]
-                        Pp0 = S[i, SX] + a0
-                        Pp1 = S[i, SX + 1] + a1
-                        Pp2 = S[i, SX + 2] + a2
-                        Vp0 = S[i, SV] + (S[i, SW + 1] * a2 - S[i, SW + 2] * a1)
-                        Vp1 = S[i, SV + 1] + (S[i, SW + 2] * a0 - S[i, SW] * a2)
-                        Vp2 = S[i, SV + 2] + (S[i, SW] * a1 - S[i, SW + 1] * a0)
-                    else:
-                        Vp0 = io[IO_VEL, 0]
-                        Vp1 = io[IO_VEL, 1]
-                        Vp2 = io[IO_VEL, 2]
-                        Pp0 = io[IO_POS, 0] + Vp0 * t
-                        Pp1 = io[IO_POS, 1] + Vp1 * t
-                        Pp2 = io[IO_POS, 2] + Vp2 * t
-                    if hn:
-                        sk = 0.5 * S[k, SL]
-                        a0 = sk * S[k, SE]
-                        a1 = sk * S[k, SE + 1]
-                        a2 = sk * S[k, SE + 2]
-                        Pn0 = S[k, SX] + a0
-                        Pn1 = S[k, SX + 1] + a1
-                        Pn2 = S[k, SX + 2] + a2
-                        Vn0 = S[k, SV] + (S[k, SW + 1] * a2 - S[k, SW + 2] * a1)
-                        Vn1 = S[k, SV + 1] + (S[k, SW + 2] * a0 - S[k, SW] * a2)
-                        Vn2 = S[k, SV + 2] + (S[k, SW] * a1 - S[k, SW + 1] * a0)
-                    else:
-                        Vn0 = io[IO_VEL + 1, 0]
-                        Vn1 = io[IO_VEL + 1, 1]
-                        Vn2 = io[IO_VEL + 1, 2]
-                        Pn0 = io[IO_POS + 1, 0] + Vn0 * t
-                        Pn1 = io[IO_POS + 1, 1] + Vn1 * t
-                        Pn2 = io[IO_POS + 1, 2] + Vn2 * t
-                    # g: velocity of the next point minus the prev one without the pay-out
-                    # sliding (J nu); at attachment a the drum end of element 0 moves on
-                    # along the rope at the pay-out rate (out or in)
-                    if hp:
-                        g0 = Vn0 - Vp0
-                        g1 = Vn1 - Vp1
-                        g2 = Vn2 - Vp2
-                    else:
-                        g0 = Vn0 - (Vp0 - payout_a * S[k, SE])
-                        g1 = Vn1 - (Vp1 - payout_a * S[k, SE + 1])
-                        g2 = Vn2 - (Vp2 - payout_a * S[k, SE + 2])
-                        # winch at end a (drum element): rope slides through the drum at the
-                        # pay-out rate, and the drum end of element 0 extends (retracts) along
-                        # it during the call; chain._winch then grows (shrinks) the element
-                        # by that length, so the drum connection never sees the flow of rope
-                        Vn0 += payout_a * S[k, SE]
-                        Vn1 += payout_a * S[k, SE + 1]
-                        Vn2 += payout_a * S[k, SE + 2]
-                        Pn0 += payout_a * t * S[k, SE]
-                        Pn1 += payout_a * t * S[k, SE + 1]
-                        Pn2 += payout_a * t * S[k, SE + 2]
+                S[c, ST] = 0.0
+                if not (F[c, 0] != 0 and (hp or att_a) and (hn or att_b)):
+                    if full and hp and hn:  # parted: no coupling block
+                        _clear_block(Ao, i)
+                else:
+                    si, sk, Pp, Vp, Pn, Vn, g = _connection_points(S, io, c, N, t, payout_a)
+                    # (scalars, not tuples: a tuple chosen in a branch changes which
+                    # multiply-adds LLVM fuses, i.e. the last bits of the results)
+                    i10 = i11 = i12 = i20 = i21 = i22 = 0.0  # basis of i
+                    k10 = k11 = k12 = k20 = k21 = k22 = 0.0  # basis of c
+                    bo33 = bo34 = bo43 = bo44 = 0.0  # bending part of Ao[i]
                     if full:
                         if hp:
-                            i10 = B1[i, 0]
-                            i11 = B1[i, 1]
-                            i12 = B1[i, 2]
-                            i20 = B2[i, 0]
-                            i21 = B2[i, 1]
-                            i22 = B2[i, 2]
-                        else:
-                            i10 = i11 = i12 = i20 = i21 = i22 = 0.0
+                            i10, i11, i12, i20, i21, i22 = _stored_basis(B1, B2, i)
                         if hn:
-                            k10 = B1[k, 0]
-                            k11 = B1[k, 1]
-                            k12 = B1[k, 2]
-                            k20 = B2[k, 0]
-                            k21 = B2[k, 1]
-                            k22 = B2[k, 2]
-                        else:
-                            k10 = k11 = k12 = k20 = k21 = k22 = 0.0
-                        bo33 = bo34 = bo43 = bo44 = 0.0  # bending part of Ao[i]
-                        if hp and hn:  # bending damping, Eq (18)-(19), relative angular velocity
-                            cm = cc[c, 3]
-                            if cm > 0.0:
-                                dw0 = S[i, SW] - S[k, SW]
-                                dw1 = S[i, SW + 1] - S[k, SW + 1]
-                                dw2 = S[i, SW + 2] - S[k, SW + 2]
-                                v = h * cm
-                                rhs[k, 3] += v * (dw0 * k10 + dw1 * k11 + dw2 * k12)
-                                rhs[k, 4] += v * (dw0 * k20 + dw1 * k21 + dw2 * k22)
-                                rhs[i, 3] -= v * (dw0 * i10 + dw1 * i11 + dw2 * i12)
-                                rhs[i, 4] -= v * (dw0 * i20 + dw1 * i21 + dw2 * i22)
-                                v = hth * cm
-                                Ad[k, 3, 3] += v
-                                Ad[k, 4, 4] += v
-                                Ad[i, 3, 3] += v
-                                Ad[i, 4, 4] += v
-                                # d torque_i / d w_k = cm B_i^T B_k
-                                bo33 = -v * (i10 * k10 + i11 * k11 + i12 * k12)
-                                bo34 = -v * (i10 * k20 + i11 * k21 + i12 * k22)
-                                bo43 = -v * (i20 * k10 + i21 * k11 + i22 * k12)
-                                bo44 = -v * (i20 * k20 + i21 * k21 + i22 * k22)
-                    # Eq (25) switches a connection off when one point enters the neighbour's
-                    # half length (|d|^2 + l d.e <= 0, i.e. axial compression). Done
-                    # continuously below: only the compressive axial part of the connection
-                    # force is removed (STRICT_EQ25 = True restores the all-or-nothing switch).
-                    if STRICT_EQ25 and (
-                            (hp and math.sqrt((Pn0 - S[i, SX]) ** 2 + (Pn1 - S[i, SX + 1]) ** 2
-                                              + (Pn2 - S[i, SX + 2]) ** 2) <= 0.5 * S[i, SL])
-                            or (hn and math.sqrt((Pp0 - S[k, SX]) ** 2 + (Pp1 - S[k, SX + 1]) ** 2
-                                                 + (Pp2 - S[k, SX + 2]) ** 2) <= 0.5 * S[k, SL])):
+                            k10, k11, k12, k20, k21, k22 = _stored_basis(B1, B2, c)
+                        if hp and hn and cc[c, 3] > 0.0:
+                            bo33, bo34, bo43, bo44 = _bending_damper(
+                                S, Ad, rhs, i, c, cc[c, 3], (i10, i11, i12, i20, i21, i22),
+                                (k10, k11, k12, k20, k21, k22), h, p.hth)
+                    if STRICT_EQ25 and _point_inside_neighbour(S, c, N, Pp, Pn):
+                        # Eq (25) as the paper states it: the connection is off
                         if full and hp and hn:  # coupling by the bending damper only
-                            for a in range(5):
-                                for q in range(5):
-                                    Ao[i, a, q] = 0.0
-                            Ao[i, 3, 3] = bo33
-                            Ao[i, 3, 4] = bo34
-                            Ao[i, 4, 3] = bo43
-                            Ao[i, 4, 4] = bo44
-                        continue
-                    # local rope axis
-                    n0 = 0.0
-                    n1 = 0.0
-                    n2 = 0.0
-                    if hp:
-                        n0 += S[i, SE]
-                        n1 += S[i, SE + 1]
-                        n2 += S[i, SE + 2]
-                    if hn:
-                        n0 += S[k, SE]
-                        n1 += S[k, SE + 1]
-                        n2 += S[k, SE + 2]
-                    nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-                    if nn < 1e-9:  # folded back on itself: use the gap direction
-                        n0 = Pp0 - Pn0
-                        n1 = Pp1 - Pn1
-                        n2 = Pp2 - Pn2
-                        nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) + 1e-300
-                    n0 /= nn
-                    n1 /= nn
-                    n2 /= nn
-                    kc = cc[c, 0]
-                    cax = cc[c, 1]
-                    ctr = cc[c, 2]
-                    dv0 = Vp0 - Vn0
-                    dv1 = Vp1 - Vn1
-                    dv2 = Vp2 - Vn2
-                    ndv = n0 * dv0 + n1 * dv1 + n2 * dv2
-                    F0 = kc * (Pp0 - Pn0) + cax * n0 * ndv + ctr * (dv0 - n0 * ndv)
-                    F1 = kc * (Pp1 - Pn1) + cax * n1 * ndv + ctr * (dv1 - n1 * ndv)
-                    F2 = kc * (Pp2 - Pn2) + cax * n2 * ndv + ctr * (dv2 - n2 * ndv)
-                    ax = F0 * n0 + F1 * n1 + F2 * n2
-                    axd = cax
-                    if ax < 0.0:  # a rope cannot push: drop the compressive axial part
-                        F0 -= ax * n0
-                        F1 -= ax * n1
-                        F2 -= ax * n2
-                        axd = 0.0
-                    T = math.sqrt(F0 * F0 + F1 * F1 + F2 * F2)
-                    if T > S[c, SB]:  # parting candidate (issue 3 item 4)
-                        if F[c, 1] != 0 and T / S[c, SB] > best_ratio:
-                            best_ratio = T / S[c, SB]
-                            best_c = c
-                            best_T = T
-                            # elastic part: EA x strain along the rope (see PART_MIN_ELASTIC)
-                            best_el = kc * ((Pp0 - Pn0) * n0 + (Pp1 - Pn1) * n1 + (Pp2 - Pn2) * n2)
+                            _clear_block(Ao, i)
+                            _set_rotation_block(Ao, i, bo33, bo34, bo43, bo44)
                     else:
-                        F[c, 1] = 1
-                    S[c, ST] = T
-                    # F acts on the next point, -F on the prev point
-                    if not hn:
-                        io[IO_FORCE + 1, 0] = F0
-                        io[IO_FORCE + 1, 1] = F1
-                        io[IO_FORCE + 1, 2] = F2
-                    if not hp:
-                        io[IO_FORCE, 0] = -F0
-                        io[IO_FORCE, 1] = -F1
-                        io[IO_FORCE, 2] = -F2
-                    if not full:
-                        continue
-                    # rhs += J^T (h F - h^2 theta k g) on the next point, minus on the prev one
-                    Q0 = h * F0 - h2t * kc * g0
-                    Q1 = h * F1 - h2t * kc * g1
-                    Q2 = h * F2 - h2t * kc * g2
-                    # Jacobian of spring and damper: J^T S J with
-                    # S = h theta (c_x n n^T + c_t (I - n n^T)) + h^2 theta^2 k I
-                    beta = hth * ctr + h2t2 * kc
-                    gamma = hth * (axd - ctr)
-                    for side in range(2):
-                        if side == 0:
-                            if not hn:
-                                continue
-                            j = k
-                            s = sk
-                            sg = 1.0
-                            b10, b11, b12, b20, b21, b22 = k10, k11, k12, k20, k21, k22
+                        n = _rope_axis(S, c, N, Pp, Pn)
+                        kc = cc[c, 0]
+                        ctr = cc[c, 2]
+                        F0, F1, F2, T, axd = _tension_only_spring_damper(kc, cc[c, 1], ctr, Pp,
+                                                                         Pn, Vp, Vn, n)
+                        if T > S[c, SB]:  # parting candidate: the most overloaded one parts
+                            if F[c, 1] != 0 and T / S[c, SB] > best_ratio:
+                                best_ratio = T / S[c, SB]
+                                best_c = c
+                                best_T = T
+                                best_el = _elastic_tension(kc, Pp, Pn, n)
                         else:
-                            if not hp:
-                                continue
-                            j = i
-                            s = si
-                            sg = -1.0
-                            b10, b11, b12, b20, b21, b22 = i10, i11, i12, i20, i21, i22
-                        # geometric stiffness of the moment of the end force: -l/2 F.e on both
-                        # rotations (K), entering rhs with the angular velocity (nu) and Ad
-                        geo = -0.5 * S[j, SL] * (F0 * S[j, SE] + F1 * S[j, SE + 1]
-                                                 + F2 * S[j, SE + 2])
-                        rhs[j, 0] += sg * Q0
-                        rhs[j, 1] += sg * Q1
-                        rhs[j, 2] += sg * Q2
-                        rhs[j, 3] += sg * (-s * (b20 * Q0 + b21 * Q1 + b22 * Q2)) + h2t * geo * (
-                            S[j, SW] * b10 + S[j, SW + 1] * b11 + S[j, SW + 2] * b12)
-                        rhs[j, 4] += sg * (s * (b10 * Q0 + b11 * Q1 + b12 * Q2)) + h2t * geo * (
-                            S[j, SW] * b20 + S[j, SW + 1] * b21 + S[j, SW + 2] * b22)
-                        (v00, v01, v02, v03, v04, v11, v12, v13, v14, v22, v23, v24, v33, v34,
-                         v44) = _jsj(s, b10, b11, b12, b20, b21, b22, beta, gamma, n0, n1, n2)
-                        Ad[j, 0, 0] += v00
-                        Ad[j, 0, 1] += v01
-                        Ad[j, 0, 2] += v02
-                        Ad[j, 0, 3] += v03
-                        Ad[j, 0, 4] += v04
-                        Ad[j, 1, 1] += v11
-                        Ad[j, 1, 2] += v12
-                        Ad[j, 1, 3] += v13
-                        Ad[j, 1, 4] += v14
-                        Ad[j, 2, 2] += v22
-                        Ad[j, 2, 3] += v23
-                        Ad[j, 2, 4] += v24
-                        Ad[j, 3, 3] += v33 - h2t2 * geo
-                        Ad[j, 3, 4] += v34
-                        Ad[j, 4, 4] += v44 - h2t2 * geo
-                    if hp and hn:  # coupling block: Ao[i] = bending part - Jp^T S Jn
-                        nk1 = n0 * k10 + n1 * k11 + n2 * k12
-                        nk2 = n0 * k20 + n1 * k21 + n2 * k22
-                        ni1 = n0 * i10 + n1 * i11 + n2 * i12
-                        ni2 = n0 * i20 + n1 * i21 + n2 * i22
-                        Ao[i, 0, 0] = -(beta + gamma * n0 * n0)
-                        Ao[i, 1, 1] = -(beta + gamma * n1 * n1)
-                        Ao[i, 2, 2] = -(beta + gamma * n2 * n2)
-                        Ao[i, 0, 1] = Ao[i, 1, 0] = -(gamma * n0 * n1)
-                        Ao[i, 0, 2] = Ao[i, 2, 0] = -(gamma * n0 * n2)
-                        Ao[i, 1, 2] = Ao[i, 2, 1] = -(gamma * n1 * n2)
-                        Ao[i, 0, 3] = sk * (beta * k20 + gamma * n0 * nk2)
-                        Ao[i, 1, 3] = sk * (beta * k21 + gamma * n1 * nk2)
-                        Ao[i, 2, 3] = sk * (beta * k22 + gamma * n2 * nk2)
-                        Ao[i, 0, 4] = -sk * (beta * k10 + gamma * n0 * nk1)
-                        Ao[i, 1, 4] = -sk * (beta * k11 + gamma * n1 * nk1)
-                        Ao[i, 2, 4] = -sk * (beta * k12 + gamma * n2 * nk1)
-                        Ao[i, 3, 0] = si * (beta * i20 + gamma * ni2 * n0)
-                        Ao[i, 3, 1] = si * (beta * i21 + gamma * ni2 * n1)
-                        Ao[i, 3, 2] = si * (beta * i22 + gamma * ni2 * n2)
-                        Ao[i, 4, 0] = -si * (beta * i10 + gamma * ni1 * n0)
-                        Ao[i, 4, 1] = -si * (beta * i11 + gamma * ni1 * n1)
-                        Ao[i, 4, 2] = -si * (beta * i12 + gamma * ni1 * n2)
-                        ss = si * sk
-                        d11 = i10 * k10 + i11 * k11 + i12 * k12  # b_x of i . b_y of k
-                        d12 = i10 * k20 + i11 * k21 + i12 * k22
-                        d21 = i20 * k10 + i21 * k11 + i22 * k12
-                        d22 = i20 * k20 + i21 * k21 + i22 * k22
-                        Ao[i, 3, 3] = bo33 - ss * (beta * d22 + gamma * ni2 * nk2)
-                        Ao[i, 3, 4] = bo34 + ss * (beta * d21 + gamma * ni2 * nk1)
-                        Ao[i, 4, 3] = bo43 + ss * (beta * d12 + gamma * ni1 * nk2)
-                        Ao[i, 4, 4] = bo44 - ss * (beta * d11 + gamma * ni1 * nk1)
-                if not full or jc == 0 or bad >= 0:
-                    continue
-                # ----------------------------------------- forward elimination of block j - 1
-                j = jc - 1
-                a00 = Ad[j, 0, 0]
-                a01 = Ad[j, 0, 1]
-                a02 = Ad[j, 0, 2]
-                a03 = Ad[j, 0, 3]
-                a04 = Ad[j, 0, 4]
-                a11 = Ad[j, 1, 1]
-                a12 = Ad[j, 1, 2]
-                a13 = Ad[j, 1, 3]
-                a14 = Ad[j, 1, 4]
-                a22 = Ad[j, 2, 2]
-                a23 = Ad[j, 2, 3]
-                a24 = Ad[j, 2, 4]
-                a33 = Ad[j, 3, 3]
-                a34 = Ad[j, 3, 4]
-                a44 = Ad[j, 4, 4]
-                y0 = rhs[j, 0]
-                y1 = rhs[j, 1]
-                y2 = rhs[j, 2]
-                y3 = rhs[j, 3]
-                y4 = rhs[j, 4]
-                if j > 0:
-                    i = j - 1
-                    for q in range(5):
-                        o0 = Ao[i, q, 0]
-                        o1 = Ao[i, q, 1]
-                        o2 = Ao[i, q, 2]
-                        o3 = Ao[i, q, 3]
-                        o4 = Ao[i, q, 4]
-                        w0 = Wm[i, q, 0]
-                        w1 = Wm[i, q, 1]
-                        w2 = Wm[i, q, 2]
-                        w3 = Wm[i, q, 3]
-                        w4 = Wm[i, q, 4]
-                        a00 -= o0 * w0
-                        a01 -= o0 * w1
-                        a02 -= o0 * w2
-                        a03 -= o0 * w3
-                        a04 -= o0 * w4
-                        a11 -= o1 * w1
-                        a12 -= o1 * w2
-                        a13 -= o1 * w3
-                        a14 -= o1 * w4
-                        a22 -= o2 * w2
-                        a23 -= o2 * w3
-                        a24 -= o2 * w4
-                        a33 -= o3 * w3
-                        a34 -= o3 * w4
-                        a44 -= o4 * w4
-                        yq = rhs[i, q]
-                        y0 -= o0 * yq
-                        y1 -= o1 * yq
-                        y2 -= o2 * yq
-                        y3 -= o3 * yq
-                        y4 -= o4 * yq
-                m = 5 if j < N - 1 else 0
-                (ok, i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42,
-                 l43) = _ldl5(a00, a01, a02, a03, a04, a11, a12, a13, a14, a22, a23, a24, a33,
-                              a34, a44)
-                if ok:
-                    for c in range(m):
-                        x0, x1, x2, x3, x4 = _ldl5_solve(
-                            i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
-                            Ao[j, 0, c], Ao[j, 1, c], Ao[j, 2, c], Ao[j, 3, c], Ao[j, 4, c])
-                        Wm[j, 0, c] = x0
-                        Wm[j, 1, c] = x1
-                        Wm[j, 2, c] = x2
-                        Wm[j, 3, c] = x3
-                        Wm[j, 4, c] = x4
-                    x0, x1, x2, x3, x4 = _ldl5_solve(
-                        i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42, l43,
-                        y0, y1, y2, y3, y4)
-                    rhs[j, 0] = x0
-                    rhs[j, 1] = x1
-                    rhs[j, 2] = x2
-                    rhs[j, 3] = x3
-                    rhs[j, 4] = x4
-                    continue
-                # not positive definite: Gaussian elimination with partial pivoting
-                Ad[j, 0, 0] = a00
-                Ad[j, 0, 1] = Ad[j, 1, 0] = a01
-                Ad[j, 0, 2] = Ad[j, 2, 0] = a02
-                Ad[j, 0, 3] = Ad[j, 3, 0] = a03
-                Ad[j, 0, 4] = Ad[j, 4, 0] = a04
-                Ad[j, 1, 1] = a11
-                Ad[j, 1, 2] = Ad[j, 2, 1] = a12
-                Ad[j, 1, 3] = Ad[j, 3, 1] = a13
-                Ad[j, 1, 4] = Ad[j, 4, 1] = a14
-                Ad[j, 2, 2] = a22
-                Ad[j, 2, 3] = Ad[j, 3, 2] = a23
-                Ad[j, 2, 4] = Ad[j, 4, 2] = a24
-                Ad[j, 3, 3] = a33
-                Ad[j, 3, 4] = Ad[j, 4, 3] = a34
-                Ad[j, 4, 4] = a44
-                rhs[j, 0] = y0
-                rhs[j, 1] = y1
-                rhs[j, 2] = y2
-                rhs[j, 3] = y3
-                rhs[j, 4] = y4
-                for r in range(5):
-                    for c in range(m):
-                        Wm[j, r, c] = Ao[j, r, c]
-                if not _lu_solve(Ad[j], Wm[j], rhs[j], m):
-                    bad = j  # singular: diverged unless a parting changes the system
+                            F[c, 1] = 1  # re-armed once unloaded
+                        S[c, ST] = T
+                        if not hn:  # F acts on the next point, -F on the prev point
+                            _set_vec3(io, IO_FORCE + 1, F0, F1, F2)
+                        if not hp:
+                            _set_vec3(io, IO_FORCE, -F0, -F1, -F2)
+                        if full:
+                            # rhs += J^T (h F - h^2 theta k g) on the next point, minus on the
+                            # prev one; Ad += J^T S J with the spring-damper Jacobian
+                            # S = h theta (c_x n n^T + c_t (I - n n^T)) + h^2 theta^2 k I
+                            Q = (h * F0 - p.h2t * kc * g[0], h * F1 - p.h2t * kc * g[1],
+                                 h * F2 - p.h2t * kc * g[2])
+                            beta = p.hth * ctr + p.h2t2 * kc
+                            gamma = p.hth * (axd - ctr)
+                            _add_connection_to_elements(
+                                S, Ad, rhs, c, N, si, sk, (i10, i11, i12, i20, i21, i22),
+                                (k10, k11, k12, k20, k21, k22), Q, (F0, F1, F2), n, beta, gamma,
+                                p.h2t, p.h2t2)
+                            if hp and hn:
+                                _coupling_block(Ao, i, si, sk, (i10, i11, i12, i20, i21, i22),
+                                                (k10, k11, k12, k20, k21, k22), n, beta, gamma,
+                                                (bo33, bo34, bo43, bo44))
+                if full and jc > 0 and bad < 0 and not _eliminate_block(Ad, Ao, Wm, rhs, jc - 1,
+                                                                         N):
+                    if not _eliminate_block_pivoting(Ad, Ao, Wm, rhs, jc - 1, N):
+                        bad = jc - 1  # singular: diverged unless a parting changes the system
             if best_c < 0:
                 break
             if best_el < PART_MIN_ELASTIC * S[best_c, SB]:  # a blow-up, not a parting
@@ -975,112 +1265,20 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                 bad = max(0, min(best_c, N - 1))
                 break
             _part(best_c, best_T, t, N, S, F, io)
-        w8 = 0.5 * h if (step == 0 or step == n_sub) else h
-        for s in range(2):
-            for a in range(3):
-                io[IO_IMPULSE + s, a] += w8 * io[IO_FORCE + s, a]
+        _add_end_impulses(io, 0.5 * h if (step == 0 or step == n_sub) else h)
         if not full and bad < 0:
             break
         if bad < 0:
-            # -------------------------------------------- back substitution and update
-            # dnu_j = y_j - Wm_j dnu_{j+1}; each element is advanced as soon as its dnu is
-            # known: X, V, and e and W rotated (Rodrigues) by h ((1 - theta) W +
-            # theta W_new), W kept perpendicular to e
+            # back substitution; each element is advanced as soon as its dnu is known
             for j in range(N - 1, -1, -1):
-                d0 = rhs[j, 0]
-                d1 = rhs[j, 1]
-                d2 = rhs[j, 2]
-                d3 = rhs[j, 3]
-                d4 = rhs[j, 4]
-                if j < N - 1:
-                    for q in range(5):
-                        xq = dnu[j + 1, q]
-                        d0 -= Wm[j, 0, q] * xq
-                        d1 -= Wm[j, 1, q] * xq
-                        d2 -= Wm[j, 2, q] * xq
-                        d3 -= Wm[j, 3, q] * xq
-                        d4 -= Wm[j, 4, q] * xq
-                dnu[j, 0] = d0
-                dnu[j, 1] = d1
-                dnu[j, 2] = d2
-                dnu[j, 3] = d3
-                dnu[j, 4] = d4
-                Vn0 = S[j, SV] + d0
-                Vn1 = S[j, SV + 1] + d1
-                Vn2 = S[j, SV + 2] + d2
-                S[j, SX] += h * ((1.0 - theta) * S[j, SV] + theta * Vn0)
-                S[j, SX + 1] += h * ((1.0 - theta) * S[j, SV + 1] + theta * Vn1)
-                S[j, SX + 2] += h * ((1.0 - theta) * S[j, SV + 2] + theta * Vn2)
-                S[j, SV] = Vn0
-                S[j, SV + 1] = Vn1
-                S[j, SV + 2] = Vn2
-                Wn0 = S[j, SW] + d3 * B1[j, 0] + d4 * B2[j, 0]
-                Wn1 = S[j, SW + 1] + d3 * B1[j, 1] + d4 * B2[j, 1]
-                Wn2 = S[j, SW + 2] + d3 * B1[j, 2] + d4 * B2[j, 2]
-                f0 = h * ((1.0 - theta) * S[j, SW] + theta * Wn0)
-                f1 = h * ((1.0 - theta) * S[j, SW + 1] + theta * Wn1)
-                f2 = h * ((1.0 - theta) * S[j, SW + 2] + theta * Wn2)
-                e0 = S[j, SE]
-                e1 = S[j, SE + 1]
-                e2 = S[j, SE + 2]
-                ang = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
-                if ang < 1e-300:
-                    en0, en1, en2 = e0, e1, e2
-                    wr0, wr1, wr2 = Wn0, Wn1, Wn2
-                else:
-                    k0 = f0 / ang
-                    k1 = f1 / ang
-                    k2 = f2 / ang
-                    co = math.cos(ang)
-                    sa = math.sin(ang)
-                    kv = (k0 * e0 + k1 * e1 + k2 * e2) * (1.0 - co)
-                    en0 = e0 * co + (k1 * e2 - k2 * e1) * sa + k0 * kv
-                    en1 = e1 * co + (k2 * e0 - k0 * e2) * sa + k1 * kv
-                    en2 = e2 * co + (k0 * e1 - k1 * e0) * sa + k2 * kv
-                    kv = (k0 * Wn0 + k1 * Wn1 + k2 * Wn2) * (1.0 - co)
-                    wr0 = Wn0 * co + (k1 * Wn2 - k2 * Wn1) * sa + k0 * kv
-                    wr1 = Wn1 * co + (k2 * Wn0 - k0 * Wn2) * sa + k1 * kv
-                    wr2 = Wn2 * co + (k0 * Wn1 - k1 * Wn0) * sa + k2 * kv
-                nrm = math.sqrt(en0 * en0 + en1 * en1 + en2 * en2)
-                en0 /= nrm
-                en1 /= nrm
-                en2 /= nrm
-                we = wr0 * en0 + wr1 * en1 + wr2 * en2
-                S[j, SE] = en0
-                S[j, SE + 1] = en1
-                S[j, SE + 2] = en2
-                S[j, SW] = wr0 - we * en0
-                S[j, SW + 1] = wr1 - we * en1
-                S[j, SW + 2] = wr2 - we * en2
-                # divergence: non-finite or absurd values (NaN fails every comparison)
-                sv = Vn0 * Vn0 + Vn1 * Vn1 + Vn2 * Vn2
-                sw = S[j, SW] * S[j, SW] + S[j, SW + 1] * S[j, SW + 1] + S[j, SW + 2] * S[j, SW + 2]
-                sx = S[j, SX] * S[j, SX] + S[j, SX + 1] * S[j, SX + 1] + S[j, SX + 2] * S[j, SX + 2]
-                se = en0 * en0 + en1 * en1 + en2 * en2
-                if not (sv <= vmax2 and sw <= wmax2 and sx <= pmax2 and se <= 2.0):
+                d0, d1, d2, d3, d4 = _back_substitute(rhs, dnu, Wm, j, N)
+                if not _advance_element(S, B1, B2, j, d0, d1, d2, d3, d4, p):
                     bad = j  # the lowest bad element is reported
         if bad >= 0:
             io[IO_INFO, 0] = step
             io[IO_INFO, 1] = bad
-            for j in range(N):
-                for a in range(3):
-                    S[j, SX + a] = bk[j, 0, a]
-                    S[j, SE + a] = bk[j, 1, a]
-                    S[j, SV + a] = bk[j, 2, a]
-                    S[j, SW + a] = bk[j, 3, a]
-            for c in range(N + 1):
-                S[c, ST] = misc[c, 1]
-                F[c, 0] = np.int64(misc[c, 2])
-                F[c, 1] = np.int64(misc[c, 3])
-            for s in range(2):
-                for a in range(3):
-                    io[IO_FORCE + s, a] = bF[s, a]
-            io[IO_NEV] = b_nev
+            _restore_call_state(S, F, io, bk, misc, bF, N, b_nev)
             return DIVERGED
     if dt > 0.0:
-        inv = 1.0 / dt
-        for s in range(2):
-            for a in range(3):
-                io[IO_MEAN + s, a] = io[IO_IMPULSE + s, a] * inv
-                io[IO_POS + s, a] = io[IO_POS + s, a] + io[IO_VEL + s, a] * dt
+        _finish_exchange_step(io, dt)
     return PARTED if io[IO_NEV] > b_nev else OK
