@@ -17,7 +17,7 @@ setup(
     zip_safe=True,
     maintainer="Tug simulator maintainers",
     maintainer_email="maintainer@tugsim.example.org",
-    description="Towing rope models (seed 000 multi-body element chain, seed 001 finite-difference cable) and the one rope node that runs any rope file.",
+    description="Towing rope models (multi-body element chain of Yoon, Lee, Park, Kim; finite-difference cable of Park & Jung) and the one rope node that runs any rope file.",
     license="Apache-2.0",
     entry_points={
         "console_scripts": [

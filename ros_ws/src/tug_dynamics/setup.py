@@ -17,7 +17,7 @@ setup(
     zip_safe=True,
     maintainer="Tug simulator maintainers",
     maintainer_email="maintainer@tugsim.example.org",
-    description="Vessel manoeuvring models (seed 002 barge, seed 003 S-175 with anchor, harbour tug, seed 004 planing hull) and the one vessel node that runs any ship file.",
+    description="Vessel manoeuvring models (Yun & Kim barge, Yoon S-175 with anchor dredging, harbour tug, Yoon & Kang planing hull) and the one vessel node that runs any ship file.",
     license="Apache-2.0",
     entry_points={
         "console_scripts": [

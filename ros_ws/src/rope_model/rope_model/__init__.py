@@ -1,4 +1,4 @@
-"""rope_model: ROS-free towing-rope physics (seed 000, multi-body element chain).
+"""rope_model: ROS-free towing-rope physics (the multi-body element chain of Yoon, Lee, Park, Kim 2012; the finite-difference cable of Park & Jung).
 
 Units SI, angles rad, world frame ENU (x east, y north, z up), water surface z = 0.
 

@@ -1,4 +1,5 @@
-"""FdCable: low-tension towed cable by finite differences (seed 001, Park & Jung). No ROS here.
+"""FdCable: low-tension towed cable by finite differences (Park & Jung, "Nonlinear Dynamic
+Analysis on Low-Tension Towed Cable by Finite Difference Method"). No ROS here.
 
 Model: 10 unknowns per node (Eq 9), governing equations with bending stiffness (Eq 2-5),
 Morison drag on the velocity relative to a uniform current (Eq 6), added mass (Eq 7), the
@@ -67,7 +68,7 @@ class FdCableConvergenceError(RuntimeError):
 
 @dataclass(frozen=True)
 class FdCableParams:
-    """Cable of seed 001 (Table 1 defaults). Derived values are documented at each property."""
+    """Cable of Park & Jung (their Table 1 defaults). Derived values are documented at each property."""
 
     model: str = "fd_cable"
     name: str = "cable"

@@ -1,7 +1,7 @@
 """One face for every rope model, so the one rope node can run any rope file.
 
-The rope file's ``model:`` key picks the model: ``element_chain`` (seed 000, the default when
-the key is absent) or ``fd_cable`` (seed 001). Each adapter offers the same outputs in the
+The rope file's ``model:`` key picks the model: ``element_chain`` (Yoon, Lee, Park, Kim 2012; the default when
+the key is absent) or ``fd_cable`` (Park & Jung). Each adapter offers the same outputs in the
 world frame (ENU, m, m/s, N).
 """
 from __future__ import annotations
@@ -34,7 +34,7 @@ def rope_file_model(path: str) -> str:
 
 
 class ChainAdapter:
-    """Seed 000 multi-body element chain."""
+    """The multi-body element chain of Yoon, Lee, Park, Kim (2012)."""
 
     name = "element_chain"
 
@@ -86,7 +86,7 @@ class ChainAdapter:
 
 
 class CableAdapter:
-    """Seed 001 finite-difference towed cable: end a on the ship, end b free."""
+    """The finite-difference towed cable of Park & Jung: end a on the ship, end b free."""
 
     name = "fd_cable"
 
@@ -94,7 +94,7 @@ class CableAdapter:
                  n_elements: Optional[int], deployed_length: Optional[float], max_substep: float,
                  velocity_a=(0.0, 0.0, 0.0), heading: float = 0.0):
         if end_a == "free" or end_b != "free":
-            raise ValueError("an fd_cable rope has end a on a vessel (or fixed) and end b 'free' (seed 001 Eq 14-15)")
+            raise ValueError("an fd_cable rope has end a on a vessel (or fixed) and end b 'free' (Park & Jung Eq 14-15)")
         if layout != "straight":
             raise ValueError("an fd_cable rope starts from its steady state: use layout 'straight'")
         self.params = load_cable_params(path)

@@ -1,4 +1,4 @@
-"""Rope parameters (seed 000, Table 1) and their YAML loader.
+"""Rope parameters (Yoon, Lee, Park, Kim 2012, Table 1) and their YAML loader.
 
 All values are SI. Paper units are converted in the YAML comments / here, once. Files are
 checked against the schema in schema.py (required keys, physical ranges, unknown and
