@@ -1,5 +1,5 @@
 """Schemas of the rope files (element chain, ropes/table1.yaml) and cable files (fd cable,
-ropes/cable_001.yaml) and the strict YAML reader both use.
+ropes/cable_001.yaml), read with the one strict YAML reader (sim_plumbing.input_files).
 
 pydantic models with unknown keys forbidden and strict types (a string or a bool is not a
 number, 11.0 is not an element count), the same approach as scenario_runner's scenario
@@ -13,53 +13,18 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import typing
 from typing import Literal, Optional
 
 import annotated_types as at
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from sim_plumbing.input_files import YamlInputError, load_yaml
 
 G0 = 9.80665  # m/s^2, standard gravity
 
 
 class RopeParamsError(ValueError):
     """Bad rope or cable file / parameter; the message names the file and the key."""
-
-
-# ------------------------------------------------------------------ strict YAML reader
-class StrictLoader(yaml.SafeLoader):
-    """SafeLoader that refuses duplicate mapping keys (PyYAML silently keeps the last one) and
-    reads 1e9 / 4.4e8 as numbers like YAML 1.2 (YAML 1.1 wants a dot: "4.4e+8")."""
-
-
-class DuplicateKeyError(yaml.MarkedYAMLError):
-    pass
-
-
-def _construct_mapping(loader, node, deep=False):
-    loader.flatten_mapping(node)
-    seen = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        try:
-            first = seen.get(key)
-        except TypeError:  # unhashable key: SafeLoader's own error follows
-            continue
-        if first is not None:
-            raise DuplicateKeyError(
-                problem=f"key '{key}': duplicate key (first given on line {first})",
-                problem_mark=key_node.start_mark)
-        seen[key] = key_node.start_mark.line + 1
-    return yaml.SafeLoader.construct_mapping(loader, node, deep)
-
-
-StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-StrictLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"))
 
 
 def read_yaml_mapping(path, what: str, error=RopeParamsError):
@@ -70,18 +35,14 @@ def read_yaml_mapping(path, what: str, error=RopeParamsError):
     src = os.path.basename(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(f"{what} parameter file not found: {path}")
-    with open(path, encoding="utf-8") as fh:
-        try:
-            data = yaml.load(fh, Loader=StrictLoader)  # noqa: S506 (a SafeLoader)
-        except yaml.MarkedYAMLError as exc:
-            mark = exc.problem_mark or exc.context_mark
-            where = f"line {mark.line + 1}: " if mark is not None else ""
-            if isinstance(exc, DuplicateKeyError):
-                raise error(f"{src}: {where}{exc.problem}") from None
-            why = " ".join(s for s in (exc.context, exc.problem) if s)
-            raise error(f"{src}: {where}not valid YAML: {why}") from None
-        except yaml.YAMLError as exc:
-            raise error(f"{src}: not valid YAML: {exc}") from None
+    try:
+        data = load_yaml(path)  # the one strict reader: duplicate keys refused, 1e9 a number
+    except YamlInputError as exc:
+        where = f"line {exc.line}: " if exc.line is not None else ""
+        if exc.duplicate_key is not None:
+            raise error(f"{src}: {where}key '{exc.duplicate_key}': duplicate key (first given on line "
+                        f"{exc.first_line})") from None
+        raise error(f"{src}: {where}not valid YAML: {exc.problem}") from None
     if data is None:
         raise error(f"{src}: the file is empty: expected a mapping of {what} parameters")
     if not isinstance(data, dict):
@@ -181,7 +142,7 @@ def check_density(src, mass_per_length, diameter, error=RopeParamsError):
 # Shared bounds. Towlines are tens of m to about 2 km (deep-sea tow wires); diameters 2 mm
 # (a heaving line) to 0.5 m (the largest fibre hawsers are about 0.3 m). EA: a 200 mm steel
 # wire rope has EA ~ 3e9 N (E ~ 100 GPa on its metallic area), 1e10 N leaves margin; 1e3 N is
-# a rubber cord. Drag (Eq 11 / seed 001 Eq 6): normal C_D of a cylinder 1.0-1.2, stranded
+# a rubber cord. Drag (Eq 11 / Park & Jung Eq 6): normal C_D of a cylinder 1.0-1.2, stranded
 # ropes up to about 2; skin friction 0.01-0.03. Environment: water 1000 (fresh) .. 1025 (sea)
 # kg/m^3, air 1.1 (40 degC) .. 1.42 (-30 degC), gravity 9.78-9.83 on the Earth's surface
 # (bounds as the scenario format's environment).
@@ -194,7 +155,7 @@ GRAV = (9.0, 10.5, "m/s^2")
 
 
 class RopeFile(_Strict):
-    """Element chain rope file (seed 000; ropes/table1.yaml)."""
+    """Element chain rope file (Yoon, Lee, Park, Kim 2012; ropes/table1.yaml)."""
 
     model: Literal["element_chain"] = "element_chain"
     name: str = "rope"
@@ -227,7 +188,7 @@ class RopeFile(_Strict):
 
 
 class CableFile(_Strict):
-    """Finite-difference cable file (seed 001; ropes/cable_001.yaml)."""
+    """Finite-difference cable file (Park & Jung; ropes/cable_001.yaml)."""
 
     model: Literal["fd_cable"]
     name: str = "cable"

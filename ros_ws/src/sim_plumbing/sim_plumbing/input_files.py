@@ -1,19 +1,38 @@
-"""Reading input YAML files strictly: duplicate mapping keys are errors, and every error
-carries the line and column. Used by the ship-file and scenario loaders (ROS-free, yaml only).
+"""Reading input YAML files strictly, the one reader of every input file (ship, rope, cable and
+scenario files; ROS-free, yaml only): duplicate mapping keys are errors, every error carries the
+line and column, and 1e9 reads as a number.
 
 PyYAML's SafeLoader keeps the last of two equal keys silently: `mass: 1000` followed later
-by `mass: 1e30` would load the second without a word.
+by `mass: 1e30` would load the second without a word. And it follows YAML 1.1, where an
+exponent needs a dot ("4.4e+8"): `EA: 4.4e8` would be the string "4.4e8"; here it is the
+number, as in YAML 1.2.
 """
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import yaml
 
 
 class YamlInputError(ValueError):
-    """A file that is not readable, valid YAML, or has a duplicate key; message without the path."""
+    """A file that is not readable, valid YAML, or has a duplicate key; message without the path.
+    line / column (1-based, None if unknown), problem (the message without the position) and,
+    for a duplicate key, duplicate_key and first_line let a caller word it its own way."""
+
+    def __init__(self, message: str, line: int | None = None, column: int | None = None, problem: str = "",
+                 duplicate_key: Any = None, first_line: int | None = None):
+        super().__init__(message)
+        self.line, self.column, self.problem = line, column, problem or message
+        self.duplicate_key, self.first_line = duplicate_key, first_line
+
+
+class DuplicateKeyError(yaml.constructor.ConstructorError):
+    def __init__(self, node, key, key_node, first_mark):
+        super().__init__(f"while reading the mapping starting at line {node.start_mark.line + 1}", node.start_mark,
+                         f"duplicate key {key!r} (first given at line {first_mark.line + 1})", key_node.start_mark)
+        self.key, self.first_line = key, first_mark.line + 1
 
 
 class UniqueKeyLoader(yaml.SafeLoader):
@@ -32,11 +51,14 @@ class UniqueKeyLoader(yaml.SafeLoader):
                 except TypeError:  # unhashable key: SafeLoader reports it
                     continue
                 if first is not None:
-                    raise yaml.constructor.ConstructorError(
-                        f"while reading the mapping starting at line {node.start_mark.line + 1}", node.start_mark,
-                        f"duplicate key {key!r} (first given at line {first.line + 1})", key_node.start_mark)
+                    raise DuplicateKeyError(node, key, key_node, first)
                 seen[key] = key_node.start_mark
         return super().construct_mapping(node, deep=deep)
+
+
+UniqueKeyLoader.add_implicit_resolver(  # YAML 1.2 floats: 1e9, 4.4e8 (YAML 1.1 wants 4.4e+8)
+    "tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"))
 
 
 def describe_yaml_error(exc: yaml.YAMLError) -> str:
@@ -50,6 +72,16 @@ def describe_yaml_error(exc: yaml.YAMLError) -> str:
     return text
 
 
+def _input_error(exc: yaml.YAMLError) -> YamlInputError:
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    dup = isinstance(exc, DuplicateKeyError)
+    return YamlInputError(f"not valid YAML: {describe_yaml_error(exc)}",
+                          line=mark.line + 1 if mark is not None else None,
+                          column=mark.column + 1 if mark is not None else None,
+                          problem=str(getattr(exc, "problem", None) or exc),
+                          duplicate_key=exc.key if dup else None, first_line=exc.first_line if dup else None)
+
+
 def load_yaml(path: str) -> Any:
     """The parsed document of a YAML file; YamlInputError (no path in the message) if it cannot
     be read, is not UTF-8, is not valid YAML or repeats a key."""
@@ -57,7 +89,7 @@ def load_yaml(path: str) -> Any:
         with open(path, "r", encoding="utf-8") as fh:
             return yaml.load(fh, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
-        raise YamlInputError(f"not valid YAML: {describe_yaml_error(exc)}") from None
+        raise _input_error(exc) from None
     except UnicodeDecodeError as exc:
         raise YamlInputError(f"not UTF-8 text: {exc}") from None
     except OSError as exc:
@@ -69,7 +101,7 @@ def loads_yaml(text: str) -> Any:
     try:
         return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
-        raise YamlInputError(f"not valid YAML: {describe_yaml_error(exc)}") from None
+        raise _input_error(exc) from None
 
 
 def first_non_finite(data: Any, path: str = "") -> str | None:
@@ -89,5 +121,5 @@ def first_non_finite(data: Any, path: str = "") -> str | None:
     return None
 
 
-__all__ = ["YamlInputError", "UniqueKeyLoader", "describe_yaml_error", "load_yaml", "loads_yaml",
+__all__ = ["YamlInputError", "DuplicateKeyError", "UniqueKeyLoader", "describe_yaml_error", "load_yaml", "loads_yaml",
            "first_non_finite"]

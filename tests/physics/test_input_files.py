@@ -1,0 +1,43 @@
+"""The one strict YAML reader of every input file (sim_plumbing.input_files), checked against
+what the YAML 1.2 spec and PyYAML's own SafeLoader say."""
+import pytest
+import yaml
+
+from sim_plumbing.input_files import YamlInputError, load_yaml, loads_yaml
+
+
+def test_a_key_given_twice_is_an_error_with_both_lines():
+    with pytest.raises(YamlInputError) as err:
+        loads_yaml("a: 1\nb: 2\na: 3\n")
+    e = err.value
+    assert (e.duplicate_key, e.first_line, e.line) == ("a", 1, 3)
+    assert "line 3" in str(e) and "duplicate key 'a'" in str(e)
+
+
+def test_merge_keys_may_be_overridden():
+    # YAML merge: the mapping's own key wins over a merged one; that is not a duplicate
+    text = "base: &b {x: 1, y: 2}\nderived:\n  <<: *b\n  y: 5\n"
+    assert loads_yaml(text)["derived"] == {"x": 1, "y": 5} == yaml.safe_load(text)["derived"]
+
+
+@pytest.mark.parametrize("text,value", [("1e9", 1e9), ("4.4e8", 4.4e8), ("-2E-3", -2e-3), ("4.4e+8", 4.4e8),
+                                        ("12", 12), ("0.5", 0.5)])
+def test_exponent_numbers_read_as_yaml_1_2(text, value):
+    got = loads_yaml(f"v: {text}\n")["v"]
+    assert got == value and type(got) is type(value)
+
+
+def test_strings_that_only_look_like_numbers_stay_strings():
+    assert loads_yaml("v: e9\nw: '1e9'\nx: 1e\n") == {"v": "e9", "w": "1e9", "x": "1e"}
+
+
+def test_file_errors_name_what_is_wrong(tmp_path):
+    with pytest.raises(YamlInputError, match="cannot read"):
+        load_yaml(str(tmp_path / "missing.yaml"))
+    bad = tmp_path / "bad.yaml"
+    bad.write_bytes(b"a: [1, 2\n")
+    with pytest.raises(YamlInputError, match=r"line \d+, column \d+"):
+        load_yaml(str(bad))
+    bad.write_bytes(b"a: \xff\n")
+    with pytest.raises(YamlInputError, match="not UTF-8"):
+        load_yaml(str(bad))
