@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from scenario_runner.autopilot_law import (AutopilotConfig, AutopilotLaw, HeadingController, LosGuidance,
-                                           Measurement, SpeedController, parse_waypoints, wrap_angle,
-                                           yaw_from_quaternion)
+                                           Measurement, SpeedController, parse_waypoints, wrap_angle)
 
 D = math.radians
 
@@ -63,12 +62,6 @@ def test_law_sign_with_vessel_conventions():
         assert out.steering_angle == pytest.approx(sign * D(35))
         assert out.engine_order == 0.5
         assert out.heading_error == pytest.approx(D(ordered))
-
-
-def test_yaw_from_quaternion():
-    for yaw in (0.0, D(30), D(90), D(-135), D(179)):
-        q = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-        assert yaw_from_quaternion(*q) == pytest.approx(yaw)
 
 
 # -- saturation and anti-windup --------------------------------------------------------------
@@ -232,7 +225,7 @@ def _closed_loop(cfg, duration, dt=0.05, wrenches=None, tug=None):
     def measure():
         s = tug.state
         return Measurement(s.position[0], s.position[1], s.rpy[2], s.angular_velocity_body[2],
-                           tug.status()["speed_through_water"])
+                           tug.status().speed_through_water)
 
     out = law.update(measure(), 0.0)
     rows = []
@@ -241,7 +234,7 @@ def _closed_loop(cfg, duration, dt=0.05, wrenches=None, tug=None):
         out = law.update(measure(), dt)
         tug.step(dt, wrenches(tug) if wrenches else ())
         s = tug.state
-        rows.append(((k + 1) * dt, s.position[0], s.position[1], s.rpy[2], tug.status()["speed_through_water"],
+        rows.append(((k + 1) * dt, s.position[0], s.position[1], s.rpy[2], tug.status().speed_through_water,
                      out.cross_track, out.leg))
     return np.array(rows)
 

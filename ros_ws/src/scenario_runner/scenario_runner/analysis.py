@@ -40,6 +40,7 @@ from typing import Callable, Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
+from sim_math.rotations import rpy_from_quaternion
 from sim_math.turning import turning_measures
 from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
 
@@ -50,18 +51,6 @@ EPOCH_LIKE = 1e8  # s: stamps beyond ~3 years are wall-clock (epoch) times, show
 def _stamp_ns(msg) -> int:
     st = msg.header.stamp
     return int(st.sec) * 1_000_000_000 + int(st.nanosec)
-
-
-def rpy_from_quaternion(qx, qy, qz, qw):
-    """Roll, pitch, yaw (arrays) of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103)."""
-    qx, qy, qz, qw = (np.asarray(a, float) for a in (qx, qy, qz, qw))
-    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-    n[n == 0] = 1.0
-    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
-    roll = np.arctan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
-    pitch = np.arcsin(np.clip(2 * (qw * qy - qz * qx), -1.0, 1.0))
-    yaw = np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
-    return roll, pitch, yaw
 
 
 class _Series:

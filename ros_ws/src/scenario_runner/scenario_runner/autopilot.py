@@ -44,8 +44,8 @@ from rclpy.duration import Duration
 from rcl_interfaces.msg import ParameterDescriptor
 from tug_msgs.msg import VesselCommand, VesselStatus
 
-from scenario_runner.autopilot_law import (AutopilotConfig, AutopilotLaw, Measurement, Output, parse_waypoints,
-                                           yaw_from_quaternion)
+from scenario_runner.autopilot_law import AutopilotConfig, AutopilotLaw, Measurement, Output, parse_waypoints
+from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
 

@@ -46,11 +46,6 @@ def clamp(value: float, lo: float, hi: float) -> float:
     return lo if value < lo else hi if value > hi else value
 
 
-def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
-    """Yaw of R = Rz(yaw) Ry(pitch) Rx(roll) (REP-103), rad in [-pi, pi]."""
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
 class HeadingController:
     """PID on the wrapped heading error, damping on the measured yaw rate. Output: steering, rad."""
 
