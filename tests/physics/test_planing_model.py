@@ -49,8 +49,8 @@ def test_at_rest_stays_at_rest_at_static_draft(cfg):
     s, st = m.state, m.status()
     assert np.all(np.abs(s.position) < 1e-9) and np.all(np.abs(s.rpy) < 1e-9)
     assert np.all(np.abs(s.linear_velocity_body) < 1e-9) and np.all(np.abs(s.angular_velocity_body) < 1e-9)
-    assert st["draft_at_reference"] == pytest.approx(D0, abs=1e-9)  # Table 1 draft
-    assert st["rise"] == 0.0 and st["thrust"] == 0.0 and st["lift"] == 0.0
+    assert st.draft_at_reference == pytest.approx(D0, abs=1e-9)  # Table 1 draft
+    assert st.rise == 0.0 and st.thrust == 0.0 and st.lift == 0.0
 
 
 def test_sinkage_under_a_known_load_matches_hydrostatics(cfg):
@@ -60,7 +60,7 @@ def test_sinkage_under_a_known_load_matches_hydrostatics(cfg):
     wr = [ExternalWrench(np.array([0.0, 0.0, -f]), np.zeros(3))]
     run(m, 60.0, wrenches=wr)
     d_true = D0 * math.sqrt(1.0 + f / W)
-    assert m.status()["draft_at_reference"] == pytest.approx(d_true, abs=1e-3)
+    assert m.status().draft_at_reference == pytest.approx(d_true, abs=1e-3)
     assert abs(m.state.rpy[1]) < 1e-6  # a force at the origin gives no pitch (Eq 4: M = M_S theta)
 
 
@@ -144,10 +144,10 @@ def test_lift_only_bow_up(cfg):
     m = make(cfg)
     m.set_steady_run(12.0)
     m.step(1e-4)
-    assert m.status()["lift"] > 0.3 * W
+    assert m.status().lift > 0.3 * W
     m.state.rpy[1] = math.radians(0.5)   # bow down: Eq 9 switches lift and lift moment off
     m.step(1e-4)
-    assert m.status()["lift"] == 0.0
+    assert m.status().lift == 0.0
 
 
 def test_positive_steering_turns_to_port_and_heels_inward(cfg):
@@ -167,7 +167,7 @@ def test_nan_and_inf_commands_are_rejected_and_the_old_command_kept(cfg):
         with pytest.raises(CommandRejected):
             m.set_command(bad)
         assert m.command.engine_order == 0.4 and m.command.steering_angle == 0.1
-        assert m.status()["steering_angle_ordered"] == 0.1
+        assert m.status().steering_angle_ordered == 0.1
 
 
 def test_out_of_range_commands_are_clamped_with_messages(cfg):
@@ -178,8 +178,8 @@ def test_out_of_range_commands_are_clamped_with_messages(cfg):
     assert m.command.steering_angle == pytest.approx(math.radians(30.0))
     run(m, 3.0)
     st = m.status()
-    assert st["steering_angle"] == pytest.approx(math.radians(30.0))  # bucket at its limit
-    assert 0 < st["throttle"] < 1.0 and st["shaft_speed"] > 0        # impeller still ramping
+    assert st.steering_angle == pytest.approx(math.radians(30.0))  # bucket at its limit
+    assert 0 < st.throttle < 1.0 and st.shaft_speed > 0        # impeller still ramping
 
 
 # ---------------------------------------------------------------- ship file errors
@@ -250,6 +250,6 @@ def test_a_free_boat_drifts_with_the_current(cfg):
     run(m, 400.0)   # slow: only quadratic cross-flow drag acts at such small relative speeds
     pos, vel = m.attachment_kinematics("bow_eye")
     assert vel[0] == pytest.approx(0.5, abs=0.06) and vel[1] == pytest.approx(-0.3, abs=0.06)
-    assert m.status()["speed_through_water"] < 0.06
+    assert m.status().speed_through_water < 0.06
     with pytest.raises(ValueError):
         m.set_current([float("nan"), 0.0, 0.0])

@@ -82,7 +82,7 @@ def test_ship_moving_with_the_current_feels_no_force():
     run(ship, 600.0, 0.5)
     assert ship.state.position[:2] == pytest.approx([360.0, -480.0], abs=1e-6)
     assert ship.state.rpy[2] == pytest.approx(yaw, abs=1e-12)
-    assert ship.status()["speed_through_water"] < 1e-9
+    assert ship.status().speed_through_water < 1e-9
 
 
 def test_ship_at_rest_in_current_is_carried_along():
@@ -93,7 +93,7 @@ def test_ship_at_rest_in_current_is_carried_along():
     stw = []
     for _ in range(6):
         run(ship, 500.0, 1.0)
-        stw.append(ship.status()["speed_through_water"])
+        stw.append(ship.status().speed_through_water)
     assert all(b < a for a, b in zip(stw, stw[1:]))
     assert stw[-1] < 0.1
 
@@ -104,7 +104,7 @@ def test_engine_lag_eq9_is_first_order():
     run(ship, 20.0, 0.5)
     n_star = 0.5 * 89.0
     expected = n_star * (1.0 - math.exp(-20.0 / 15.0))     # Eq 9, T_n = 15 s
-    assert ship.status()["engine_rpm"] == pytest.approx(expected, rel=1e-4)
+    assert ship.status().engine_rpm == pytest.approx(expected, rel=1e-4)
 
 
 def test_steering_gear_eq10_rate_limit_then_lag():
@@ -113,10 +113,10 @@ def test_steering_gear_eq10_rate_limit_then_lag():
     # Eq 10: 3 deg/s while the error exceeds Te*rate = 7.5 deg (until 27.5 deg at t = 9.1667 s),
     # then delta = 35 - 7.5 exp(-(t - t1) / 2.5)
     run(ship, 5.0, 0.25)
-    assert math.degrees(ship.status()["steering_angle"]) == pytest.approx(15.0, abs=0.01)
+    assert math.degrees(ship.status().steering_angle) == pytest.approx(15.0, abs=0.01)
     run(ship, 10.0, 0.25)
     expected = 35.0 - 7.5 * math.exp(-(15.0 - 27.5 / 3.0) / 2.5)
-    assert math.degrees(ship.status()["steering_angle"]) == pytest.approx(expected, abs=0.02)
+    assert math.degrees(ship.status().steering_angle) == pytest.approx(expected, abs=0.02)
 
 
 def test_astern_thrust_acts_astern():
@@ -124,7 +124,7 @@ def test_astern_thrust_acts_astern():
     ship.set_command(Command(-1.0, 0.0))
     run(ship, 60.0, 0.2)
     st = ship.status()
-    assert st["thrust"] < 0.0 and st["shaft_speed"] < 0.0
+    assert st.thrust < 0.0 and st.shaft_speed < 0.0
     assert ship.state.linear_velocity_body[0] < -1.0
 
 
@@ -133,11 +133,11 @@ def test_anchor_let_go_takes_its_time_then_dredges():
     ship.set_state(_state(u=3.0), shaft_rps=0.0)
     ship.set_command(Command(0.0, 0.0, ANCHOR_LET_GO))
     run(ship, 14.0, 1.0)
-    assert ship.status()["anchor_state"] == AnchorState.LETTING_GO and ship.status()["anchor_force"] == 0.0
+    assert ship.status().anchor_state == AnchorState.LETTING_GO and ship.status().anchor_force == 0.0
     run(ship, 2.0, 1.0)
     st = ship.status()
-    assert st["anchor_state"] == AnchorState.DREDGING
-    assert st["anchor_force"] == pytest.approx(1.5 * 7200 * 9.80665, rel=1e-4)   # lambda_a W_a g, Eq 5-6
+    assert st.anchor_state == AnchorState.DREDGING
+    assert st.anchor_force == pytest.approx(1.5 * 7200 * 9.80665, rel=1e-4)   # lambda_a W_a g, Eq 5-6
 
 
 def test_nan_command_rejected_and_held_command_kept():
@@ -256,3 +256,41 @@ def test_rudder_force_continuous_as_engine_stops():
     assert rdot[0] > 0.0
     assert rdot[1] == pytest.approx(rdot[0], rel=1e-3)
     assert rdot[2] == pytest.approx(rdot[0], rel=0.05)
+
+
+def _vessel_status_fields():
+    """(name, type) of the fields of tug_msgs/VesselStatus, read from its .msg file (no ROS)."""
+    msg = os.path.join(os.path.dirname(__file__), "..", "..", "ros_ws", "src", "tug_msgs", "msg", "VesselStatus.msg")
+    fields = []
+    for line in open(msg):
+        words = line.split("#")[0].split()
+        if len(words) == 2 and "=" not in line:
+            fields.append((words[1], words[0]))
+    return fields
+
+
+@pytest.mark.parametrize("path", list_ship_files(), ids=os.path.basename)
+def test_every_model_states_every_status_field_the_message_carries(path):
+    """The node fills tug_msgs/VesselStatus from status(): each model's record must hold every
+    physical field of the message (the float fields the encoder writes, the anchor state and the
+    girting warning) with a real value, never a default filled in by the node."""
+    from sim_plumbing.cdr import VESSEL_STATUS_FLOATS_A, VESSEL_STATUS_FLOATS_B
+    ship = load_ship(path)
+    ship.set_command(Command(0.5, math.radians(10.0)))
+    run(ship, 5.0, 0.05)
+    st = ship.status()
+    node_filled = {"header", "step", "vessel", "commands_rejected", "commands_clamped"}  # the node's own
+    for name, kind in _vessel_status_fields():
+        if name in node_filled:
+            continue
+        value = getattr(st, name)  # AttributeError names a field the model does not state
+        if kind == "float64":
+            assert isinstance(value, float) and math.isfinite(value), (name, value)
+        elif kind == "bool":
+            assert isinstance(value, bool), (name, value)
+        else:
+            assert isinstance(value, AnchorState), (name, value)
+    assert set(VESSEL_STATUS_FLOATS_A + VESSEL_STATUS_FLOATS_B) == \
+        {n for n, kind in _vessel_status_fields() if kind == "float64"}
+    with pytest.raises(TypeError):
+        st["heel"]  # a record, read by attribute: no lookup by a string that could be misspelt

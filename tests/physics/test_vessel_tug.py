@@ -96,7 +96,7 @@ def test_abeam_towline_heel_matches_gm(cfg, tonnes):
     tug = _abeam(load_ship("harbour_tug.yaml"), F)
     lever = cfg["attachments"]["towing_hook"][2] - cfg["roll"]["z_lateral_resistance"]
     expected = -math.asin(F * lever / (cfg["hull"]["mass"] * G * cfg["roll"]["gm"]))   # port side down
-    assert tug.status()["heel"] == pytest.approx(expected, rel=0.05)
+    assert tug.status().heel == pytest.approx(expected, rel=0.05)
     assert abs(tug.state.angular_velocity_body[0]) < 1e-4
 
 
@@ -143,10 +143,10 @@ def test_girting_warning(cfg):
     righting = m * G * box_gz(B, T, T + fb, T / 2 + bm - gm, phi)
     lever = cfg["attachments"]["towing_hook"][2] - cfg["roll"]["z_lateral_resistance"]
     low = _abeam(load_ship("harbour_tug.yaml"), 5.0 * 1000 * G, 60.0).status()
-    assert low["girting_ratio"] == pytest.approx(5.0 * 1000 * G * lever / righting, rel=1e-3)
-    assert not low["girting_warning"]
+    assert low.girting_ratio == pytest.approx(5.0 * 1000 * G * lever / righting, rel=1e-3)
+    assert not low.girting_warning
     high = _abeam(load_ship("harbour_tug.yaml"), 20.0 * 1000 * G, 20.0).status()
-    assert high["girting_ratio"] > cfg["roll"]["girting_threshold"] and high["girting_warning"]
+    assert high.girting_ratio > cfg["roll"]["girting_threshold"] and high.girting_warning
 
 
 def test_course_stable_with_rudder_amidships():

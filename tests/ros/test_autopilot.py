@@ -355,7 +355,7 @@ def test_lockstep_autopilot_is_reproducible(start_node, start_autopilot, rclpy_c
     def measure():
         s = tug.state
         return Measurement(s.position[0], s.position[1], s.rpy[2], s.angular_velocity_body[2],
-                           tug.status()["speed_through_water"])
+                           tug.status().speed_through_water)
 
     out = law.update(measure(), 0.0)
     for k in range(n):

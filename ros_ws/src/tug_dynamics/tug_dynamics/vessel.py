@@ -121,13 +121,6 @@ class StatusRecord:
     girting_threshold: float       # girting_ratio at which girting_warning is raised
     girting_warning: bool
 
-    def __getitem__(self, key: str):
-        """Read a field by name, status["heel"], for callers that index by name; an unknown
-        name raises KeyError (never a default)."""
-        if key not in {f.name for f in dataclasses.fields(self)}:
-            raise KeyError(f"{type(self).__name__} has no field {key!r}")
-        return getattr(self, key)
-
 
 def check_current(current_world: Sequence[float]) -> np.ndarray:
     """A uniform current as a (3,) array, world ENU, m/s; ValueError unless 3 finite numbers."""
