@@ -381,22 +381,19 @@ def _echo_qos(cli: CliNode, topic: str, args):
     publishers = cli.node.get_publishers_info_by_topic(topic)
     if not publishers:
         return profile
-    reliable = sum(p.qos_profile.reliability == QoSReliabilityPolicy.RELIABLE for p in publishers)
-    latched = sum(p.qos_profile.durability == QoSDurabilityPolicy.TRANSIENT_LOCAL for p in publishers)
-    if reliable == len(publishers):
-        profile.reliability = QoSReliabilityPolicy.RELIABLE
-    else:
-        if reliable:
-            print("Some, but not all, publishers are offering QoSReliabilityPolicy.RELIABLE. Falling back to "
-                  "QoSReliabilityPolicy.BEST_EFFORT as it will connect to all publishers")
-        profile.reliability = QoSReliabilityPolicy.BEST_EFFORT
-    if latched == len(publishers):
-        profile.durability = QoSDurabilityPolicy.TRANSIENT_LOCAL
-    else:
-        if latched:
-            print("Some, but not all, publishers are offering QoSDurabilityPolicy.TRANSIENT_LOCAL. Falling back "
-                  "to QoSDurabilityPolicy.VOLATILE as it will connect to all publishers")
-        profile.durability = QoSDurabilityPolicy.VOLATILE
+    def common(policy: str, strong, weak):
+        """strong if every publisher offers it, else weak (ros2cli's warning when some do)."""
+        offering = sum(getattr(p.qos_profile, policy) == strong for p in publishers)
+        if offering == len(publishers):
+            return strong
+        if offering:
+            name = type(strong).__name__
+            print(f"Some, but not all, publishers are offering {name}.{strong.name}. Falling back to "
+                  f"{name}.{weak.name} as it will connect to all publishers")
+        return weak
+
+    profile.reliability = common("reliability", QoSReliabilityPolicy.RELIABLE, QoSReliabilityPolicy.BEST_EFFORT)
+    profile.durability = common("durability", QoSDurabilityPolicy.TRANSIENT_LOCAL, QoSDurabilityPolicy.VOLATILE)
     return profile
 
 
@@ -635,14 +632,21 @@ def param_set(cli: CliNode, args) -> int:
 
 
 # -- command line --------------------------------------------------------------------------------
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value <= 0:
-        raise argparse.ArgumentTypeError("value must be a positive integer")
-    return value
+def _int_at_least(least: int, message: str):
+    """argparse type: an int >= least, else ros2cli's own message."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = least - 1
+        if value < least:
+            raise argparse.ArgumentTypeError(message)
+        return value
+    return parse
+
+
+_positive_int = _int_at_least(1, "value must be a positive integer")
+_unsigned_int = _int_at_least(0, "value must be non-negative integer")
 
 
 def _positive_float(text: str) -> float:
@@ -652,16 +656,6 @@ def _positive_float(text: str) -> float:
         raise argparse.ArgumentTypeError("Expects a floating point number")
     if not value > 0.0:
         raise argparse.ArgumentTypeError("Value must be positive")
-    return value
-
-
-def _unsigned_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError("value must be non-negative integer")
     return value
 
 
