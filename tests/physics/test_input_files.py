@@ -1,9 +1,9 @@
-"""The one strict YAML reader of every input file (sim_plumbing.input_files), checked against
+"""The one strict YAML reader of every input file (sim_math.input_files), checked against
 what the YAML 1.2 spec and PyYAML's own SafeLoader say."""
 import pytest
 import yaml
 
-from sim_plumbing.input_files import YamlInputError, load_yaml, loads_yaml
+from sim_math.input_files import YamlInputError, load_yaml, loads_yaml
 
 
 def test_a_key_given_twice_is_an_error_with_both_lines():

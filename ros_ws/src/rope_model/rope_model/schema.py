@@ -1,5 +1,5 @@
 """Schemas of the rope files (element chain, ropes/table1.yaml) and cable files (fd cable,
-ropes/cable_001.yaml), read with the one strict YAML reader (sim_plumbing.input_files).
+ropes/cable_001.yaml), read with the one strict YAML reader (sim_math.input_files).
 
 pydantic models with unknown keys forbidden and strict types (a string or a bool is not a
 number, 11.0 is not an element count), the same approach as scenario_runner's scenario
@@ -18,7 +18,7 @@ from typing import Literal, Optional
 
 import annotated_types as at
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
-from sim_plumbing.input_files import YamlInputError, load_yaml
+from sim_math.input_files import YamlInputError, load_yaml
 
 G0 = 9.80665  # m/s^2, standard gravity
 

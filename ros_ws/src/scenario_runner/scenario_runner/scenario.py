@@ -30,7 +30,7 @@ from typing import Any, Dict, List, Literal, Optional
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
-from sim_plumbing.input_files import YamlInputError, load_yaml
+from sim_math.input_files import YamlInputError, load_yaml
 
 
 class ScenarioError(ValueError):

@@ -26,7 +26,7 @@ from pydantic import ValidationError
 from . import maneuvering as mv
 from . import ship_schema as schema
 from .vessel import Vessel, VesselState
-from sim_plumbing.input_files import YamlInputError, load_yaml
+from sim_math.input_files import YamlInputError, load_yaml
 
 SHIPS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "ships")
 G = 9.80665
