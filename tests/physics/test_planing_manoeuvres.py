@@ -95,8 +95,8 @@ def test_turn_heels_inward_with_small_speed_loss(stbd_turn):
     assert 0 < f["speed_loss_pct"] < 5.0
     assert f["steady_trim_deg"] > 0.0                         # still bow-up
     # two independent measurements of the turning diameter: the circle fitted to the track
-    # (f["diameter"]) and the steady-turn kinematics 2 U / r
-    assert f["diameter"] == pytest.approx(2 * f["steady_u"] / math.radians(abs(f["steady_r_deg_s"])), rel=0.02)
+    # (f["diameter"], sim_math.turning) and the steady-turn kinematics 2 U / |r| (measured 6.5e-5)
+    assert f["diameter"] == pytest.approx(2 * f["steady_speed"] / math.radians(abs(f["steady_r_deg_s"])), rel=0.02)
 
 
 def test_port_turn_mirrors_starboard_turn(stbd_turn):

@@ -4,8 +4,8 @@
   gives the steady turning diameter the vessel library measures: the analysis of the MCAP
   file is compared with an independent run of tug_dynamics (load_ship + the same dt and
   commands) measured two ways in this test: its own least-squares circle over the last
-  revolution (tolerance 0.5 %) and the library's turning_metrics (2 U / r over the last 20 %,
-  tolerance 1 %); advance, transfer and tactical diameter against turning_metrics within 0.5 m;
+  revolution (tolerance 0.5 %) and the library's turning_metrics (the same sim_math.turning
+  measures on the library's own track, tolerance 1 %); advance, transfer and tactical diameter against turning_metrics within 0.5 m;
 - the figures render: every PNG exists and is a non-trivial image (size, pixel spread, share
   of non-background pixels), for a towing recording with a rope (default demo, 10 s);
 - bad input: a recording cut in the middle is reported with its path and "truncated" (exit
@@ -131,7 +131,7 @@ def test_turning_diameter_matches_the_vessel_library(turn_recording, library_tur
     last = psi >= psi[-1] - 2 * math.pi
     d_circle = kasa_diameter(tr.x[last], tr.y[last])
     print(f"steady turning diameter: analysis {turn['steady_diameter']:.3f} m, independent circle fit "
-          f"{d_circle:.3f} m, library turning_metrics (2U/r) {lib['steady_diameter']:.3f} m; "
+          f"{d_circle:.3f} m, library turning_metrics {lib['steady_diameter']:.3f} m; "
           f"advance {turn['advance']:.2f} / {lib['advance']:.2f} m, transfer {turn['transfer']:.2f} / "
           f"{lib['transfer']:.2f} m, tactical {turn['tactical_diameter']:.2f} / {lib['tactical_diameter']:.2f} m")
     assert turn["steady_diameter"] == pytest.approx(d_circle, rel=0.005)

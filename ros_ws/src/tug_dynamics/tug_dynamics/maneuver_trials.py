@@ -8,6 +8,8 @@ from typing import Callable, Dict, Optional, Sequence
 
 import numpy as np
 
+from sim_math.turning import turning_measures
+
 from .vessel import Command, ExternalWrench, Vessel, VesselState
 
 KN = 1852.0 / 3600.0
@@ -71,38 +73,12 @@ def steady_straight(vessel: Vessel, engine_order: float, u0: float, duration: fl
     return float(tr.u[-1])
 
 
-def turning_metrics(tr: Track, t0: float = 0.0) -> Dict[str, float]:
-    """Advance, transfer, tactical diameter (at 90 / 180 deg heading change), steady values.
-
-    The approach course is the heading at t0; positions relative to the position at t0.
-    """
-    i0 = int(np.searchsorted(tr.t, t0))
-    psi0 = tr.psi[i0]
-    dpsi = np.abs(np.unwrap(tr.psi[i0:]) - psi0)
-    c, s = math.cos(psi0), math.sin(psi0)
-    dx = tr.x[i0:] - tr.x[i0]
-    dy = tr.y[i0:] - tr.y[i0]
-    along = c * dx + s * dy
-    across = -s * dx + c * dy
-
-    def at(angle):
-        j = int(np.argmax(dpsi >= angle))
-        if dpsi[j] < angle:
-            return math.nan, math.nan
-        f = (angle - dpsi[j - 1]) / (dpsi[j] - dpsi[j - 1])
-        return (along[j - 1] + f * (along[j] - along[j - 1]),
-                across[j - 1] + f * (across[j] - across[j - 1]))
-
-    adv, transfer = at(math.pi / 2)
-    _, tact = at(math.pi)
-    # steady turning diameter from the last full revolution: mean distance across the circle
-    res = {"advance": adv, "transfer": abs(transfer), "tactical_diameter": abs(tact)}
-    n = len(tr.t)
-    tail = slice(int(0.8 * n), n)
-    res["steady_speed"] = float(np.mean(tr.speed[tail]))
-    res["steady_yaw_rate"] = float(np.mean(tr.r[tail]))
-    res["steady_diameter"] = 2.0 * res["steady_speed"] / abs(res["steady_yaw_rate"]) if res["steady_yaw_rate"] else math.inf
-    return res
+def turning_metrics(tr: Track, t0: float = 0.0, t1: Optional[float] = None) -> Dict[str, float]:
+    """The turning-circle measures of sim_math.turning.turning_measures (advance, transfer,
+    tactical diameter, steady diameter = circle fitted to the last full revolution, steady
+    speed, yaw rate, drift angle, ...; definitions and keys there) of the turn whose helm
+    order was given at t0. Only adapts a Track to the arrays; no measure is defined here."""
+    return turning_measures(tr.t, tr.x, tr.y, tr.psi, tr.u, tr.v, tr.r, t0, t1)
 
 
 def distance_run(tr: Track) -> np.ndarray:
@@ -112,7 +88,9 @@ def distance_run(tr: Track) -> np.ndarray:
 
 
 def readme_tables() -> str:
-    """The README's result tables (python -m tug_dynamics.maneuver_trials)."""
+    """The README's result tables (python -m tug_dynamics.maneuver_trials): the block between
+    <!-- tables:start --> and <!-- tables:end --> in ros_ws/src/tug_dynamics/README.md, as is.
+    Turning measures from turning_metrics (sim_math.turning definitions)."""
     from .ship_file import load_ship
     from .vessel import ANCHOR_LET_GO
     lines = []
@@ -125,7 +103,7 @@ def readme_tables() -> str:
         b.set_state(VesselState(np.zeros(3), np.zeros(3), np.array([0.857, 0, 0.0]), np.zeros(3)))
         tr = run(b, 400.0, 0.05)
         m = turning_metrics(tr)
-        beta = math.degrees(math.atan2(-tr.v[-1], tr.u[-1]))
+        beta = math.degrees(m["steady_drift_angle"])
         lines.append(f"| {g} deg | {m['steady_speed']:.3f} | {math.degrees(m['steady_yaw_rate']):.2f} | {beta:.1f} | "
                      f"{m['steady_diameter']:.1f} | {m['steady_diameter'] / 5.0:.2f} | {m['tactical_diameter'] / 5.0:.2f} |")
     # ---- S-175 ----
@@ -171,13 +149,12 @@ def readme_tables() -> str:
         ev = {0.0: Command(half, math.radians(35.0))}
         if case == "dredging":
             ev[30.0] = Command(half, math.radians(35.0), ANCHOR_LET_GO)
-        u0 = s.state.linear_velocity_body[0]
         m = turning_metrics(run(s, 1500.0, 1.0, ev))
-        lines.append(f"| {label} (approach {u0 / KN:.2f} kn) | {m['advance']:.0f} | {m['transfer']:.0f} | "
+        lines.append(f"| {label} (approach {m['approach_speed'] / KN:.2f} kn) | {m['advance']:.0f} | {m['transfer']:.0f} | "
                      f"{m['tactical_diameter']:.0f} | {m['steady_speed'] / KN:.2f} | "
                      f"{math.degrees(m['steady_yaw_rate']):.3f} | {m['steady_diameter']:.0f} |")
     # ---- tug ----
-    lines += ["", "### Harbour tug", "", "| quantity | stated | model |", "|---|---|---|"]
+    lines += ["", "### Harbour tug", "", "| quantity | stated | model | kind |", "|---|---|---|---|"]
     tug = load_ship("harbour_tug.yaml")
     tr = run(tug, 300.0, 0.2, {0.0: Command(1.0, 0.0)})
     hook = tug.attachments["towing_hook"]
@@ -185,15 +162,16 @@ def readme_tables() -> str:
     run(tug2, 120.0, 0.1, {0.0: Command(1.0, 0.0)}, wrenches=lambda v, t: [ExternalWrench(
         np.array([-2e5 * v.state.position[0] - 2e6 * v.state.linear_velocity_body[0], 0, 0]), hook)])
     bp = 2e5 * tug2.state.position[0] / 9806.65
-    lines.append(f"| bollard pull ahead, t | 35.4 | {bp:.2f} |")
-    lines.append(f"| free-running speed, full ahead, kn | 12.0 | {tr.u[-1] / KN:.2f} |")
+    lines.append(f"| bollard pull ahead, t | 35.4 | {bp:.2f} | calibration: `engine.rated_rpm` chosen for it |")
+    lines.append(f"| free-running speed, full ahead, kn | 12.0 | {tr.u[-1] / KN:.2f} | "
+                 f"calibration: the resistance's Fn^4 term set for it |")
     t3 = load_ship("harbour_tug.yaml")
     tr3 = run(t3, 300.0, 0.2, {0.0: Command(1.0, math.radians(35.0))})
     m3 = turning_metrics(tr3)
     lines.append(f"| 35 deg turn from rest at full ahead: steady diameter m (/L) | - | {m3['steady_diameter']:.0f} "
-                 f"({m3['steady_diameter'] / 24:.1f}) |")
+                 f"({m3['steady_diameter'] / 24:.1f}) | regression (no published value) |")
     from .vessel import rotation_body_to_world
-    for tonnes in (5.0, 10.0, 20.0):
+    for k, tonnes in enumerate((5.0, 10.0, 20.0)):
         t4 = load_ship("harbour_tug.yaml")
         F = tonnes * 9806.65
         run(t4, 200.0, 0.1, wrenches=lambda v, t: [ExternalWrench(
@@ -202,7 +180,9 @@ def readme_tables() -> str:
         st = t4.status()
         lines.append(f"| abeam pull {tonnes:.0f} t at hook height: heel deg (GM prediction) / girting ratio, warning | "
                      f"{pred:.2f} | {abs(math.degrees(st.heel)):.2f} / {st.girting_ratio:.2f}, "
-                     f"{'WARNING' if st.girting_warning else 'ok'} |")
+                     f"{'WARNING' if st.girting_warning else 'ok'} | "
+                     + ("heel: analytic static balance F lever = Delta g GM sin(phi); ratio: regression |" if k == 0
+                        else "as above |"))
     return "\n".join(lines)
 
 

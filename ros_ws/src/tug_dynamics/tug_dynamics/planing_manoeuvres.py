@@ -17,6 +17,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
+from sim_math.turning import turning_measures
 from tug_dynamics.planing import KNOT, PlaningHull, load
 from tug_dynamics.vessel import Command
 
@@ -109,37 +110,41 @@ def deceleration_backing(path: str = DEFAULT_SHIP, t_back: float = 30.0, duratio
     return {"history": h, "figures": fig}
 
 
-def _circle_diameter(x, y) -> float:
-    # algebraic least-squares circle fit (Kasa)
-    A = np.c_[2 * x, 2 * y, np.ones_like(x)]
-    b = x ** 2 + y ** 2
-    cx, cy, c = np.linalg.lstsq(A, b, rcond=None)[0]
-    return 2.0 * math.sqrt(c + cx ** 2 + cy ** 2)
-
-
 def turn(path: str = DEFAULT_SHIP, speed: float = 12.0, bucket_deg: float = -10.0,
          duration: float = 150.0) -> Dict:
-    """Steady run at `speed`, then the bucket to `bucket_deg` (interface sign; -10 = starboard)."""
+    """Steady run at `speed`, then the bucket to `bucket_deg` (interface sign; -10 = starboard).
+
+    The turning measures are sim_math.turning's (helm order at t0 = 0; the steady values over
+    its steady window, the last full revolution but not the first 180 deg; NaN if the turn is
+    shorter than 270 deg): advance, transfer, tactical diameter, steady diameter (circle fit),
+    steady speed U and speed loss U / U0, yaw rate, drift angle atan2(-v, u) (REP-103 sign:
+    negative = bow inside in a starboard turn). Roll and trim are averaged over the same window."""
     m = load(path)
     m.set_steady_run(speed)
     h = run(m, [(0.0, None, math.radians(bucket_deg))], duration)
-    yaw_change = np.unwrap(h["yaw"]) - h["yaw"][0]
-    late = h["t"] >= duration - 60.0
-    i180 = np.flatnonzero(np.abs(yaw_change) >= math.pi)
+    tm = turning_measures(h["t"], h["x"], h["y"], h["yaw"], h["u"], h["v"], h["r"], 0.0)
+    steady = h["t"] >= tm["steady_t_start"]          # empty (NaN start) if the turn is too short
+
+    def steady_mean_deg(values) -> float:
+        return float(np.degrees(values[steady].mean())) if steady.any() else float("nan")
+
     fig = {
-        "u0": float(h["u"][0]),
-        "steady_u": float(h["u"][late].mean()),
-        "speed_loss_pct": float(100.0 * (1.0 - h["u"][late].mean() / h["u"][0])),
-        "steady_r_deg_s": float(np.degrees(h["r"][late].mean())),
-        "steady_roll_deg": float(np.degrees(h["roll"][late].mean())),
+        "u0": tm["approach_speed"],
+        "steady_speed": tm["steady_speed"],
+        "speed_loss_pct": 100.0 * (1.0 - tm["speed_loss"]),
+        "steady_r_deg_s": math.degrees(tm["steady_yaw_rate"]),
+        "steady_roll_deg": steady_mean_deg(h["roll"]),
         "max_roll_deg": float(np.degrees(np.abs(h["roll"])).max()),
-        "steady_trim_deg": float(-np.degrees(h["pitch"][late].mean())),
-        "steady_drift_deg": float(np.degrees(np.arctan2(h["v"][late], h["u"][late]).mean())),
-        "diameter": _circle_diameter(h["x"][late], h["y"][late]),
-        "tactical_diameter": float(abs(h["y"][i180[0]] - h["y"][0])) if i180.size else float("nan"),
-        "t_180": float(h["t"][i180[0]]) if i180.size else float("nan"),
+        "steady_trim_deg": -steady_mean_deg(h["pitch"]),
+        "steady_drift_deg": math.degrees(tm["steady_drift_angle"]),
+        "advance": tm["advance"],
+        "transfer": tm["transfer"],
+        "tactical_diameter": tm["tactical_diameter"],
+        "t_180": tm["time_to_180"],
+        "diameter": tm["steady_diameter"],
+        "diameter_kinematic": tm["steady_diameter_kinematic"],
     }
-    return {"history": h, "figures": fig}
+    return {"history": h, "figures": fig, "turning": tm}
 
 
 def zigzag(path: str = DEFAULT_SHIP, speed: float = 12.0, bucket_deg: float = 10.0, every: float = 5.0,
