@@ -15,6 +15,6 @@ setup(
     maintainer="Tug simulator maintainers",
     maintainer_email="maintainer@tugsim.example.org",
     description="ROS-free numerics shared by the physics and analysis packages: rotations, RK4, "
-                "circle fit and the IMO turning measures.",
+                "LU solves, circle fit and the IMO turning measures.",
     license="Apache-2.0",
 )

@@ -33,6 +33,8 @@ import math
 import numpy as np
 from numba import njit
 
+from sim_math.linalg import lu_factor, lu_solve_columns
+
 NV = 10
 # parameter vector layout
 P_M, P_MA, P_MR, P_W0, P_EA, P_EI, P_KT, P_KN, P_KB = range(9)
@@ -334,70 +336,13 @@ def _kdot(Ko, j, i, H, Ho):
 
 # ----------------------------------------------------------------- block tri-diagonal solve
 @njit(cache=True)
-def _lu(M, piv):
-    """In-place LU with partial pivoting of a small square matrix. Returns False if singular."""
-    n = M.shape[0]
-    for c in range(n):
-        p = c
-        big = abs(M[c, c])
-        for i in range(c + 1, n):
-            if abs(M[i, c]) > big:
-                big = abs(M[i, c])
-                p = i
-        piv[c] = p
-        if big == 0.0:
-            return False
-        if p != c:
-            for k in range(n):
-                tmp = M[c, k]
-                M[c, k] = M[p, k]
-                M[p, k] = tmp
-        inv = 1.0 / M[c, c]
-        for i in range(c + 1, n):
-            f = M[i, c] * inv
-            M[i, c] = f
-            if f != 0.0:
-                for k in range(c + 1, n):
-                    M[i, k] -= f * M[c, k]
-    return True
-
-
-@njit(cache=True)
-def _lu_solve(M, piv, B):
-    """Solve in place for the columns of B (n x m) with the factors from _lu."""
-    n = M.shape[0]
-    m = B.shape[1]
-    for c in range(n):
-        p = piv[c]
-        if p != c:
-            for k in range(m):
-                tmp = B[c, k]
-                B[c, k] = B[p, k]
-                B[p, k] = tmp
-    for c in range(n):
-        for i in range(c + 1, n):
-            f = M[i, c]
-            if f != 0.0:
-                for k in range(m):
-                    B[i, k] -= f * B[c, k]
-    for c in range(n - 1, -1, -1):
-        inv = 1.0 / M[c, c]
-        for k in range(m):
-            B[c, k] *= inv
-        for i in range(c):
-            f = M[i, c]
-            if f != 0.0:
-                for k in range(m):
-                    B[i, k] -= f * B[c, k]
-
-
-@njit(cache=True)
 def block_tridiag_solve(A, D, C, r):
     """Solve the block tri-diagonal system (Fig. 2): A[k] x[k-1] + D[k] x[k] + C[k] x[k+1] = r[k].
 
     Block Thomas elimination (Numerical Recipes' approach, ref [14]) with partial pivoting
-    inside each 10x10 block: O(n) instead of the O(n^3) of a dense solve. Inputs are not
-    modified. Returns x (n, m) or raises on a singular block.
+    inside each 10x10 block (sim_math.linalg): O(n) instead of the O(n^3) of a dense solve.
+    Inputs are not modified. Returns x (n, m); raises ValueError on a singular or non-finite
+    diagonal block.
     """
     n, m = r.shape
     X = np.empty((n, m, m))  # D'^-1 C
@@ -421,9 +366,9 @@ def block_tridiag_solve(A, D, C, r):
                         for c in range(m):
                             Dp[i, c] -= aij * X[k - 1, l, c]
                         rhs[i, m] -= aij * y[k - 1, l]
-        if not _lu(Dp, piv):
+        if not lu_factor(Dp, piv):
             raise ValueError("block tri-diagonal solve: singular diagonal block")
-        _lu_solve(Dp, piv, rhs)
+        lu_solve_columns(Dp, piv, rhs, m + 1)
         for i in range(m):
             for l in range(m):
                 X[k, i, l] = rhs[i, l]

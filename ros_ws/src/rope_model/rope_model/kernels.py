@@ -42,6 +42,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from sim_math.linalg import lu_factor, lu_solve, lu_solve_columns
+
 # status codes returned by run_substeps
 OK = 0
 DIVERGED = 1
@@ -824,54 +826,6 @@ def _ldl5_solve(i0, i1, i2, i3, i4, l10, l20, l30, l40, l21, l31, l41, l32, l42,
     return x0, x1, x2, x3, x4
 
 
-@njit(cache=True)
-def _lu_solve(D, R, r, m):
-    """Solve D Z = [R[:, :m] | r] in place (D 5x5, R 5x5, r 5), Gaussian elimination with
-    partial pivoting. Returns False if D is singular or not finite."""
-    for col in range(5):
-        piv = col
-        best = abs(D[col, col])
-        for q in range(col + 1, 5):
-            if abs(D[q, col]) > best:
-                best = abs(D[q, col])
-                piv = q
-        if best == 0.0 or not math.isfinite(best):
-            return False
-        if piv != col:
-            for c in range(col, 5):
-                tmp = D[col, c]
-                D[col, c] = D[piv, c]
-                D[piv, c] = tmp
-            for c in range(m):
-                tmp = R[col, c]
-                R[col, c] = R[piv, c]
-                R[piv, c] = tmp
-            tmp = r[col]
-            r[col] = r[piv]
-            r[piv] = tmp
-        inv = 1.0 / D[col, col]
-        for q in range(col + 1, 5):
-            fac = D[q, col] * inv
-            if fac != 0.0:
-                for c in range(col + 1, 5):
-                    D[q, c] -= fac * D[col, c]
-                for c in range(m):
-                    R[q, c] -= fac * R[col, c]
-                r[q] -= fac * r[col]
-    for col in range(4, -1, -1):
-        inv = 1.0 / D[col, col]
-        for c in range(m):
-            acc = R[col, c]
-            for q in range(col + 1, 5):
-                acc -= D[col, q] * R[q, c]
-            R[col, c] = acc * inv
-        acc = r[col]
-        for q in range(col + 1, 5):
-            acc -= D[col, q] * r[q]
-        r[col] = acc * inv
-    return True
-
-
 @njit(cache=True, inline="always", fastmath=FMA)
 def _eliminate_block(Ad, Ao, Wm, rhs, j, N):
     """Forward elimination of block j (block Thomas on the symmetric system: diagonal Ad,
@@ -976,12 +930,18 @@ def _eliminate_block(Ad, Ao, Wm, rhs, j, N):
 @njit(cache=True, fastmath=FMA)
 def _eliminate_block_pivoting(Ad, Ao, Wm, rhs, j, N):
     """_eliminate_block for a D_j that is not positive definite (Ad[j] = D_j in full):
-    Gaussian elimination with partial pivoting. Returns False if D_j is singular."""
+    LU with partial pivoting (sim_math.linalg), Ad[j] overwritten by the factors. Returns
+    False if D_j is singular or not finite."""
     m = 5 if j < N - 1 else 0
     for r in range(5):
         for c in range(m):
             Wm[j, r, c] = Ao[j, r, c]
-    return _lu_solve(Ad[j], Wm[j], rhs[j], m)
+    piv = np.empty(5, np.int64)
+    if not lu_factor(Ad[j], piv):
+        return False
+    lu_solve_columns(Ad[j], piv, Wm[j], m)
+    lu_solve(Ad[j], piv, rhs[j])
+    return True
 
 
 @njit(cache=True, inline="always", fastmath=FMA)

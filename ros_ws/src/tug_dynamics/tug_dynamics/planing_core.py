@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from sim_math.integration import rk4_stage, rk4_update
+from sim_math.linalg import lu_factor, lu_solve
 from sim_math.rotations import matrix_entries_from_trig
 
 # --- scalar parameter slots -------------------------------------------------------------
@@ -74,41 +75,6 @@ def jet_speed(P, rtab, n_abs):
         return 0.0
     r0 = resistance(P, rtab, u0)
     return 0.5 * (u0 + math.sqrt(u0 * u0 + 4.0 * r0 / (P[P_RHO] * P[P_AJ])))
-
-
-@njit(cache=True)
-def solve6(A, b):
-    """Gaussian elimination with partial pivoting for the 6x6 mass matrix."""
-    n = 6
-    M = A.copy()
-    x = b.copy()
-    for k in range(n):
-        piv = k
-        big = abs(M[k, k])
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > big:
-                big = abs(M[i, k])
-                piv = i
-        if piv != k:
-            for j in range(n):
-                t = M[k, j]
-                M[k, j] = M[piv, j]
-                M[piv, j] = t
-            t = x[k]
-            x[k] = x[piv]
-            x[piv] = t
-        for i in range(k + 1, n):
-            f = M[i, k] / M[k, k]
-            if f != 0.0:
-                for j in range(k, n):
-                    M[i, j] -= f * M[k, j]
-                x[i] -= f * x[k]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for j in range(i + 1, n):
-            s -= M[i, j] * x[j]
-        x[i] = s / M[i, i]
-    return x
 
 
 # ---- force components: each returns its contribution in the body frame ----------------------
@@ -400,7 +366,13 @@ def rhs(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag):
     b = np.empty(6)
     A = np.empty((6, 6))
     zdot = forces(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag, b, A)
-    acc = solve6(A, b)
+    # Eq 1: the accelerations A^-1 b; A and b are this call's own, solved in place
+    piv = np.empty(6, np.int64)
+    if lu_factor(A, piv):
+        lu_solve(A, piv, b)
+    else:  # singular or not finite: a non-finite state, which PlaningHull.step refuses
+        b[:] = np.nan
+    acc = b
     phi, th, psi = x[3], x[4], x[5]
     u, v, w, p, q, r = x[6], x[7], x[8], x[9], x[10], x[11]
     cf, sf = math.cos(phi), math.sin(phi)
