@@ -47,7 +47,7 @@ def turns():
         ev = {0.0: Command(HALF, HARD)}
         if case == "dredging":
             ev[30.0] = Command(HALF, HARD, ANCHOR_LET_GO)      # let go during the turn
-        tr = run(s, 1500.0, 1.0, ev)
+        tr = run(s, 2400.0, 1.0, ev)  # the last full revolution (~890 s) well past the transient
         out[case] = turning_metrics(tr)
         out[case]["track"] = tr
     return out
@@ -73,9 +73,8 @@ def test_steady_turning_diameter_two_ways(turns):
         assert np.ptp(tr.r[tail]) < 1e-3 * abs(r), case                      # steady
         d_fit = _fitted_circle_diameter(tr.x[tail], tr.y[tail])
         d_kin = 2.0 * np.mean(tr.speed[tail]) / abs(r)
-        assert d_fit == pytest.approx(d_kin, rel=1e-5), case                  # measured 4.5e-8
-        # the library's window is the last revolution (from 854 s), where the normal turn is
-        # still creeping towards steady: measured 5.0e-6 (normal), 2.4e-7 and 1.6e-7
+        assert d_fit == pytest.approx(d_kin, rel=1e-5), case                  # measured 2.5e-10
+        # the library's window is the last full revolution: measured 5.5e-8, 1.3e-8, 9.2e-9
         assert m["steady_diameter"] == pytest.approx(d_fit, rel=1e-5), case
 
 

@@ -149,7 +149,7 @@ def readme_tables() -> str:
         ev = {0.0: Command(half, math.radians(35.0))}
         if case == "dredging":
             ev[30.0] = Command(half, math.radians(35.0), ANCHOR_LET_GO)
-        m = turning_metrics(run(s, 1500.0, 1.0, ev))
+        m = turning_metrics(run(s, 2400.0, 1.0, ev))
         lines.append(f"| {label} (approach {m['approach_speed'] / KN:.2f} kn) | {m['advance']:.0f} | {m['transfer']:.0f} | "
                      f"{m['tactical_diameter']:.0f} | {m['steady_speed'] / KN:.2f} | "
                      f"{math.degrees(m['steady_yaw_rate']):.3f} | {m['steady_diameter']:.0f} |")
