@@ -19,7 +19,8 @@ Public node arrays are ordered from the towing point (index 0, paper node n, s =
 of tug_msgs/RopeState) to the free end (index N-1, paper node 1, s = 0).
 
     params = load_cable_params(path)                      # FdCableParams; FdCableParamsError
-    cable = FdCable(params, top_position, top_velocity, heading, n_nodes=None, current=None)
+    cable = FdCable(params, top_position, top_velocity, heading, n_nodes=None, current=None,
+                    tangential_reference=None)                # None: R_t on v_t - u_t (Eq 6)
     cable.set_top_kinematics(position(3,), velocity(3,))  # world; ValueError on NaN/inf
     cable.step(dt)                                        # FdCableConvergenceError(step, ...)
     cable.top_force()                                     # (3,) force ON the ship, N, world
@@ -238,7 +239,7 @@ class FdCable:
     """Towed cable, free lower end, top end at the ship's towing point (Eq 2-21)."""
 
     def __init__(self, params: FdCableParams, top_position, top_velocity, heading, *,
-                 n_nodes=None, current=None):
+                 n_nodes=None, current=None, tangential_reference=None):
         if not isinstance(params, FdCableParams):
             raise TypeError("params must be an FdCableParams (see load_cable_params)")
         n = params.n_nodes if n_nodes is None else n_nodes
@@ -257,6 +258,12 @@ class FdCable:
             current = params.current_along_heading * np.array(
                 [math.cos(heading), math.sin(heading), 0.0])
         self.current = _vec3(current, "current")
+        # R_t of Eq 6 acts on v_t relative to this world velocity: None = the current (Morison
+        # drag on the relative velocity, the shipped reading); the literal Eq 6 "v_t" is the
+        # cable's own velocity, i.e. a reference of 0 (over ground) or the ship's velocity
+        # (a frame towed with the ship). Kept for the reading comparison (FD_CABLE.md, issue 15).
+        self.tangential_reference = (None if tangential_reference is None
+                                     else _vec3(tangential_reference, "tangential_reference"))
         self.heading = float(heading)
         p = params
         mr = p.mass + (p.added_mass if p.added_mass_full_acceleration else 0.0)
@@ -287,6 +294,11 @@ class FdCable:
     # ------------------------------------------------------------------ frame helpers
     def _to_paper(self, w):
         return self._R.T @ w
+
+    def _cur_paper(self):
+        """(6,) paper frame: the current (normal drag) and the tangential drag's reference."""
+        ref = self.current if self.tangential_reference is None else self.tangential_reference
+        return np.concatenate([self._R.T @ self.current, self._R.T @ ref])
 
     def _guess_straight(self):
         """Straight cable trailing 45 deg downstream (or hanging): a rough, generic guess."""
@@ -321,7 +333,7 @@ class FdCable:
         dummy3 = np.zeros((n, 10, 10))
         dummy2 = np.zeros((max(n - 1, 1), 10))
         vtop = self._to_paper(self.top_velocity)
-        cur = self._to_paper(self.current)
+        cur = self._cur_paper()
         res = math.inf
         max_iter = max(60, self.params.newton_max_iter)
         for it in range(1, max_iter + 1):
@@ -367,7 +379,7 @@ class FdCable:
         n = self.n
         A, D, C, r = (np.zeros((n, 10, 10)), np.zeros((n, 10, 10)), np.zeros((n, 10, 10)),
                       np.zeros((n, 10)))
-        FK.assemble(Hg, H0, Ko, Cold, self._P, self._to_paper(self.current),
+        FK.assemble(Hg, H0, Ko, Cold, self._P, self._cur_paper(),
                     self._to_paper(self.top_velocity), self.ds, dt, self.params.time_weight,
                     True, A, D, C, r)
         return A, D, C, r
@@ -380,7 +392,7 @@ class FdCable:
 
     def _old_terms(self, H0):
         Ko = FK.k_matrices(H0, self._P)
-        Cold = FK.old_level(H0, self._P, self._to_paper(self.current), self.ds,
+        Cold = FK.old_level(H0, self._P, self._cur_paper(), self.ds,
                             self.params.time_weight)
         return Ko, Cold
 
@@ -389,7 +401,7 @@ class FdCable:
         (H or None, iterations, max|Phi| of the last iterate, last scaled correction)."""
         p = self.params
         Ko, Cold = self._old_terms(H0)
-        vtop, cur = self._to_paper(vtop_w), self._to_paper(self.current)
+        vtop, cur = self._to_paper(vtop_w), self._cur_paper()
         n = self.n
         A, D, C, r = (np.empty((n, 10, 10)), np.empty((n, 10, 10)), np.empty((n, 10, 10)),
                       np.empty((n, 10)))

@@ -25,7 +25,8 @@ balance and compatibility (Eq 2-5) because Eq 10-12 are OCR-damaged:
   9  EI Ob'      = EI Ob On tan th - Sn (1+e)^3
 e = T/EA; mr = m + ma (added mass on the whole normal acceleration, frame-invariant) or m
 (the paper's Eq 12 literally: added mass on vn., vb. only). Fluid acceleration terms vanish
-for a uniform steady current. Drag Eq 6 on the velocity relative to the current.
+for a uniform steady current. Drag Eq 6 on the velocity relative to the current (R_t on
+v_t - u_t; see FD_CABLE.md, 'Tangential drag: statics against the turn').
 """
 import cmath
 import math
@@ -61,8 +62,9 @@ def local_triad(phi, th, out):
 def node_terms(H, Hold, P, cur, use_k, L, g):
     """L(H) of Eq 10 (re-derived) and g = K(H) (H - Hold) of Eq 12 (re-derived).
 
-    Generic in the dtype of H (complex for the complex-step Jacobian). cur: uniform current in
-    the paper frame, m/s.
+    Generic in the dtype of H (complex for the complex-step Jacobian). cur (6,): the uniform
+    current (cur[0:3]) and the velocity the tangential drag R_t is measured against (cur[3:6];
+    the current itself for Morison drag on the relative velocity), paper frame, m/s.
     """
     T, Sn, Sb, vt, vn, vb, ph, th, On, Ob = (H[0], H[1], H[2], H[3], H[4], H[5], H[6], H[7],
                                              H[8], H[9])
@@ -70,10 +72,12 @@ def node_terms(H, Hold, P, cur, use_k, L, g):
     cp, sp, ct, st = cmath.cos(ph), cmath.sin(ph), cmath.cos(th), cmath.sin(th)
     tt = st / ct
     e1 = 1.0 + T / EA
-    # current in the local frame (Eq 1)
-    ut = cur[0] * ct * cp + cur[1] * ct * sp - cur[2] * st
+    # current in the local frame (Eq 1); R_t acts on v_t relative to cur[3:6] (the velocity
+    # the tangential drag is measured against, FdCable(tangential_reference=)), R_n, R_b on the
+    # velocity relative to the current cur[0:3]
     un = -cur[0] * sp + cur[1] * cp
     ub = cur[0] * st * cp + cur[1] * st * sp + cur[2] * ct
+    ut = cur[3] * ct * cp + cur[4] * ct * sp - cur[5] * st
     vtr, vnr, vbr = vt - ut, vn - un, vb - ub
     # Eq 6: Morison drag; (1+e)^0.5 = stretched length x Poisson-thinned diameter.
     # x*sqrt(x*x) is x|x| in a complex-step-safe form.
