@@ -112,7 +112,9 @@ def test_zigzag_roll_is_periodic_in_phase_and_smaller_than_in_the_turn(zigzag, s
     h, f = zigzag["history"], zigzag["figures"]
     peaks = np.array(f["roll_peaks_deg"])
     assert np.all(np.sign(peaks[1:]) == -np.sign(peaks[:-1]))          # alternates every leg
-    assert np.allclose(np.abs(peaks), np.abs(peaks).mean(), rtol=0.05)  # periodic, steady amplitude
+    # periodic, steady amplitude from the second half-cycle on (the first starts from the
+    # straight run; since the heel takes longer than a 5 s leg to settle it differs by ~8 %)
+    assert np.allclose(np.abs(peaks[1:]), np.abs(peaks[1:]).mean(), rtol=0.05)
     # roll zero crossings follow the 5 s bucket reversals
     t, roll = h["t"], h["roll"]
     zc = t[1:][np.diff(np.sign(roll)) != 0]
@@ -121,10 +123,11 @@ def test_zigzag_roll_is_periodic_in_phase_and_smaller_than_in_the_turn(zigzag, s
     # in phase with the turn: heel inward (roll opposite to yaw rate) most of the time
     sel = (t > 5.0) & (np.abs(h["r"]) > np.radians(0.5))
     assert np.mean(roll[sel] * h["r"][sel] < 0) > 0.9
-    # smaller than in the steady turn on average (RMS); the peaks reach the turn's roll within
-    # 5 %: with Tables 3-4 the yaw rate settles in ~2 s, well inside a 5 s leg (PLANING.md).
-    # The paper's roll values for both are withheld: 0.95 and 1.05 are this test's margins.
+    # smaller than in the steady turn: the heel takes longer than a 5 s leg to settle. (This
+    # asserted only "peaks < 1.05 x steady" while the old model's heel followed the yaw rate
+    # within a second; issue 15 item 2, PLANING.md.) The paper's roll values are withheld:
+    # 0.95 is this test's margin.
     steady = stbd_turn["figures"]["steady_roll_deg"]
     assert f["roll_rms_deg"] < 0.95 * steady
-    assert f["roll_amplitude_deg"] < 1.05 * steady
+    assert f["roll_amplitude_deg"] < 0.95 * steady
     assert f["speed_loss_pct"] < 5.0          # paper 4.3: small speed change (5 % as in the turn)

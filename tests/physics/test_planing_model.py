@@ -204,7 +204,7 @@ def test_bad_ship_file_names_file_and_key(cfg, mutate, key):
 def test_every_estimated_value_is_marked(cfg):
     est = cfg["estimated"]
     must = ["hull.chine_beam", "hull.deadrise_deg", "hull.lcg_from_transom", "waterjet.nozzle_area",
-            "hydrodynamics.polynomials.M_w", "hydrodynamics.Z_q_per_speed", "hydrodynamics.K_v_lift_lever"]
+            "hydrodynamics.polynomials.M_w", "hydrodynamics.Z_q_per_speed", "hydrodynamics.side_force_froude_range"]
     for key in must:
         assert key in est and len(est[key]) > 10
     with open(SHIP, encoding="utf-8") as fh:

@@ -38,7 +38,7 @@ _SCHEMA: Dict[str, Dict[str, bool]] = {
     "resistance": {"savitsky_speeds_kn": True, "roughness_allowance": True, "astern_factor": True},
     "hydrodynamics": {"reference_length": True, "lift_reference_beam": True, "lift_fade_draft": True,
                       "polynomials": True, "Y_vv": True, "N_rr": True, "Y_phi": True, "N_phi": True,
-                      "K_phi": True, "K_v_lift_lever": True, "Z_wdot": True, "K_pdot": True,
+                      "K_phi": True, "side_force_froude_range": True, "Z_wdot": True, "K_pdot": True,
                       "M_qdot": True, "Z_q_per_speed": True, "heave_damping": True,
                       "pitch_damping": True, "roll_damping": True},
     "hydrodynamics.polynomials": {k: True for k in (
@@ -198,8 +198,10 @@ class PlaningHull(Vessel):
         limits = {"bucket_max": P[pc.P_DMAX],
                   "rated_impeller_speed": c.num("waterjet.rated_impeller_rpm", 0.0, 1e5, strict_lo=True)
                   * 2.0 * math.pi / 60.0}
-        return cls(name or str(cfg.get("name", "planing_hull")), P, C, rtab, hull, attachments,
+        boat = cls(name or str(cfg.get("name", "planing_hull")), P, C, rtab, hull, attachments,
                    limits, source, initial_state)
+        boat.length = c.num("hull.length_overall", 0.0, 200.0, strict_lo=True)  # the L of the IMO criteria
+        return boat
 
     # ------------------------------------------------------------------ Vessel interface
     @property
@@ -402,7 +404,8 @@ def _hull_particulars(c: _Cfg) -> Tuple[savitsky.HullParticulars, _BodyParticula
     mass = c.num("hull.mass", 0.0, 1e7, strict_lo=True)
     x_ref = c.num("hull.reference_point_from_transom", 0.0, loa)
     b = c.num("hull.chine_beam", 0.0, 50.0, strict_lo=True)
-    beta = c.num("hull.deadrise_deg", 0.0, 45.0)
+    # > 0: a flat bottom's pressure has no side component (side_force_height is unbounded)
+    beta = c.num("hull.deadrise_deg", 5.0, 45.0)
     lcg = c.num("hull.lcg_from_transom", 0.0, loa, strict_lo=True)
     vcg = c.num("hull.vcg_above_waterline", -d0, 20.0)
     kxx, kyy, kzz = c.vec("hull.radii_of_gyration", 3)
@@ -436,6 +439,20 @@ def _fill_mass_and_hydrostatics(P: np.ndarray, hull: savitsky.HullParticulars, b
     P[pc.P_XG], P[pc.P_YG], P[pc.P_ZG] = hull.lcg_from_transom - body.reference_from_transom, 0.0, body.vcg
     P[pc.P_IXX], P[pc.P_IYY], P[pc.P_IZZ] = mass * kxx ** 2, mass * kyy ** 2, mass * kzz ** 2
     P[pc.P_D0], P[pc.P_V0], P[pc.P_NEXP] = body.draft, mass / hull.water_density, body.displacement_exponent
+    P[pc.P_ZSIDE] = side_force_height(hull, body.draft)
+
+
+def side_force_height(hull: savitsky.HullParticulars, draft: float) -> float:
+    """Height above the origin (static waterline) at which the planing hull's side force acts.
+
+    With dry sides (flow leaving the chines) the side force is the bottom pressure normal to the
+    two deadrise panels; a panel's force has a roll moment about the keel equal to itself times
+    the distance of its centre of pressure along the panel, s, so a pressure difference between
+    the panels (sway or yaw) gives a side force whose line of action crosses the centreline s /
+    sin(beta) above the keel. With the difference centred on each panel, s = b / (4 cos beta):
+    b / (2 sin 2 beta) above the keel, the keel being `draft` below the origin (PLANING.md)."""
+    beta = math.radians(hull.deadrise_deg)
+    return hull.chine_beam / (2.0 * math.sin(2.0 * beta)) - draft
 
 
 def _fill_hydrodynamics(P: np.ndarray, c: _Cfg, d0: float) -> None:
@@ -450,7 +467,10 @@ def _fill_hydrodynamics(P: np.ndarray, c: _Cfg, d0: float) -> None:
     P[pc.P_CZ0], P[pc.P_CZ1] = _nonneg2(c, "hydrodynamics.heave_damping")
     P[pc.P_CQ0], P[pc.P_CQ1] = _nonneg2(c, "hydrodynamics.pitch_damping")
     P[pc.P_CP0], P[pc.P_CP1] = _nonneg2(c, "hydrodynamics.roll_damping")
-    P[pc.P_CKV] = c.num("hydrodynamics.K_v_lift_lever", -100.0, 100.0)
+    fn0, fn1 = c.vec("hydrodynamics.side_force_froude_range", 2)
+    if not 0.0 <= fn0 < fn1:
+        raise c._err("hydrodynamics.side_force_froude_range", f"must be [low >= 0, high > low], got {[fn0, fn1]}")
+    P[pc.P_FNV0], P[pc.P_FNV1] = fn0, fn1
     P[pc.P_YVV] = c.num("hydrodynamics.Y_vv", -1e9, 0.0)
     P[pc.P_NRR] = c.num("hydrodynamics.N_rr", -1e12, 0.0)
     P[pc.P_YPHI] = c.num("hydrodynamics.Y_phi", -1e9, 1e9)

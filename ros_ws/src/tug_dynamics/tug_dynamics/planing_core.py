@@ -3,9 +3,9 @@
 
 forces() sums one function per force group (Eq 2: F_G + F_B, F_H, F_P; external wrenches
 for F_ENV): _gravity_and_hydrostatics (Eqs 3-4), _bottom_lift (Eqs 9, 14),
-_horizontal_hydrodynamics and _added_mass_derivatives (Eqs 7-8, 13), _roll_moment and
-_vertical_plane (Eq 7 K, Z, M rows), _waterjet (Eqs 10-12), _wrench_in_body; then
-_rigid_body_rhs and _mass_matrix (Eq 1).
+_horizontal_hydrodynamics and _added_mass_derivatives (Eqs 7-8, 13), _hull_side_force_roll
+(Eq 7 K_v), _roll_moment and _vertical_plane (Eq 7 K, Z, M rows), _waterjet (Eqs 10-12),
+_wrench_in_body; then _rigid_body_rhs and _mass_matrix (Eq 1).
 
 All arrays SI/radians, REP-103 (body x fwd, y port, z up; world ENU). The paper's frames
 are already these (its section 2.1), so its Eqs 1-14 apply unchanged except:
@@ -28,10 +28,10 @@ from sim_math.rotations import matrix_entries_from_trig
 # --- scalar parameter slots -------------------------------------------------------------
 (P_RHO, P_G, P_MASS, P_XG, P_YG, P_ZG, P_IXX, P_IYY, P_IZZ,
  P_LREF, P_BLIFT, P_D0, P_V0, P_NEXP, P_LIFT_FADE, P_UFIT,
- P_ZWD, P_KPD, P_MQD, P_ZQ1, P_CZ0, P_CZ1, P_CQ0, P_CQ1, P_CP0, P_CP1, P_CKV,
- P_YVV, P_NRR, P_YPHI, P_NPHI, P_KPHI,
+ P_ZWD, P_KPD, P_MQD, P_ZQ1, P_CZ0, P_CZ1, P_CQ0, P_CQ1, P_CP0, P_CP1, P_ZSIDE,
+ P_FNV0, P_FNV1, P_YVV, P_NRR, P_YPHI, P_NPHI, P_KPHI,
  P_AJ, P_UDES, P_ETAREV, P_XT, P_YT, P_ZT,
- P_RTAB_U0, P_RTAB_DU, P_RAST, P_NRAMP, P_DRATE, P_DMAX, P_MAXSUB, P_NPAR) = range(46)
+ P_RTAB_U0, P_RTAB_DU, P_RAST, P_NRAMP, P_DRATE, P_DMAX, P_MAXSUB, P_NPAR) = range(48)
 
 # --- polynomial rows (coefficients a0..a4 in U, m/s) --------------------------------------
 (C_YVD, C_YRD, C_YV, C_YR, C_NVD, C_NRD, C_NV, C_NR, C_KS, C_MS, C_CL, C_CM, C_MW, C_NPOLY) = range(14)
@@ -106,16 +106,15 @@ def _gravity_and_hydrostatics(P, C, z0, phi, th, sf, st, ct, cf, Up):
 
 
 @njit(cache=True, inline="always")
-def _bottom_lift(P, C, U, Up, v_rel, d1, st, ct):
+def _bottom_lift(P, C, U, Up, d1, st, ct):
     """Eqs 9 and 14: bottom lift and lift moment (the caller applies them ahead, bow up only).
 
-    Returns the lift and its X, Z, K, M; the roll due to sway from the asymmetric bottom
-    lift is estimated (PLANING.md)."""
+    Returns the lift and its X, Z, M (the roll due to sway is _hull_side_force_roll's)."""
     fade = min(max(d1 / P[P_LIFT_FADE], 0.0), 1.0)   # no lift once the hull is out
     qd = 0.5 * P[P_RHO] * U * U * fade
     B = P[P_BLIFT]
     lift = qd * B * B * poly(C, C_CL, Up)
-    return lift, -lift * st, lift * ct, P[P_CKV] * lift / U * v_rel, qd * B * B * B * poly(C, C_CM, Up)
+    return lift, -lift * st, lift * ct, qd * B * B * B * poly(C, C_CM, Up)
 
 
 @njit(cache=True, inline="always")
@@ -131,7 +130,7 @@ def _added_mass_derivatives(P, C, Up):
 def _horizontal_hydrodynamics(P, C, rtab, U, Up, ahead, u_rel, v_rel, r, phi, yvd, yrd):
     """Eqs 7-8, 13: surge resistance and Munk terms, sway and yaw damping (prime system on L).
 
-    Returns X, Y, N and the resistance term of X."""
+    Returns X, Y, N, the resistance term of X and the hull side force Y_v v + Y_r r."""
     h = 0.5 * P[P_RHO]
     L = P[P_LREF]
     yv = poly(C, C_YV, Up) * h * L * L * U
@@ -143,9 +142,24 @@ def _horizontal_hydrodynamics(P, C, rtab, U, Up, ahead, u_rel, v_rel, r, phi, yv
     else:
         res = P[P_RAST] * u_rel * u_rel        # astern: quadratic, opposes motion
     X = res - yvd * v_rel * r - yrd * r * r     # Eq 8: X_vr = -Y_vdot, X_rr = -Y_rdot
-    Y = (yv * v_rel + yr * r + P[P_YVV] * v_rel * abs(v_rel) + P[P_YPHI] * phi)
+    yside = yv * v_rel + yr * r
+    Y = (yside + P[P_YVV] * v_rel * abs(v_rel) + P[P_YPHI] * phi)
     N = (nv * v_rel + nr * r + P[P_NRR] * r * abs(r) + P[P_NPHI] * phi)
-    return X, Y, N, res
+    return X, Y, N, res, yside
+
+
+@njit(cache=True, inline="always")
+def _hull_side_force_roll(P, U, yside):
+    """Eq 7's K_v v (and the same for Y_r r): roll moment of the hull side force about the origin.
+
+    Planing with dry sides, the side force is bottom pressure normal to the two deadrise
+    panels; its line of action crosses the centreline at b / (2 sin 2 beta) above the keel,
+    P_ZSIDE above the origin (planing.py). It is applied there in full from the volumetric
+    Froude number P_FNV1 up, at the origin (as a displacement hull's, wetted sides) below
+    P_FNV0, linearly between (PLANING.md)."""
+    fn = U / math.sqrt(P[P_G] * P[P_V0] ** (1.0 / 3.0))
+    w = min(max((fn - P[P_FNV0]) / (P[P_FNV1] - P[P_FNV0]), 0.0), 1.0)
+    return -P[P_ZSIDE] * w * yside
 
 
 @njit(cache=True, inline="always")
@@ -309,17 +323,18 @@ def forces(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag, b, A):
     mn = 0.0
     lift = 0.0
     if ahead and th < 0.0:                          # Eq 9: only ahead and bow up
-        lift, Xl, Zl, Kl, Ml = _bottom_lift(P, C, U, Up, v_rel, d1, st, ct)
+        lift, Xl, Zl, Ml = _bottom_lift(P, C, U, Up, d1, st, ct)
         fx += Xl
         fz += Zl
         mm += Ml
-        mk += Kl
 
     yvd, yrd, nvd, nrd = _added_mass_derivatives(P, C, Up)
-    Xh, Yh, Nh, res = _horizontal_hydrodynamics(P, C, rtab, U, Up, ahead, u_rel, v_rel, r, phi, yvd, yrd)
+    Xh, Yh, Nh, res, yside = _horizontal_hydrodynamics(P, C, rtab, U, Up, ahead, u_rel, v_rel, r, phi, yvd, yrd)
     fx += Xh
     fy += Yh
     mn += Nh
+    if ahead:                                       # astern: derivatives at rest (4.1), no lever
+        mk += _hull_side_force_roll(P, U, yside)
     phidot, thdot = _attitude_rates(p, q, r, sf, cf, st, ct)
     mk += _roll_moment(P, U, phi, phidot)
 

@@ -164,7 +164,10 @@ def zigzag(path: str = DEFAULT_SHIP, speed: float = 12.0, bucket_deg: float = 10
     steady_part = h["t"] >= every
     fig = {
         "roll_peaks_deg": peaks,
-        "roll_amplitude_deg": float(np.mean(np.abs(peaks))),
+        # the first half-cycle starts from the straight run (a transient): the amplitude is
+        # that of the periodic part, from the second half-cycle on
+        "first_roll_peak_deg": peaks[0],
+        "roll_amplitude_deg": float(np.mean(np.abs(peaks[1:]))),
         "roll_rms_deg": float(np.sqrt(np.mean(roll[steady_part] ** 2))),
         "max_yaw_excursion_deg": float(np.degrees(np.abs(np.unwrap(h["yaw"]) - h["yaw"][0])).max()),
         "min_u": float(h["u"].min()), "u0": float(h["u"][0]),
