@@ -43,7 +43,8 @@ events:
 """
 DT = 0.05  # 1 / exchange_rate
 EXPECTED_FIGURES = ["tracks.png", "yaw.png", "speed_yaw_rate.png", "motions.png", "towline_tension.png",
-                    "rope_heights.png", "rope_pitch.png"]
+                    "rope_heights.png", "rope_pitch.png", "orders_tug.png", "orders_barge.png"]
+KN = 1852.0 / 3600.0
 
 
 def tool(executable, module):
@@ -146,6 +147,17 @@ def test_turning_diameter_matches_the_vessel_library(turn_recording, library_tur
     assert turn["heading_change"] > 2 * math.pi + math.pi  # more than 1.5 turns: one full steady revolution
     assert "tug" in out.stdout and "steady diameter" in out.stdout
     check_png(str(tmp_path / "an" / "turn_tug.png"))
+    # for people: knots and a compass course (the scenario starts heading east: 090 deg true)
+    assert turn["approach_speed_kn"] == pytest.approx(turn["approach_speed"] / KN)
+    assert turn["approach_heading_deg_true"] == pytest.approx(90.0, abs=1e-6)
+    # the run's metadata gives the ship file's length; a 20 deg helm is no IMO turning test
+    import yaml
+    from ament_index_python.packages import get_package_share_directory
+    ship = yaml.safe_load(open(os.path.join(get_package_share_directory("tug_dynamics"), "ships",
+                                            "harbour_tug.yaml")))
+    assert summary["vessels"]["tug"]["length"] == ship["hull"]["length"]
+    assert turn["helm_angle"] == pytest.approx(math.radians(20.0))
+    assert not [r for r in summary["vessels"]["tug"]["imo"] if r["criterion"].startswith("turning")]
 
 
 def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
@@ -159,6 +171,20 @@ def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
         check_png(str(tmp_path / "an" / name))
     rope = summary["ropes"]["towline"]
     assert rope["tension_a_max"] > 0 and rope["tension_b_max"] > 0 and rope["elements_start"] > 1
+    import yaml
+    from ament_index_python.packages import get_package_share_directory
+    rope_file = yaml.safe_load(open(os.path.join(get_package_share_directory("rope_model"), "ropes", "table1.yaml")))
+    assert rope["breaking_load"] == rope_file["breaking_load"]
+    assert rope["peak_over_breaking_load"] == pytest.approx(
+        max(rope["tension_a_max"], rope["tension_b_max"], rope["tension_max_anywhere"]) / rope_file["breaking_load"])
+    # the towline angle: the barge lies dead astern of the tug at the start, so the line leaves
+    # the tug's winch astern (+-180 deg) and the barge's bow bollard ahead (0 deg)
+    from scenario_runner.analysis import Recording, towline_angle
+    rec = Recording(str(demo_recording))
+    vessel_a, _, angle_a = towline_angle(rec, "towline", "a")
+    vessel_b, _, angle_b = towline_angle(rec, "towline", "b")
+    assert (vessel_a, vessel_b) == ("tug", "barge")
+    assert abs(math.degrees(abs(angle_a[0])) - 180.0) < 1.0 and abs(math.degrees(angle_b[0])) < 1.0
     assert rope["min_element_height"] < 0  # the towline hangs into the water
     kinds = {e["kind"] for e in summary["events"]}
     assert {"scenario_started", "order"} <= kinds

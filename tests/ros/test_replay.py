@@ -188,11 +188,17 @@ def test_replay_recorded_again_gives_the_same_messages_and_timing(demo_recording
     assert values == sorted(values)
     assert {ns(m) for m in clock_in} <= set(values)
 
-    # the re-recording analyses like the original (analysis uses header stamps, not log times)
+    # the re-recording analyses like the original (analysis uses header stamps, not log times);
+    # the runner's metadata (vessel lengths, breaking loads) is not on a topic, so the
+    # re-recording is given them on the command line
     res = {}
     for name, path in (("orig", demo_recording), ("rerec", rerec_path)):
+        extra = []
+        if name == "rerec":
+            extra = ["--length"] + [f"{v}={s['length']}" for v, s in res["orig"]["vessels"].items()] + \
+                ["--breaking-load"] + [f"{r}={s['breaking_load']}" for r, s in res["orig"]["ropes"].items()]
         out = subprocess.run(tool("analyze", "scenario_runner.analysis") + [str(path), "-o", str(tmp_path / name),
-                                                                             "--no-figures"],
+                                                                             "--no-figures", *extra],
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 0, out.stderr
         res[name] = json.loads((tmp_path / name / "summary.json").read_text())

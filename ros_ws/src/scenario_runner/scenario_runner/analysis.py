@@ -16,15 +16,20 @@ Writes to the output directory (default: <recording without .mcap>_analysis/):
                        (snapshots of each rope and the paths of selected elements)
   yaw.png              yaw (heading) angle of every vessel, unwrapped, deg
   speed_yaw_rate.png   speed over ground and yaw rate of every vessel
-  motions.png          speed, roll and pitch histories of every vessel (the planing-hull figure)
-  towline_tension.png  tension at end a and end b of every rope, kN
+  motions.png          speed, roll and pitch histories of every vessel (the planing-hull figure;
+                       roll / pitch panels only where they are more than round-off)
+  orders_<vessel>.png  helm ordered / actual, engine order and rpm, thrust, girting ratio
+  towline_tension.png  tension at end a and end b of every rope, kN, with the breaking load,
+                       and the towline angle at the ends made fast on a vessel
   rope_heights.png     heights z of selected rope elements (and the lowest element) over time
   rope_pitch.png       pitch angles of the same elements over time
   turn_<vessel>.png    a turning manoeuvre: track in approach-course axes with advance, transfer,
                        tactical diameter and the fitted steady circle
   summary.json, summary.csv (entity, quantity, value, unit), vessel_<name>.csv, rope_<name>.csv
 
-The manoeuvre measures are defined once in sim_math/turning.py (and docs/tools.md).
+The manoeuvre measures are defined once in sim_math/turning.py and sim_math/trials.py (zig-zag,
+stopping, the IMO MSC.137(76) criteria; docs/tools.md). Vessel lengths and breaking loads come
+from the runner's "tugsim" metadata record, or --length / --breaking-load.
 Exit status: 0 done; 1 done on the readable part of a damaged file; 2 nothing to analyse.
 """
 from __future__ import annotations
@@ -41,6 +46,7 @@ from typing import Callable, Dict, List, NamedTuple, Optional, Tuple
 import numpy as np
 
 from sim_math.rotations import rpy_from_quaternion
+from sim_math import trials
 from sim_math.turning import turning_measures
 from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
 
@@ -82,10 +88,14 @@ class _Series:
         return idx[keep], ts[keep] * 1e-9
 
 
-# VesselStatus fields kept per sample, in column order (the figures read rise, column 8; the
-# summary girting_ratio, 9)
+# VesselStatus fields kept per sample, in column order (read by name with status_column)
 STATUS_FIELDS = ("engine_order", "steering_angle_ordered", "steering_angle", "shaft_speed", "thrust",
-                 "speed_through_water", "heel", "trim", "rise", "girting_ratio")
+                 "speed_through_water", "heel", "trim", "rise", "girting_ratio", "girting_threshold")
+
+
+def status_column(status: dict, field: str) -> np.ndarray:
+    """One VesselStatus field over time from a vessel's "status" table."""
+    return status["data"][:, STATUS_FIELDS.index(field)]
 
 
 class _Handler(NamedTuple):
@@ -127,8 +137,25 @@ class Recording:
                     continue
             h.take(m, msg.log_time)
         self._finish()
+        self.particulars = self._read_particulars()
 
     # -- reading --------------------------------------------------------------------------
+    def _read_particulars(self) -> dict:
+        """The runner's "tugsim" metadata record (run_scenario.particulars: vessel lengths, rope
+        ends and breaking loads); {} for a recording without one (rosbag2, older files)."""
+        text = self.file.metadata.get("tugsim", {}).get("particulars")
+        if text is None:
+            return {}
+        try:
+            value = json.loads(text)
+            if not isinstance(value, dict):
+                raise ValueError(f"a JSON {type(value).__name__}, not an object")
+        except ValueError as exc:
+            self.decoder.notes.append(f"metadata 'tugsim' key 'particulars' is not readable ({exc}); "
+                                      "lengths and breaking loads only from --length / --breaking-load")
+            return {}
+        return value
+
     def _has_fields(self, ch, msg, fields) -> bool:
         """A channel decoded with the file's own schema (its type does not import here) may be
         of an older version of the type: one without a field the analysis reads is left out,
@@ -271,10 +298,51 @@ class Recording:
         if "command" in v and v["command"]["t"].size:
             return v["command"]["t"], v["command"]["data"][:, 1]
         if "status" in v and v["status"]["t"].size:
-            t, d = v["status"]["t"], v["status"]["data"][:, 1]
+            t, d = v["status"]["t"], status_column(v["status"], "steering_angle_ordered")
             change = np.nonzero(np.abs(np.diff(d)) > 1e-9)[0]
             return np.concatenate([[t[0]], t[change]]), np.concatenate([[d[0]], d[change + 1]])
         return np.zeros(0), np.zeros(0)
+
+    def engine_orders(self, name: str):
+        """(times, engine orders) given to a vessel, as steering_orders finds its helm orders."""
+        v = self.vessels[name]
+        if "command" in v and v["command"]["t"].size:
+            return v["command"]["t"], v["command"]["data"][:, 0]
+        if "status" in v and v["status"]["t"].size:
+            t, e = v["status"]["t"], status_column(v["status"], "engine_order")
+            change = np.nonzero(np.abs(np.diff(e)) > 1e-9)[0]
+            return np.concatenate([[t[0]], t[change]]), np.concatenate([[e[0]], e[change + 1]])
+        return np.zeros(0), np.zeros(0)
+
+    def find_zigzag(self, name: str):
+        """(order times, order angles) of a zig-zag: from the first helm order of at least 5 deg,
+        the helm orders that alternate side at the same angle (within 0.5 deg); None unless
+        there is at least one reversal."""
+        t, d = self.steering_orders(name)
+        keep_t, keep_d = [], []
+        for ti, di in zip(t, d):
+            if not keep_t:
+                if abs(di) >= math.radians(5.0):
+                    keep_t, keep_d = [float(ti)], [float(di)]
+                continue
+            if abs(di - keep_d[-1]) < 1e-9:
+                continue  # the same order repeated
+            if abs(abs(di) - abs(keep_d[0])) <= math.radians(0.5) and di * keep_d[-1] < 0:
+                keep_t.append(float(ti))
+                keep_d.append(float(di))
+            else:
+                break  # midships or another angle: the zig-zag is over
+        return (keep_t, keep_d) if len(keep_t) >= 2 else None
+
+    def find_stop(self, name: str, min_speed: float = 0.3):
+        """Time of the first astern order (engine order <= -0.5) given from ahead (engine order
+        >= 0 before it) while making headway above min_speed; None if there is none."""
+        t, e = self.engine_orders(name)
+        v = self.vessels[name]
+        for i in range(1, t.size):
+            if e[i] <= -0.5 < 0 <= e[i - 1] + 1e-12 and np.interp(t[i], v["t"], v["u"]) > min_speed:
+                return float(t[i])
+        return None
 
     def find_turn(self, name: str, min_steering_deg: float = 1.0):
         """(t0, t1) of the first turn: from the first helm order of at least min_steering_deg
@@ -328,7 +396,8 @@ class _Figures:
 
 
 def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int = 6, dpi: int = 110,
-                 turns: Optional[Dict[str, dict]] = None) -> List[str]:
+                 turns: Optional[Dict[str, dict]] = None,
+                 breaking: Optional[Dict[str, Optional[float]]] = None) -> List[str]:
     """Every figure the recording has data for (see the module docstring); their paths."""
     import matplotlib
     matplotlib.use("Agg")
@@ -340,9 +409,12 @@ def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int
         _yaw_figure(out, rec)
         _speed_yaw_rate_figure(out, rec)
         _motions_figure(out, rec)
+    for name, v in rec.vessels.items():
+        if "status" in v and len(v["status"]["t"]):
+            _orders_figure(out, name, v)
     ropes = {n: r for n, r in rec.ropes.items() if "t" in r or "wrench_a" in r or "wrench_b" in r}
     if ropes:
-        _tension_figure(out, ropes)
+        _tension_figure(out, rec, ropes, breaking or {})
     chains = {n: r for n, r in rec.ropes.items() if "pos" in r and len(r["t"])}
     if chains:
         _rope_element_figures(out, chains, elements)
@@ -413,34 +485,103 @@ def _speed_yaw_rate_figure(out: _Figures, rec: Recording) -> None:
     out.save(fig, "speed_yaw_rate.png")
 
 
+NOISE_DEG = 0.01  # a roll or pitch history that never spans this much is a 3-DOF model's round-off
+
+
 def _motions_figure(out: _Figures, rec: Recording) -> None:
-    """Speed, roll and pitch, and the rise of the vessels that report one (planing hulls)."""
-    risers = {n: v["status"] for n, v in rec.vessels.items()
-              if "status" in v and np.any(v["status"]["data"][:, 8] != 0.0)}
-    rows = 4 if risers else 3
-    fig, axs = out.plt.subplots(rows, 1, figsize=(8, 2.7 * rows), sharex=True)
-    for name, v in rec.vessels.items():
-        axs[0].plot(v["t"], v["speed"], label=name)
-        axs[1].plot(v["t"], np.degrees(v["roll"]), label=name)
-        axs[2].plot(v["t"], np.degrees(v["pitch"]), label=name)
-    for name, st in risers.items():
-        axs[3].plot(st["t"], st["data"][:, 8], label=name)
-        axs[3].set_ylabel("rise (m)")
-    axs[0].set_ylabel("speed (m/s)")
-    axs[1].set_ylabel("roll (deg, + stbd down)")
-    axs[2].set_ylabel("pitch (deg, + bow down)")
+    """Speed, and roll, pitch and rise where some vessel has them (a 3-DOF model's pitch is
+    round-off and gets no panel; the rise is reported by planing hulls)."""
+    panels = [("speed", "speed (m/s)", {n: (v["t"], v["speed"]) for n, v in rec.vessels.items()})]
+    for key, label in (("roll", "roll (deg, + stbd down)"), ("pitch", "pitch (deg, + bow down)")):
+        series = {n: (v["t"], np.degrees(v[key])) for n, v in rec.vessels.items()}
+        if any(np.ptp(y) > NOISE_DEG for _, y in series.values() if y.size):
+            panels.append((key, label, series))
+    risers = {n: (v["status"]["t"], status_column(v["status"], "rise")) for n, v in rec.vessels.items()
+              if "status" in v and np.any(status_column(v["status"], "rise") != 0.0)}
+    if risers:
+        panels.append(("rise", "rise (m)", risers))
+    fig, axs = out.plt.subplots(len(panels), 1, figsize=(8, max(3.5, 2.7 * len(panels))), sharex=True, squeeze=False)
+    axs = axs[:, 0]
+    for a, (_key, label, series) in zip(axs, panels):
+        for name, (t, y) in series.items():
+            a.plot(t, y, label=name)
+        a.set_ylabel(label)
     axs[-1].set_xlabel("time (s)")
     for a in axs:
         a.grid(alpha=0.3)
         a.legend()
-    axs[0].set_title("Speed, roll and pitch histories")
+    axs[0].set_title("Speed" + "".join(f", {k}" for k, _, _ in panels[1:]) + " histories")
     out.save(fig, "motions.png")
 
 
-def _tension_figure(out: _Figures, ropes: Dict[str, dict]) -> None:
-    """End tensions from the rope state, else from the end wrenches."""
-    fig, axs = out.plt.subplots(len(ropes), 1, figsize=(8, 3.5 * len(ropes)), squeeze=False)
-    for a, (name, rope) in zip(axs[:, 0], ropes.items()):
+def _orders_figure(out: _Figures, name: str, v: dict) -> None:
+    """The orders a vessel was given and what they did: helm (or bucket) ordered and actual,
+    engine order and shaft speed, thrust, and the girting ratio with its warning threshold when
+    the vessel reports one."""
+    st = v["status"]
+    t = st["t"]
+    girting = status_column(st, "girting_ratio")
+    rows = 4 if np.any(girting != 0.0) else 3
+    fig, axs = out.plt.subplots(rows, 1, figsize=(8, 2.5 * rows), sharex=True)
+    axs[0].plot(t, np.degrees(status_column(st, "steering_angle_ordered")), "--", label="ordered")
+    axs[0].plot(t, np.degrees(status_column(st, "steering_angle")), label="actual")
+    axs[0].set_ylabel("rudder / nozzle (deg, + port)")
+    axs[1].plot(t, status_column(st, "engine_order"), label="engine order")
+    axs[1].set_ylabel("engine order (-1..1)")
+    rpm = axs[1].twinx()
+    rpm.plot(t, status_column(st, "shaft_speed") * 60.0 / (2.0 * math.pi), color="C3", lw=1, label="shaft")
+    rpm.set_ylabel("shaft (rpm)", color="C3")
+    axs[2].plot(t, status_column(st, "thrust") / 1e3, label="thrust")
+    axs[2].set_ylabel("thrust (kN)")
+    if rows == 4:
+        axs[3].plot(t, girting, label="girting ratio")
+        axs[3].plot(t, status_column(st, "girting_threshold"), "r--", lw=1, label="warning threshold")
+        axs[3].set_ylabel("girting ratio")
+    axs[-1].set_xlabel("time (s)")
+    for a in axs:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7, loc="upper left")
+    axs[0].set_title(f"Orders and response of {name}")
+    out.save(fig, f"orders_{name}.png")
+
+
+def towline_angle(rec: Recording, rope_name: str, end: str) -> Optional[Tuple[str, np.ndarray, np.ndarray]]:
+    """(vessel, times, angle) of a rope's end on a vessel: the horizontal direction in which the
+    line leaves the vessel (from the end element to its neighbour) relative to the vessel's
+    heading, rad in (-pi, pi]: 0 = leading ahead, +-pi = straight astern, + to port. None when
+    the end is not on a recorded vessel or the rope has fewer than two elements."""
+    spec = rec.particulars.get("ropes", {}).get(rope_name, {}).get(f"end_{end}", "")
+    vessel = spec.split("/")[0] if "/" in spec else None
+    rope = rec.ropes.get(rope_name, {})
+    if vessel not in rec.vessels or "pos" not in rope:
+        return None
+    v = rec.vessels[vessel]
+    t, ang = [], []
+    for tk, p in zip(rope["t"], rope["pos"]):
+        if len(p) < 2:
+            continue
+        d = p[1] - p[0] if end == "a" else p[-2] - p[-1]
+        yaw = np.interp(tk, v["t"], v["yaw_unwrapped"])
+        t.append(tk)
+        ang.append(math.atan2(d[1], d[0]) - yaw)
+    if not t:
+        return None
+    a = np.asarray(ang)
+    return vessel, np.asarray(t), np.arctan2(np.sin(a), np.cos(a))
+
+
+def _tension_figure(out: _Figures, rec: Recording, ropes: Dict[str, dict], breaking: Dict[str, Optional[float]]) -> None:
+    """End tensions from the rope state, else from the end wrenches, with the breaking load;
+    under each rope the towline angle at the ends that are made fast on a vessel."""
+    angles: Dict[str, list] = {}
+    for n in ropes:
+        ends = ((towline_angle(rec, n, e), e) for e in ("a", "b"))
+        angles[n] = [got + (e,) for got, e in ends if got]
+    rows = sum(1 + bool(angles[n]) for n in ropes)
+    fig, axs = out.plt.subplots(rows, 1, figsize=(8, 3.2 * rows), squeeze=False)
+    axs = list(axs[:, 0])
+    for name, rope in ropes.items():
+        a = axs.pop(0)
         if "t" in rope:
             a.plot(rope["t"], rope["tension_a"] / 1e3, label=f"{name} end a")
             a.plot(rope["t"], rope["tension_b"] / 1e3, "--", label=f"{name} end b")
@@ -449,11 +590,23 @@ def _tension_figure(out: _Figures, ropes: Dict[str, dict]) -> None:
                 if f"wrench_{end}" in rope:
                     w = rope[f"wrench_{end}"]
                     a.plot(w["t"], w["tension"] / 1e3, label=f"{name} end {end} (wrench)")
+        if breaking.get(name):
+            a.axhline(breaking[name] / 1e3, color="r", ls=":", label=f"breaking load {breaking[name] / 1e3:.0f} kN")
         a.set_ylabel("tension (kN)")
+        a.set_xlabel("time (s)")
+        a.set_title(f"Towline {name}: tension at both ends")
         a.grid(alpha=0.3)
-        a.legend()
-    axs[-1, 0].set_xlabel("time (s)")
-    axs[0, 0].set_title("Towline tension at both ends")
+        a.legend(fontsize=7)
+        if angles[name]:
+            b = axs.pop(0)
+            for vessel, t, ang, end in angles[name]:
+                b.plot(t, np.degrees(ang), label=f"end {end} on {vessel}")
+            b.set_ylabel("towline angle (deg from bow, + port)")
+            b.set_xlabel("time (s)")
+            b.set_ylim(-185, 185)
+            b.set_yticks([-180, -90, 0, 90, 180])
+            b.grid(alpha=0.3)
+            b.legend(fontsize=7)
     out.save(fig, "towline_tension.png")
 
 
@@ -529,10 +682,20 @@ TURN_UNITS = {"t0": "s", "t1": "s", "approach_speed": "m/s", "approach_heading":
               "tactical_diameter": "m", "time_to_180": "s", "steady_window_from": "rad",
               "steady_window_span": "rad", "steady_diameter": "m", "steady_centre_x": "m", "steady_centre_y": "m",
               "steady_fit_rms": "m", "steady_speed": "m/s", "steady_yaw_rate": "rad/s", "steady_drift_angle": "rad",
-              "steady_diameter_kinematic": "m", "speed_loss": "1", "steady_t_start": "s"}
+              "steady_diameter_kinematic": "m", "speed_loss": "1", "steady_t_start": "s", "helm_angle": "rad",
+              "delta": "rad", "execute_times": "s", "check_angles": "rad", "overshoots": "rad",
+              "overshoot_times": "s", "initial_turning_distance": "m", "time_to_stop": "s", "track_reach": "m",
+              "head_reach": "m", "lateral_deviation": "m", "engine_order": "1", "length": "m",
+              "breaking_load": "N", "peak_over_breaking_load": "1"}
 
 
-def summarise(rec: Recording, turns: Dict[str, dict]) -> dict:
+def summarise(rec: Recording, turns: Dict[str, dict], manoeuvres: Optional[Dict[str, dict]] = None,
+              lengths: Optional[Dict[str, Optional[float]]] = None,
+              breaking: Optional[Dict[str, Optional[float]]] = None) -> dict:
+    """The summary (JSON): per vessel its track figures, the turn, zig-zag and stopping measures
+    and, with its length known, the MSC.137(76) criteria; per rope its tensions (and the peak
+    over the breaking load when that is known)."""
+    lengths, breaking = lengths or {}, breaking or {}
     vessels = {}
     for name, v in rec.vessels.items():
         d = np.hypot(np.diff(v["x"]), np.diff(v["y"])).sum() if len(v["t"]) > 1 else 0.0
@@ -544,11 +707,15 @@ def summarise(rec: Recording, turns: Dict[str, dict]) -> dict:
               "yaw_rate_max_abs": np.abs(v["r"]).max(), "roll_max_abs": np.abs(v["roll"]).max(),
               "pitch_max": v["pitch"].max(), "pitch_min": v["pitch"].min()}
         if "status" in v:
-            st = v["status"]["data"]
-            vs["girting_ratio_max"] = st[:, 9].max()
-            vs["rise_max"] = st[:, 8].max()
+            vs["girting_ratio_max"] = status_column(v["status"], "girting_ratio").max()
+            vs["rise_max"] = status_column(v["status"], "rise").max()
         if name in turns:
             vs["turn"] = turns[name]
+        vs.update((manoeuvres or {}).get(name, {}))
+        L = lengths.get(name)
+        if L:
+            vs["length"] = L
+            vs["imo"] = imo_table(L, vs)
         vessels[name] = vs
     ropes = {}
     for name, r in rec.ropes.items():
@@ -566,6 +733,11 @@ def summarise(rec: Recording, turns: Dict[str, dict]) -> dict:
         for end in ("a", "b"):
             if f"wrench_{end}" in r:
                 rs[f"wrench_{end}_max"] = r[f"wrench_{end}"]["tension"].max()
+        if breaking.get(name) and "t" in r:
+            rs["breaking_load"] = breaking[name]
+            rs["peak_over_breaking_load"] = max(r["tension_a"].max(), r["tension_b"].max(),
+                                                np.nanmax(r["max_tension"]) if np.isfinite(r["max_tension"]).any()
+                                                else 0.0) / breaking[name]
         ropes[name] = rs
     f = rec.file
     return _clean({
@@ -583,6 +755,10 @@ def summarise(rec: Recording, turns: Dict[str, dict]) -> dict:
 def _units(key: str) -> str:
     if key in TURN_UNITS:
         return TURN_UNITS[key]
+    if key.endswith("_kn"):
+        return "kn"
+    if key.endswith("_deg_true"):
+        return "deg true"
     for pat, unit in (("tension|wrench", "N"), ("speed", "m/s"), ("yaw_rate", "rad/s"), ("yaw|roll|pitch|heading", "rad"),
                       ("^t_|_at$", "s"), ("^[xy]_|distance|length|height|rise", "m")):
         if re.search(pat, key):
@@ -598,13 +774,24 @@ def write_csvs(rec: Recording, summary: dict, out_dir: str) -> List[str]:
         w.writerow(["entity", "quantity", "value", "unit"])
         for kind in ("vessels", "ropes"):
             for name, vals in summary[kind].items():
+                entity = f"{kind[:-1]}/{name}"
                 for k, val in vals.items():
-                    if k == "turn":
+                    if k == "imo":
+                        for row in val:
+                            w.writerow([entity, f"imo.{row['criterion']}", "" if row["value"] is None else row["value"],
+                                        row["unit"]])
+                            w.writerow([entity, f"imo.{row['criterion']}.limit", row["limit"], row["unit"]])
+                            w.writerow([entity, f"imo.{row['criterion']}.passed",
+                                        "" if row["passed"] is None else row["passed"], ""])
+                    elif isinstance(val, dict):  # turn, zigzag, stopping
                         for tk, tv in val.items():
-                            if tk != "notes":
-                                w.writerow([f"{kind[:-1]}/{name}", f"turn.{tk}", "" if tv is None else tv, _units(tk)])
+                            if tk == "notes":
+                                continue
+                            for j, item in enumerate(tv if isinstance(tv, list) else [tv]):
+                                key = f"{k}.{tk}" + (f"[{j}]" if isinstance(tv, list) else "")
+                                w.writerow([entity, key, "" if item is None else item, _units(tk)])
                     else:
-                        w.writerow([f"{kind[:-1]}/{name}", k, "" if val is None else val, _units(k)])
+                        w.writerow([entity, k, "" if val is None else val, _units(k)])
     files.append(path)
     for name, v in rec.vessels.items():
         path = os.path.join(out_dir, f"vessel_{name}.csv")
@@ -629,6 +816,8 @@ def analyse_turns(rec: Recording, turn_start: Optional[float], turn_end: Optiona
     for name, v in rec.vessels.items():
         if turn_start is not None:
             span = (turn_start, turn_end if turn_end is not None else float(v["t"][-1]))
+        elif rec.find_zigzag(name):
+            continue  # measured as a zig-zag (analyse_trials), not as a turn
         else:
             span = rec.find_turn(name)
             if span and turn_end is not None:
@@ -637,12 +826,85 @@ def analyse_turns(rec: Recording, turn_start: Optional[float], turn_end: Optiona
             continue
         m = turning_measures(v["t"], v["x"], v["y"], v["yaw"], v["u"], v["v"], v["r"], span[0], span[1],
                              steady_from_deg)
+        ot, od = rec.steering_orders(name)
+        m["helm_angle"] = float(od[ot <= span[0] + 1e-9][-1]) if np.any(ot <= span[0] + 1e-9) else math.nan
+        _for_people(m)
         if "_along" in m:
             m["_psi0"] = float(np.interp(span[0], v["t"], v["yaw_unwrapped"]))
             m["_x0"], m["_y0"] = float(np.interp(span[0], v["t"], v["x"])), float(np.interp(span[0], v["t"], v["y"]))
         if m.get("heading_change", 0.0) and abs(m["heading_change"]) >= math.radians(10) or turn_start is not None:
             turns[name] = m
     return turns
+
+
+KN = 1852.0 / 3600.0  # m/s per knot
+
+
+def _for_people(m: dict) -> None:
+    """Adds the approach speed in knots and heading as a compass course (deg true) to a
+    manoeuvre's measures (SI and ENU stay the reference values)."""
+    if math.isfinite(m.get("approach_speed", math.nan)):
+        m["approach_speed_kn"] = m["approach_speed"] / KN
+    if math.isfinite(m.get("approach_heading", math.nan)):
+        m["approach_heading_deg_true"] = trials.compass_deg(m["approach_heading"])
+
+
+def analyse_trials(rec: Recording) -> Dict[str, dict]:
+    """Zig-zag and stopping (crash stop) measures per vessel, sim_math.trials definitions; the
+    zig-zag from the alternating helm orders (Recording.find_zigzag), the stop from the first
+    astern order given from ahead (Recording.find_stop)."""
+    out: Dict[str, dict] = {}
+    for name, v in rec.vessels.items():
+        res = {}
+        zz = rec.find_zigzag(name)
+        if zz and len(v["t"]) > 2:
+            z = trials.zigzag_measures(v["t"], v["yaw_unwrapped"], zz[0], zz[1], v["x"], v["y"], v["speed"])
+            z["approach_heading"] = float(np.interp(zz[0][0], v["t"], v["yaw"]))
+            _for_people(z)
+            res["zigzag"] = z
+        t_stop = rec.find_stop(name)
+        if t_stop is not None and len(v["t"]) > 2:
+            st = trials.stopping_measures(v["t"], v["x"], v["y"], v["yaw_unwrapped"], v["u"], v["speed"], t_stop)
+            et, eo = rec.engine_orders(name)
+            st["engine_order"] = float(eo[et <= t_stop + 1e-9][-1])
+            st["approach_heading"] = float(np.interp(t_stop, v["t"], v["yaw"]))
+            _for_people(st)
+            res["stopping"] = st
+        if res:
+            out[name] = res
+    return out
+
+
+def imo_table(length: float, vs: dict) -> List[dict]:
+    """MSC.137(76) criteria rows for one vessel's summary: the turning criteria for a hard-over
+    turn (helm >= 30 deg), the zig-zag and initial turning criteria for a 10/10 or 20/20
+    zig-zag, the stopping criterion for a full-astern stop; angles shown in deg."""
+    turn = vs.get("turn")
+    if turn is not None and not abs(turn.get("helm_angle") or 0.0) >= math.radians(30.0):
+        turn = None
+    stop = vs.get("stopping")
+    if stop is not None and not stop.get("engine_order", 0.0) <= -0.99:
+        stop = None
+    rows = trials.imo_criteria(length, turn=turn, zigzag=vs.get("zigzag"), stop=stop)
+    for r in rows:
+        if r["unit"] == "rad":
+            r["value"], r["limit"], r["unit"] = math.degrees(r["value"]), math.degrees(r["limit"]), "deg"
+    return rows
+
+
+def _named_values(pairs: Optional[List[str]], option: str) -> Dict[str, float]:
+    """NAME=VALUE pairs of a command-line option; ValueError naming the bad one."""
+    out = {}
+    for item in pairs or []:
+        name, sep, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name or not math.isfinite(number) or number <= 0:
+            raise ValueError(f"{option} {item!r}: expected NAME=VALUE with a positive number")
+        out[name] = number
+    return out
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -658,6 +920,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--turn-start", type=float, metavar="S", help="execute time of the turn (simulation s); "
                    "default: the first helm order of >= 1 deg found on the command or status topic")
     p.add_argument("--turn-end", type=float, metavar="S", help="end of the turn; default: next helm order or the end")
+    p.add_argument("--length", nargs="+", metavar="VESSEL=M",
+                   help="vessel length for the IMO criteria (default: from the run's metadata)")
+    p.add_argument("--breaking-load", nargs="+", metavar="ROPE=N",
+                   help="rope breaking load for the tension figure, N (default: from the run's metadata)")
     p.add_argument("--steady-from-deg", type=float, default=180.0,
                    help="heading change before which the turn is never taken as steady (default 180)")
     p.add_argument("--elements", type=int, default=5, help="rope elements per height/pitch figure (default 5)")
@@ -670,7 +936,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        lengths = _named_values(args.length, "--length")
+        breaking = _named_values(args.breaking_load, "--breaking-load")
+    except ValueError as exc:
+        parser.error(str(exc))
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
     try:
         rec = read_recording(args, say)
@@ -683,9 +955,13 @@ def main(argv: Optional[List[str]] = None) -> int:
         return EXIT_NOTHING
     out_dir = args.output or os.path.splitext(os.path.abspath(args.recording))[0] + "_analysis"
     os.makedirs(out_dir, exist_ok=True)
+    known = rec.particulars
+    lengths = {**{n: v.get("length") for n, v in known.get("vessels", {}).items()}, **lengths}
+    breaking = {**{n: r.get("breaking_load") for n, r in known.get("ropes", {}).items()}, **breaking}
     turns = analyse_turns(rec, args.turn_start, args.turn_end, args.steady_from_deg)
-    summary = summarise(rec, turns)
-    figures = [] if args.no_figures else make_figures(rec, out_dir, args.elements, args.snapshots, args.dpi, turns)
+    summary = summarise(rec, turns, analyse_trials(rec), lengths, breaking)
+    figures = [] if args.no_figures else make_figures(rec, out_dir, args.elements, args.snapshots, args.dpi, turns,
+                                                      breaking)
     summary["figures"] = figures
     path = os.path.join(out_dir, "summary.json")
     with open(path, "w") as fh:
@@ -722,16 +998,37 @@ def report(say, recording: str, f: McapFile, summary: dict) -> None:
         t = v.get("turn")
         if t:
             fmt = lambda k, scale=1.0: "-" if t.get(k) is None else f"{t[k] * scale:.1f}"  # noqa: E731
-            say(f"    turn from t0 = {t['t0']:.1f} s ({'port' if t.get('turn_direction', 1) > 0 else 'starboard'}): "
+            say(f"    turn from t0 = {t['t0']:.1f} s ({'port' if t.get('turn_direction', 1) > 0 else 'starboard'}"
+                f", {fmt('approach_speed_kn')} kn on {fmt('approach_heading_deg_true')} deg true): "
                 f"advance {fmt('advance')} m, transfer {fmt('transfer')} m, tactical diameter "
                 f"{fmt('tactical_diameter')} m, steady diameter {fmt('steady_diameter')} m (2U/r "
-                f"{fmt('steady_diameter_kinematic')} m), steady speed {fmt('steady_speed', 1.0)} m/s, "
+                f"{fmt('steady_diameter_kinematic')} m), steady speed {fmt('steady_speed', 1 / KN)} kn, "
                 f"yaw rate {fmt('steady_yaw_rate', 180 / math.pi)} deg/s"
                 + (f"; {t['notes']}" if t.get("notes") else ""))
+        z = v.get("zigzag")
+        if z:
+            deg = ", ".join(f"{math.degrees(o):.1f}" for o in z["overshoots"]) or "-"
+            say(f"    zig-zag {math.degrees(z['delta']):.0f}/{math.degrees(z['delta']):.0f} from "
+                f"{z.get('approach_speed_kn', math.nan):.1f} kn on {z.get('approach_heading_deg_true', math.nan):05.1f} deg "
+                f"true: overshoots {deg} deg")
+        st = v.get("stopping")
+        if st:
+            reach = "not stopped" if st["track_reach"] is None else f"track reach {st['track_reach']:.0f} m, head " \
+                f"reach {st['head_reach']:.0f} m, lateral {st['lateral_deviation']:.0f} m, in {st['time_to_stop']:.0f} s"
+            say(f"    stop (engine {st['engine_order']:+.2f}) from {st.get('approach_speed_kn', math.nan):.1f} kn: {reach}")
+        if v.get("imo"):
+            say(f"    IMO MSC.137(76), L = {v['length']:.1f} m:")
+            say("      | criterion | value | limit | holds |")
+            for row in v["imo"]:
+                value = "-" if row["value"] is None else f"{row['value']:.2f}"
+                holds = {True: "yes", False: "NO", None: "not measured"}[row["passed"]]
+                say(f"      | {row['criterion']} | {value} {row['unit']} | {row['limit']:.2f} {row['unit']} | {holds} |")
     for name, r in summary["ropes"].items():
         if "tension_a_max" in r:
             say(f"  rope {name}: max tension end a {r['tension_a_max'] / 1e3:.1f} kN, end b "
                 f"{r['tension_b_max'] / 1e3:.1f} kN, lowest element z {r['min_element_height']:.2f} m"
+                + (f", peak {100 * r['peak_over_breaking_load']:.0f} % of the breaking load"
+                   if r.get("peak_over_breaking_load") is not None else "")
                 + (f", parted at {r['broken_at']:.1f} s" if r.get("broken") else ""))
 
 

@@ -272,10 +272,12 @@ class McapRecorder(Node):
     """Subscribes the given topics (raw CDR) and writes them to an MCAP file."""
 
     def __init__(self, path: str, topics: List[Tuple[str, type, QoSProfile]], period_ns: Optional[int] = None,
-                 fed_topics: Tuple[str, ...] = ()):
+                 fed_topics: Tuple[str, ...] = (), metadata: Optional[Dict[str, Dict[str, str]]] = None):
         """fed_topics: not subscribed; recorded from record() calls of their owner in this
         process (the scenario runner's /clock and /sim/step, and /sim/step_done which it takes
-        raw anyway) or from the nodes' feeds (add_pipe_feed, feed_in_process)."""
+        raw anyway) or from the nodes' feeds (add_pipe_feed, feed_in_process). metadata: MCAP
+        metadata records (name -> string map) written at the start, so a run that is cut
+        short keeps them."""
         super().__init__("recorder")
         self.path = path
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
@@ -284,6 +286,8 @@ class McapRecorder(Node):
         # LZ4: a quarter of zstd's CPU per chunk here, and every MCAP reader supports it.
         self.writer = Writer(self._file, compression=CompressionType.LZ4)
         self.writer.start(profile="ros2", library="tugsim-recorder")
+        for name, record in (metadata or {}).items():
+            self.writer.add_metadata(name, dict(record))
         self.schemas: Dict[str, int] = {}
         self.channels: Dict[str, int] = {}
         self.counts: Dict[str, int] = {}  # topic -> messages taken (queued or written)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import math
 import os
 import signal
@@ -29,9 +30,32 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
 from scenario_runner.recorder import McapRecorder, readable_extent
-from scenario_runner.scenario import Scenario, ScenarioError, load_scenario
+from scenario_runner.scenario import Scenario, ScenarioError, load_scenario, resolve
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
+
+
+PARTICULARS_METADATA = "tugsim"  # MCAP metadata record: {"particulars": JSON of particulars()}
+
+
+def particulars(path: str, sc: Scenario) -> dict:
+    """What the analysis needs and the topics do not carry: each vessel's ship file and length
+    (the L of the IMO criteria), each rope's file, ends and breaking load (N; None for a model
+    without one). Recorded as MCAP metadata; the files were checked by load_scenario."""
+    from rope_model.models import load_params
+    from tug_dynamics.ship_file import load_ship
+    vessels = {}
+    for v in sc.vessels:
+        ship = resolve("tug_dynamics", "ships", v.ship_file, path)
+        vessels[v.name] = {"ship_file": os.path.basename(ship),
+                           "length": float(load_ship(ship, name=v.name, overrides=v.ship_overrides).length)}
+    ropes = {}
+    for r in sc.ropes:
+        rope = resolve("rope_model", "ropes", r.rope_file, path)
+        load = getattr(load_params(rope), "breaking_load", None)
+        ropes[r.name] = {"rope_file": os.path.basename(rope), "end_a": r.end_a, "end_b": r.end_b,
+                         "breaking_load": None if load is None or not math.isfinite(load) else float(load)}
+    return {"scenario": os.path.basename(path), "vessels": vessels, "ropes": ropes}
 
 
 def scenario_path(name: str) -> str:
@@ -191,8 +215,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     # shut the context down under the running loop (an RCLError traceback, or exit 3).
     rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     try:
-        recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc), fed_topics=cd.fed_topics(plan.sc)) \
-            if plan.record else None
+        recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc), fed_topics=cd.fed_topics(plan.sc),
+                                metadata={PARTICULARS_METADATA: {"particulars": json.dumps(
+                                    particulars(plan.path, plan.sc))}}) if plan.record else None
     except OSError as exc:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         rclpy.try_shutdown()

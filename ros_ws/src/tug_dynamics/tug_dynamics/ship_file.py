@@ -166,6 +166,7 @@ def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[Ves
         raise ShipFileError(f"{src}: key 'model': unknown model {model!r} (displacement | planing_6dof)")
     ship = validate_displacement(src, cfg, overrides=bool(overrides))
     vessel = _build_displacement(src, ship, name, initial_state)
+    vessel.length = float(ship.hull.length)
     if not overrides:      # an override may remove sections the estimates refer to
         _check_estimated(src, cfg)
     return vessel

@@ -140,6 +140,9 @@ class Vessel(ABC):
     name: str
     state: VesselState
     attachments: Dict[str, np.ndarray]  # name -> (3,) point in body frame, m
+    # The ship file's length (hull.length, or hull.length_overall of a planing hull), m: the L
+    # of the IMO manoeuvring criteria. Set by ship_file.load_ship.
+    length: float = math.nan
 
     # ---- commands ---------------------------------------------------------------------
     @property
