@@ -327,6 +327,84 @@ class RopeChain:
         return cls(params, X, E, L, p_a=p_a, p_b=p_b, winch=True,
                    nominal_element_length=l_nom, **kw)
 
+    # ------------------------------------------------------------------ settling
+    SETTLE_RELAXATION = 2.0  # 1/s, numerical damping while settling (as the catenary tests use)
+    SETTLE_STEP = 0.02  # s
+    SETTLE_CHECK = 1.0  # s between convergence checks
+    SETTLE_TENSION_TOL = (1e-5, 0.01)  # relative to the largest tension, absolute N, per check
+    # m/s, element speed in the frame of the ends: a slack rope lying on the water creeps at
+    # about 2 mm/s for minutes while its tensions stay put
+    SETTLE_SPEED_TOL = 5e-3
+    SETTLE_MAX_TIME = 600.0  # s
+
+    def settle(self, velocity_a=(0.0, 0.0, 0.0), velocity_b=(0.0, 0.0, 0.0)):
+        """Relax the laid-out rope to static equilibrium for its ends' present positions and
+        their initial velocities, before step 0; returns the settling time (s).
+
+        Galilean equivalence: ends moving at V in still water are ends fixed in a current -V.
+        The ends are held where they are in the current (the real one minus V, V the mean
+        velocity of the attached ends) and the model's own physics steps, with the numerical
+        relaxation as extra damping, until every connection tension changes by less than
+        SETTLE_TENSION_TOL over SETTLE_CHECK seconds and no element moves faster than
+        SETTLE_SPEED_TOL. The rope then gets the ends' motion: each element the velocity
+        interpolated along the rope between velocity_a and velocity_b (V itself when both are
+        equal) and the rotation rate that matches it. Time, step count and the current are as
+        before; nothing of the settling remains but the state. ValueError if the rope parts or
+        does not settle within SETTLE_MAX_TIME (the ends too far apart, or a blow-up)."""
+        va, vb = _vec3(velocity_a, "velocity_a"), _vec3(velocity_b, "velocity_b")
+        if self.winch and self.payout_rate != 0.0:
+            raise ValueError("settle: the winch must be stopped while settling")
+        ends = [v if m == "pinned" else np.zeros(3) for v, m in zip((va, vb), self.end_modes)]
+        attached = [v for v, m in zip(ends, self.end_modes) if m != "free"]
+        v_ref = np.mean(attached, axis=0) if attached else np.zeros(3)
+        # a fixed end does not move; a free end goes with the rest
+        va, vb = (v_ref if m == "free" else v for v, m in zip(ends, self.end_modes))
+        current, relaxation = self.current.copy(), self.relaxation
+        self.att_vel[:] = 0.0
+        self.current = current - v_ref
+        self.relaxation = self.SETTLE_RELAXATION
+        per_check = int(round(self.SETTLE_CHECK / self.SETTLE_STEP))
+        last = self.tensions.copy()
+        t = 0.0
+        try:
+            while True:
+                for _ in range(per_check):
+                    self.step(self.SETTLE_STEP)
+                t += per_check * self.SETTLE_STEP
+                if self.events:
+                    e = self.events[0]
+                    raise ValueError(f"the rope parts while settling to equilibrium (connection {e.connection}, "
+                                     f"{e.tension / 1e3:.1f} kN): the ends are too far apart for it")
+                T = self.tensions
+                change = float(np.abs(T - last).max()) if T.shape == last.shape else math.inf
+                speed = float(np.abs(self.V).max())
+                rtol, atol = self.SETTLE_TENSION_TOL
+                if change <= rtol * float(T.max()) + atol and speed <= self.SETTLE_SPEED_TOL:
+                    break
+                if t >= self.SETTLE_MAX_TIME:
+                    raise ValueError(f"the rope did not settle to equilibrium in {t:.0f} s (tension still "
+                                     f"changing {change:.3g} N/s, elements moving at {speed:.3g} m/s)")
+                last = T.copy()
+        finally:
+            self.current = current
+            self.relaxation = relaxation
+        # the ends' motion: a velocity field linear in the unstretched arc length from a to b
+        s_front = np.concatenate([[0.0], np.cumsum(self.L)[:-1]]) / self.L.sum()
+        s_aft = np.cumsum(self.L) / self.L.sum()
+        v_front = va + s_front[:, None] * (vb - va)
+        v_aft = va + s_aft[:, None] * (vb - va)
+        self.V = 0.5 * (v_front + v_aft)
+        self.W = np.cross(self.E, v_front - v_aft) / self.L[:, None]  # perpendicular to E
+        for i, v in enumerate((va, vb)):
+            if self.end_modes[i] == "pinned":
+                self.att_vel[i] = v
+        self.events.clear()
+        self.time = 0.0
+        self.step_count = 0
+        self._refresh()
+        self._mean_end_force[:] = self._end_force
+        return t
+
     # ------------------------------------------------------------------ inputs
     def set_end_kinematics(self, end, position, velocity=(0.0, 0.0, 0.0)):
         """Pinned end: attachment position (3,) and velocity (3,) at the current time, world

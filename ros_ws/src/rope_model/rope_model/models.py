@@ -39,7 +39,8 @@ class ChainAdapter:
     name = "element_chain"
 
     def __init__(self, path: str, layout: str, p_a, p_b, *, end_a: str, end_b: str, current,
-                 n_elements: Optional[int], deployed_length: Optional[float], max_substep: float):
+                 n_elements: Optional[int], deployed_length: Optional[float], max_substep: float,
+                 equilibrium: bool = False, velocity_a=(0.0, 0.0, 0.0), velocity_b=(0.0, 0.0, 0.0)):
         self.params = load_rope_params(path)
         kw = dict(end_a=end_a, end_b=end_b, current=current)
         if max_substep > 0:
@@ -51,6 +52,9 @@ class ChainAdapter:
         else:
             self.rope = RopeChain.wound_on_winch(self.params, p_a, p_b, deployed_length=deployed_length,
                                                  n_elements=n_elements, **kw)
+        # equilibrium: settled for the ends' step-0 positions and velocities before step 0
+        # (RopeChain.settle); settle_time is how long that took, None when laid as is
+        self.settle_time = self.rope.settle(velocity_a, velocity_b) if equilibrium else None
         self.breaking_load = self.params.breaking_load
         self.radius = self.params.radius
         self.reported = 0
@@ -93,6 +97,7 @@ class CableAdapter:
     def __init__(self, path: str, layout: str, p_a, p_b, *, end_a: str, end_b: str, current,
                  n_elements: Optional[int], deployed_length: Optional[float], max_substep: float,
                  velocity_a=(0.0, 0.0, 0.0), heading: float = 0.0):
+        self.settle_time = None  # it always starts in its steady tow: nothing to settle
         if end_a == "free" or end_b != "free":
             raise ValueError("an fd_cable rope has end a on a vessel (or fixed) and end b 'free' (Park & Jung Eq 14-15)")
         if layout != "straight":
@@ -132,8 +137,9 @@ class CableAdapter:
 def make_model(path: str, layout: str, p_a, p_b, **kw):
     model = rope_file_model(path)
     if model == "fd_cable":
+        kw.pop("velocity_b", None)
+        kw.pop("equilibrium", None)  # the cable always starts in its steady tow
         return CableAdapter(path, layout, p_a, p_b, **kw)
-    kw.pop("velocity_a", None)
     kw.pop("heading", None)
     return ChainAdapter(path, layout, p_a, p_b, **kw)
 

@@ -5,7 +5,9 @@
 
 Each end is "<vessel>/<attachment>" (pinned to that attachment point, taken from
 /<vessel>/attachments each step), "fixed" (held at end_X_position) or "free". The chain is
-laid out between the ends' step-0 positions (straight, slack or wound on end a's winch).
+laid out between the ends' step-0 positions (straight, slack or wound on end a's winch) and,
+with equilibrium:=true, settled to static equilibrium for those positions and the ends' step-0
+velocities before step 0 (RopeChain.settle; nothing of it is published).
 
 Publishes ``state`` (tug_msgs/RopeState), ``end_a/wrench`` and ``end_b/wrench``
 (geometry_msgs/WrenchStamped for ends pinned to a vessel: the force the rope exerts on the
@@ -72,6 +74,9 @@ class RopeNode(SteppedNode):
         p("end_a_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end a, m, world (map)"))
         p("end_b_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end b, m, world (map)"))
         p("layout", "straight", rc.text_param("Initial layout: straight, slack (sagging) or winch (wound on end a)"))
+        p("equilibrium", False, rc.text_param(
+            "true: settle the laid-out rope to static equilibrium for the ends' step-0 positions and velocities "
+            "before step 0 (not published); false: start from the layout as laid"))
         p("deployed_length", 0.0, rc.float_param(
             "Initial deployed length (slack or winch layouts); 0 = the rope file's length", 0.0, 1e5, "m"))
         p("n_elements", 0, rc.int_param("Number of elements; 0 = the rope file's", 0, 2000))
@@ -95,6 +100,7 @@ class RopeNode(SteppedNode):
             raise ValueError(f"parameter layout:={self.layout!r}: expected one of {LAYOUTS}")
         if self.layout == "winch" and self.ends[0].mode == "free":
             raise ValueError("parameter layout:=winch needs end a on a vessel or fixed (the winch is at end a)")
+        self.equilibrium = bool(gp("equilibrium").value)
         self.deployed_length = gp("deployed_length").value or None
         self.n_elements = gp("n_elements").value or None
         self.max_substep = gp("max_substep").value
@@ -187,15 +193,20 @@ class RopeNode(SteppedNode):
         self.rope = make_model(self.rope_path, self.layout, a.position, self.ends[1].position,
                                end_a=a.mode, end_b=self.ends[1].mode, current=self.current,
                                n_elements=self.n_elements, deployed_length=self.deployed_length,
-                               max_substep=self.max_substep, velocity_a=a.velocity, heading=heading)
+                               max_substep=self.max_substep, velocity_a=a.velocity, heading=heading,
+                               equilibrium=self.equilibrium, velocity_b=self.ends[1].velocity)
         for end in self.ends:
             if end.mode == "pinned":
                 self.rope.set_end(end.label, end.position, end.velocity)
         self.ready_to_step = True
         self.publish_outputs()
         out = self.rope.outputs()
+        settled = ("" if self.rope.settle_time is None else
+                   f", settled to equilibrium in {self.rope.settle_time:.0f} s (end tensions "
+                   + ", ".join(f"{np.linalg.norm(self.rope.end_force(e, averaged=False)) / 1e3:.2f}" for e in "ab")
+                   + " kN)")
         self.get_logger().info(f"rope laid out ({self.rope.name}): {len(out['positions'])} elements/nodes, "
-                               f"{out['unstretched_length']:.2f} m deployed")
+                               f"{out['unstretched_length']:.2f} m deployed{settled}")
 
     # -- stepping -------------------------------------------------------------------------
     def compute_step(self, inputs) -> None:

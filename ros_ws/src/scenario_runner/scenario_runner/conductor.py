@@ -141,7 +141,7 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         specs.append(NodeSpec(f"/{v.name}", "vessel", "tug_dynamics", "vessel_node", {**params, **common}))
     for r in sc.ropes:
         params = {"rope_file": resolve("rope_model", "ropes", r.rope_file, scenario_path),
-                  "end_a": r.end_a, "end_b": r.end_b, "layout": r.layout}
+                  "end_a": r.end_a, "end_b": r.end_b, "layout": r.layout, "equilibrium": r.equilibrium}
         for end in ("a", "b"):
             pos = getattr(r, f"end_{end}_position")
             if pos is not None:

@@ -16,6 +16,7 @@ starts; every error names the file, the key and what was expected.
         end_a: tug/towing_hook  # "<vessel>/<attachment>", or "fixed" / "free" with end_a_position
         end_b: barge/bow_bollard
         layout: winch           # straight | slack | winch (wound on end a's winch)
+        equilibrium: true       # settled to static equilibrium before step 0 (default false: as laid)
     events:
       - {time: 0.0, vessel: tug, engine_order: 0.8}
       - {time: 60.0, vessel: tug, steering_deg: 20.0}
@@ -69,8 +70,9 @@ class InitialState(_Strict):
 
 
 class Motion(_Strict):
-    """Prescribed motion of a tug, in the initial frame: the tug tracks of section 4 of Yoon, Lee,
-    Park, Kim, "Dynamic Modeling and Simulation of a Towing Rope using Multiple Finite Element Method"."""
+    """Prescribed motion of a tug, in the initial frame (x along initial.heading_deg): the tug tracks
+    of section 4 of Yoon, Lee, Park, Kim, "Dynamic Modeling and Simulation of a Towing Rope using
+    Multiple Finite Element Method". The vessel starts as the law says at t = 0 (start())."""
     type: Literal["constant_speed", "sinusoidal_sway", "acceleration", "turn"]
     speed: float = Field(ge=0.0, le=40.0)  # m/s, U or U_max
     amplitude: float = Field(0.0, ge=0.0, le=1e3)  # m
@@ -91,6 +93,20 @@ class Motion(_Strict):
             raise ValueError("acceleration needs a positive acceleration")
         return self
 
+    def start(self):
+        """(surge speed m/s, heading relative to the track's x axis rad) of the law at t = 0, from
+        the law itself (tug_dynamics.prescribed): e.g. the seed 000 sway (2 kn, 10 m, 50 s) starts
+        at 1.624 m/s, 50.7 deg off its mean course (atan2(A 2 pi / T, U))."""
+        from tug_dynamics.prescribed import MotionLaw
+        law = MotionLaw(self.type, speed=self.speed, amplitude=self.amplitude, period=self.period,
+                        acceleration=self.acceleration, heading=self.heading,
+                        turn_rate=math.radians(self.turn_rate_deg), turn_start=self.turn_start,
+                        turn_duration=self.turn_duration)
+        _, (vx, vy), _ = law.track(0.0)
+        if self.heading == "track" and math.hypot(vx, vy) > 1e-9:
+            return math.hypot(vx, vy), math.atan2(vy, vx)
+        return vx, 0.0
+
 
 class VesselSpec(_Strict):
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -109,6 +125,9 @@ class RopeSpec(_Strict):
     end_a_position: Optional[Point3] = None
     end_b_position: Optional[Point3] = None
     layout: Literal["straight", "slack", "winch"] = "straight"
+    # true: the rope node settles the laid-out rope to static equilibrium for the ends' positions and
+    # velocities at t = 0 before step 0 (RopeChain.settle), so the run starts without a spurious load
+    equilibrium: bool = False
     deployed_length: Optional[float] = Field(None, gt=0.0, le=1e5)  # also <= the rope file's length
     n_elements: Optional[int] = Field(None, ge=1, le=2000)
 
@@ -304,6 +323,14 @@ def _check_references(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key '{key}': vessel '{parts[0]}' is not in 'vessels' ({vessels})")
         if r.layout == "winch" and r.end_a == "free":
             raise ScenarioError(f"{path}: key 'ropes[{i}].layout': a winch layout needs end a attached")
+    for i, v in enumerate(sc.vessels):
+        # a prescribed vessel starts as its law says: an initial speed that says otherwise is refused
+        if v.motion is not None and "speed" in v.initial.model_fields_set:
+            surge = v.motion.start()[0]
+            if abs(v.initial.speed - surge) > 1e-3:
+                raise ScenarioError(f"{path}: key 'vessels[{i}].initial.speed': {v.initial.speed:g} m/s contradicts "
+                                    f"the prescribed motion ({v.motion.type}), which starts at {surge:.4f} m/s; "
+                                    f"give {surge:.4f} or leave the key out")
     driven = {}
     for i, a in enumerate(sc.autopilots):
         if a.vessel not in vessels:
@@ -372,7 +399,8 @@ def _end_point(path: str, sc: Scenario, r: RopeSpec, end: str, points: Dict[str,
     vessel, point = spec.split("/")
     v = next(v for v in sc.vessels if v.name == vessel)
     ax, ay, az = points[vessel][point]
-    c, s = math.cos(heading_rad(v)), math.sin(heading_rad(v))
+    yaw = heading_rad(v) + (v.motion.start()[1] if v.motion is not None else 0.0)
+    c, s = math.cos(yaw), math.sin(yaw)
     return [v.initial.x + c * ax - s * ay, v.initial.y + s * ax + c * ay, az]
 
 
@@ -427,6 +455,9 @@ def _check_files(path: str, sc: Scenario) -> None:
             if r.layout != "straight":
                 raise ScenarioError(f"{path}: key '{key}.layout': an fd_cable rope ({r.rope_file}) starts from its "
                                     f"steady state: use layout straight, got {r.layout!r}")
+            if r.equilibrium:
+                raise ScenarioError(f"{path}: key '{key}.equilibrium': an fd_cable rope ({r.rope_file}) starts "
+                                    "from its steady tow already; the settle phase is for element-chain ropes")
             if r.n_elements is not None and r.n_elements < 3:
                 raise ScenarioError(f"{path}: key '{key}.n_elements': an fd_cable rope needs at least 3 nodes, "
                                     f"got {r.n_elements}")
@@ -442,4 +473,6 @@ def _check_files(path: str, sc: Scenario) -> None:
 
 
 def heading_rad(v: VesselSpec) -> float:
+    """initial.heading_deg in rad: the heading at t = 0, or for a prescribed vessel the direction of
+    its track's x axis (its heading at t = 0 adds the law's track angle, Motion.start)."""
     return math.radians(v.initial.heading_deg)
