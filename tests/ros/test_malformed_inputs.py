@@ -202,6 +202,18 @@ CASES = {
     "event_payout_nan": ([("payout_rate: 0.5", "payout_rate: .nan")], {}, ["events[0].payout_rate"]),
     "event_orders_autopiloted_vessel": ([("{time: 1.0, vessel: barge, anchor: heave_up}",
                                           "{time: 1.0, vessel: tug, engine_order: 0.5}")], {}, ["events[1].vessel"]),
+    "event_time_and_trigger": ([("{time: 1.0, vessel: barge", "{time: 1.0, when: {vessel: barge, speed_below: 1.0}, "
+                                 "vessel: barge")], {}, ["events[1]", "'time'", "'when'"]),
+    "trigger_two_conditions": ([("{time: 1.0, vessel: barge", "{when: {vessel: barge, speed_below: 1.0, "
+                                 "surge_below: 0.0}, vessel: barge")], {}, ["events[1]", "exactly one"]),
+    "trigger_no_condition": ([("{time: 1.0, vessel: barge", "{when: {vessel: barge}, vessel: barge")], {},
+                             ["events[1]", "exactly one"]),
+    "trigger_vessel_unknown": ([("{time: 1.0, vessel: barge", "{when: {vessel: ghost, speed_below: 1.0}, "
+                                 "vessel: barge")], {}, ["events[1].when.vessel", "'ghost'"]),
+    "trigger_heading_change_zero": ([("{time: 1.0, vessel: barge", "{when: {vessel: barge, heading_change_deg: 0.0}, "
+                                      "vessel: barge")], {}, ["events[1]", "heading_change_deg"]),
+    "trigger_since_without_heading": ([("{time: 1.0, vessel: barge", "{when: {vessel: barge, speed_below: 1.0, "
+                                        "since: 1.0}, vessel: barge")], {}, ["events[1]", "since"]),
     "duplicate_vessel_names": ([("  - name: barge", "  - name: tug")], {}, ["'vessels'", "duplicate"]),
     "scenario_name_is_a_path": ([("name: malformed_base", "name: ../../escape")], {}, ["'name'"]),
 }

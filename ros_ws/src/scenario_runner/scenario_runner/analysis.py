@@ -339,8 +339,10 @@ class Recording:
         >= 0 before it) while making headway above min_speed; None if there is none."""
         t, e = self.engine_orders(name)
         v = self.vessels[name]
-        for i in range(1, t.size):
-            if e[i] <= -0.5 < 0 <= e[i - 1] + 1e-12 and np.interp(t[i], v["t"], v["u"]) > min_speed:
+        for i in range(t.size):
+            # the order before the first one on the command topic is not on it: headway tells
+            ahead_before = e[i - 1] >= 0.0 if i else True
+            if e[i] <= -0.5 and ahead_before and np.interp(t[i], v["t"], v["u"]) > min_speed:
                 return float(t[i])
         return None
 

@@ -26,6 +26,7 @@ import numpy as np
 import rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
+from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
 from scenario_runner.scenario import Scenario, heading_rad, installed_executable, resolve
@@ -290,7 +291,24 @@ class Conductor(Node):
         self.done_sub = self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done_raw, rc.PROTOCOL_QOS,
                                                  raw=True)
         self.rescued = 0  # StepDones the executor did not deliver, taken in wait_for (rc.take_missed)
-        self.orders = self._orders_by_step()
+        # Orders: timed events by step, state-triggered events armed in file order (_orders_at)
+        self.held = {v.name: VesselCommand(engine_order=float(v.initial.engine_order),
+                                           steering_angle=math.radians(v.initial.steering_deg))
+                     for v in sc.vessels}
+        self.timed: Dict[int, List[int]] = {}
+        for i, ev in enumerate(sc.events):
+            if ev.time is not None:
+                self.timed.setdefault(int(round(ev.time * sc.exchange_rate)), []).append(i)
+        self.fired: set = set()
+        self.triggered = [i for i, ev in enumerate(sc.events) if ev.when is not None]
+        # the state of each vessel a trigger watches: its odometry, the step's own
+        self.watched = sorted({sc.events[i].when.vessel for i in self.triggered})
+        self.vessel_state: Dict[str, Tuple[int, float, float, float]] = {}  # stamp ns, yaw unwrapped, speed, u
+        self.heading_since: Dict[Tuple[str, int], float] = {}  # (vessel, step) -> unwrapped yaw then
+        self._since_steps = {(sc.events[i].when.vessel, int(round(sc.events[i].when.since * sc.exchange_rate)))
+                             for i in self.triggered if sc.events[i].when.heading_change_deg is not None}
+        self.odom_subs = [self.create_subscription(Odometry, f"/{name}/odom", lambda m, n=name: self._on_odom(n, m),
+                                                   rc.LATCHED_STATE_QOS) for name in self.watched]
         # Vessels steered by a lockstep autopilot get its order stamped k at every step k.
         self.piloted = sorted(a.vessel for a in sc.autopilots)
 
@@ -366,17 +384,64 @@ class Conductor(Node):
                 f"ROS_DOMAIN_ID={domain} is in use by another run: {'; '.join(found)}. Stop that run (or its "
                 f"leftover nodes), or start this one on another domain, e.g. ROS_DOMAIN_ID={(int(domain) + 1) % 101}")
 
-    def _orders_by_step(self) -> Dict[int, List]:
-        """Events merged per target and step: one order per namespace per step."""
-        rate = self.sc.exchange_rate
-        held = {v.name: VesselCommand(engine_order=float(v.initial.engine_order),
-                                      steering_angle=math.radians(v.initial.steering_deg))
-                for v in self.sc.vessels}
-        out: Dict[int, Dict[str, object]] = {}
-        for ev in sorted(self.sc.events, key=lambda e: e.time):
-            k = int(round(ev.time * rate))
+    def _on_odom(self, name: str, msg: Odometry) -> None:
+        """The watched vessel's state: yaw unwrapped step by step, speed over ground, headway."""
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        prev = self.vessel_state.get(name)
+        if prev is not None and stamp <= prev[0]:
+            return  # a repeat (transient local) or out of order: the state of that step is known
+        q = msg.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        if prev is not None:
+            yaw = prev[1] + math.remainder(yaw - prev[1], 2.0 * math.pi)
+        lin = msg.twist.twist.linear
+        self.vessel_state[name] = (stamp, yaw, math.hypot(lin.x, lin.y), lin.x)
+        step = int(round(stamp / self.period_ns))
+        if (name, step) in self._since_steps:
+            self.heading_since[(name, step)] = yaw
+
+    def states_needed(self, k: int) -> List[str]:
+        """The watched vessels whose state of step k is not here yet (empty once every trigger
+        has fired)."""
+        if len(self.fired) == len(self.sc.events) or not self.watched:
+            return []
+        stamp = k * self.period_ns
+        return [n for n in self.watched if self.vessel_state.get(n, (-1,))[0] < stamp]
+
+    def _trigger_met(self, trigger, k: int) -> bool:
+        stamp, yaw, speed, surge = self.vessel_state[trigger.vessel]
+        if trigger.heading_change_deg is not None:
+            ref = self.heading_since.get((trigger.vessel, int(round(trigger.since * self.sc.exchange_rate))))
+            if ref is None:
+                return False  # before `since`
+            change = math.radians(trigger.heading_change_deg)
+            return math.copysign(1.0, change) * (yaw - ref) >= abs(change)
+        if trigger.speed_below is not None:
+            return speed < trigger.speed_below
+        if trigger.speed_above is not None:
+            return speed > trigger.speed_above
+        return surge < trigger.surge_below
+
+    def _orders_at(self, k: int) -> List[Tuple[str, object]]:
+        """The orders of step k: its timed events, then the state-triggered events armed (every
+        event listed before fired) whose condition the state of step k meets, in file order,
+        merged into the held command: one order per namespace per step."""
+        events = self.sc.events
+        firing = list(self.timed.get(k, []))
+        self.fired.update(firing)
+        for i in self.triggered:
+            if i in self.fired:
+                continue
+            if any(j not in self.fired for j in range(i)) or not self._trigger_met(events[i].when, k):
+                break  # not armed, or not met: the events after it wait too
+            self.fired.add(i)
+            firing.append(i)
+            self.event(k, "trigger", events[i].when.vessel, f"events[{i}]: {events[i].when.describe()}")
+        out: Dict[str, object] = {}
+        for i in sorted(firing, key=lambda j: (events[j].time if events[j].time is not None else k / self.sc.exchange_rate, j)):
+            ev = events[i]
             if ev.vessel is not None:
-                cmd = held[ev.vessel]
+                cmd = self.held[ev.vessel]
                 cmd = VesselCommand(engine_order=cmd.engine_order, steering_angle=cmd.steering_angle,
                                     anchor=VesselCommand.ANCHOR_NO_CHANGE)
                 if ev.engine_order is not None:
@@ -386,11 +451,11 @@ class Conductor(Node):
                 if ev.anchor is not None:
                     cmd.anchor = {"let_go": VesselCommand.ANCHOR_LET_GO, "heave_up": VesselCommand.ANCHOR_HEAVE_UP}[
                         ev.anchor]
-                held[ev.vessel] = cmd
-                out.setdefault(k, {})[ev.vessel] = cmd
+                self.held[ev.vessel] = cmd
+                out[ev.vessel] = cmd
             else:
-                out.setdefault(k, {})[ev.rope] = WinchCommand(payout_rate=float(ev.payout_rate))
-        return {k: sorted(v.items()) for k, v in out.items()}
+                out[ev.rope] = WinchCommand(payout_rate=float(ev.payout_rate))
+        return sorted(out.items())
 
     def order_publishers(self):
         return list(self.cmd_pubs.values()) + list(self.winch_pubs.values())
@@ -400,7 +465,7 @@ class Conductor(Node):
         if self.recorder:
             self.recorder.log_time_ns = k * self.period_ns
         ordered = []
-        for target, order in self.orders.get(k, []):
+        for target, order in self._orders_at(k):
             order.header.stamp = stamp
             if isinstance(order, VesselCommand):
                 self.cmd_pubs[target].publish(order)
@@ -602,6 +667,8 @@ class _Session:
                 late = time.monotonic() - target
                 stats.lateness.append(late)
             t0 = time.monotonic()
+            if conductor.watched:
+                self.wait_for_states(k, stall_timeout)
             conductor.send_step(k)
             if recorder:
                 recorder.flush()  # the previous step's messages, written while the nodes compute
@@ -618,6 +685,17 @@ class _Session:
         stats.cpu_time = time.process_time() + self.procs.cpu_seconds() - cpu_start
         stats.compute_times = conductor.compute_times
         conductor.event(n_steps, "scenario_finished", "", f"{n_steps} steps in {stats.wall_time:.1f} s wall")
+
+    def wait_for_states(self, k: int, timeout: float) -> None:
+        """Spin until the conductor has the odometry of step k of every vessel a pending
+        trigger watches (the nodes answer StepDone and publish their state independently)."""
+        deadline = time.monotonic() + timeout
+        while self.conductor.states_needed(k):
+            self.executor.spin_once(timeout_sec=0.001)
+            self.stop.check()
+            if time.monotonic() > deadline:
+                raise RunError(f"no odometry of step {k} from {', '.join(self.conductor.states_needed(k))} within "
+                               f"{timeout:g} s: a state-triggered event cannot be evaluated")
 
     def settle(self, settled: Callable[[], bool]) -> None:
         """Let the last messages reach subscribers in this process (recorder, summary): 0.3 s,

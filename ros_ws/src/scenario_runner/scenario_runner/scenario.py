@@ -21,6 +21,9 @@ starts; every error names the file, the key and what was expected.
       - {time: 0.0, vessel: tug, engine_order: 0.8}
       - {time: 60.0, vessel: tug, steering_deg: 20.0}
       - {time: 0.0, rope: towline, payout_rate: 1.0}
+      # triggered by state (IMO trials): armed once every event listed before it has fired
+      - {when: {vessel: tug, heading_change_deg: 10.0, since: 60.0}, vessel: tug, steering_deg: -20.0}
+      - {when: {vessel: tug, speed_below: 0.5}, vessel: tug, engine_order: 0.0}
 """
 from __future__ import annotations
 
@@ -132,8 +135,46 @@ class RopeSpec(_Strict):
     n_elements: Optional[int] = Field(None, ge=1, le=2000)
 
 
+class Trigger(_Strict):
+    """A vessel's state that fires an event (IMO trials: "when the heading has changed by 10 deg,
+    put the rudder over"). Evaluated on the state at the start of each step (the step's
+    odometry); exactly one condition:
+      heading_change_deg: the heading (yaw, + to port) has changed by this much (signed) since
+        the time `since` (s, default 0): + port / counter-clockwise, - starboard;
+      speed_below / speed_above: speed over ground below / above this, m/s;
+      surge_below: headway u (body x over ground) below this, m/s (a crash stop: 0.0)."""
+    vessel: str
+    heading_change_deg: Optional[float] = Field(None, ge=-3600.0, le=3600.0)
+    since: float = Field(0.0, ge=0.0)
+    speed_below: Optional[float] = Field(None, ge=0.0, le=40.0)
+    speed_above: Optional[float] = Field(None, ge=0.0, le=40.0)
+    surge_below: Optional[float] = Field(None, ge=-40.0, le=40.0)
+
+    @model_validator(mode="after")
+    def _one_condition(self):
+        given = [k for k in CONDITIONS if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(f"a trigger gives exactly one of {', '.join(CONDITIONS)}; got "
+                             f"{', '.join(given) if given else 'none'}")
+        if self.heading_change_deg == 0.0:
+            raise ValueError("heading_change_deg 0 would fire at once: give the change (+ port, - starboard)")
+        if "since" in self.model_fields_set and self.heading_change_deg is None:
+            raise ValueError("since is the reference time of heading_change_deg only")
+        return self
+
+    def describe(self) -> str:
+        if self.heading_change_deg is not None:
+            return f"{self.vessel} heading changed {self.heading_change_deg:+g} deg since {self.since:g} s"
+        key = next(k for k in CONDITIONS if getattr(self, k) is not None)
+        return f"{self.vessel} {key.replace('_', ' ')} {getattr(self, key):g} m/s"
+
+
+CONDITIONS = ("heading_change_deg", "speed_below", "speed_above", "surge_below")
+
+
 class Event(_Strict):
-    time: float = Field(ge=0.0)
+    time: Optional[float] = Field(None, ge=0.0)  # s; or `when` (a Trigger), not both
+    when: Optional[Trigger] = None
     vessel: Optional[str] = None
     rope: Optional[str] = None
     engine_order: Optional[float] = Field(None, ge=-1.0, le=1.0)
@@ -143,6 +184,8 @@ class Event(_Strict):
 
     @model_validator(mode="after")
     def _one_target(self):
+        if (self.time is None) == (self.when is None):
+            raise ValueError("an event gives exactly one of 'time' (s) or 'when' (a state trigger)")
         if (self.vessel is None) == (self.rope is None):
             raise ValueError("an event names exactly one of 'vessel' or 'rope'")
         vessel_keys = [self.engine_order, self.steering_deg, self.anchor]
@@ -359,8 +402,15 @@ def _check_references(path: str, sc: Scenario) -> None:
             if next(r for r in sc.ropes if r.name == ev.rope).layout != "winch":
                 raise ScenarioError(f"{path}: key 'events[{i}].payout_rate': rope '{ev.rope}' has no winch "
                                     "(layout: winch)")
-        if ev.time > sc.duration:
+        if ev.time is not None and ev.time > sc.duration:
             raise ScenarioError(f"{path}: key 'events[{i}].time': {ev.time} s is after the end ({sc.duration} s)")
+        if ev.when is not None:
+            if ev.when.vessel not in vessels:
+                raise ScenarioError(f"{path}: key 'events[{i}].when.vessel': '{ev.when.vessel}' is not in 'vessels' "
+                                    f"({vessels})")
+            if ev.when.since > sc.duration:
+                raise ScenarioError(f"{path}: key 'events[{i}].when.since': {ev.when.since} s is after the end "
+                                    f"({sc.duration} s)")
 
 
 def resolve(package: str, subdir: str, name: str, scenario_path: str) -> str:
