@@ -79,7 +79,8 @@ _fix_cmake_paths() {
     py_inc="$("$VENV/bin/python" -S -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
     np_inc="$("$VENV/bin/python" -c 'import numpy; print(numpy.get_include())')"
     _say "rewriting wheel-build include paths in CMake exports -> $py_inc, $np_inc"
-    grep -rlE '/opt/python/cp311-cp311' "$VENV/share" --include='*.cmake' 2>/dev/null | while read -r f; do
+    # (grep finds nothing once the files are fixed: not an error under pipefail)
+    { grep -rlE '/opt/python/cp311-cp311' "$VENV/share" --include='*.cmake' 2>/dev/null || true; } | while read -r f; do
         sed -i -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include#$np_inc#g" \
                -e "s#/opt/python/cp311-cp311/include/python3.11#$py_inc#g" "$f"
     done

@@ -46,9 +46,10 @@ FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
 def fed_topics(sc: Scenario) -> Tuple[str, ...]:
     """Topics the recorder gets without a subscription: the runner's own (FED_TOPICS) and the
     per-step outputs of the nodes it starts, through their feed (sim_plumbing/record_feed.py).
-    Those outputs are the contract's state topics (LATCHED_STATE_QOS), published through
-    SteppedNode.create_fed_publisher."""
-    return FED_TOPICS + tuple(t for t, _type, qos in contract_topics(sc) if qos is rc.LATCHED_STATE_QOS)
+    Those outputs are the contract's state topics (LATCHED_STATE_QOS) and the vessels' frames
+    (/tf, /tf_static), published through SteppedNode.create_fed_publisher."""
+    return FED_TOPICS + tuple(t for t, _type, qos in contract_topics(sc)
+                              if qos is rc.LATCHED_STATE_QOS or t in (rc.TF_TOPIC, rc.TF_STATIC_TOPIC))
 
 
 class RunError(RuntimeError):
@@ -507,14 +508,18 @@ def contract_topics(sc: Scenario) -> List[tuple]:
     from geometry_msgs.msg import WrenchStamped
     from nav_msgs.msg import Odometry
     from rosgraph_msgs.msg import Clock as ClockMsg
+    from tf2_msgs.msg import TFMessage
     from tug_msgs.msg import AttachmentArray, RopeState, VesselStatus
     from visualization_msgs.msg import MarkerArray
     topics = [("/clock", ClockMsg, CLOCK_QOS), (rc.SIM_STEP_TOPIC, SimStep, rc.PROTOCOL_QOS),
               (rc.STEP_DONE_TOPIC, StepDone, rc.PROTOCOL_QOS), (rc.EVENTS_TOPIC, ScenarioEvent, rc.EVENTS_QOS)]
+    if sc.vessels:  # every vessel node broadcasts its frames (tf2_ros's QoS)
+        topics += [(rc.TF_TOPIC, TFMessage, rc.TF_QOS), (rc.TF_STATIC_TOPIC, TFMessage, rc.TF_STATIC_QOS)]
     for v in sc.vessels:
         topics += [(f"/{v.name}/odom", Odometry, rc.LATCHED_STATE_QOS),
                    (f"/{v.name}/attachments", AttachmentArray, rc.LATCHED_STATE_QOS),
                    (f"/{v.name}/status", VesselStatus, rc.LATCHED_STATE_QOS),
+                   (f"/{v.name}/markers", MarkerArray, rc.LATCHED_STATE_QOS),
                    (f"/{v.name}/command", VesselCommand, rc.COMMAND_QOS)]
     for r in sc.ropes:
         topics += [(f"/{r.name}/state", RopeState, rc.LATCHED_STATE_QOS),

@@ -202,7 +202,53 @@ def build_parser() -> argparse.ArgumentParser:
                              "one_process: all nodes in this process on one executor")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--live", action="store_true",
+                        help="serve the run to Foxglove / Lichtblick on a WebSocket (live_view package)")
+    parser.add_argument("--live-port", type=int, default=8765, help="WebSocket port of --live (default 8765)")
+    parser.add_argument("--live-host", default="127.0.0.1", help="address --live listens on (default 127.0.0.1)")
+    parser.add_argument("--live-rate", type=float, default=20.0,
+                        help="rate at which --live sends new messages to its clients, Hz (default 20)")
     return parser
+
+
+def live_topics(sc: Scenario) -> List[Tuple[str, str, bool]]:
+    """(topic, type, transient-local) the live view serves: the contract, and the frames and
+    vessel scenes."""
+    from rclpy.qos import DurabilityPolicy
+    from sim_plumbing.msg_definitions import type_name
+    topics = [(t, type_name(cls), qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)
+              for t, cls, qos in cd.contract_topics(sc)]
+    extra = [(rc.TF_TOPIC, "tf2_msgs/msg/TFMessage", False), (rc.TF_STATIC_TOPIC, "tf2_msgs/msg/TFMessage", True)]
+    extra += [(f"/{v.name}/markers", "visualization_msgs/msg/MarkerArray", True) for v in sc.vessels]
+    have = {t[0] for t in topics}
+    return topics + [t for t in extra if t[0] not in have]
+
+
+def _add_tap(recorder: McapRecorder, topic: str, callback: Callable[[bytes], None]) -> bool:
+    """Hand the recorder's bytes of topic to callback too (after any tap already there)."""
+    before = recorder.taps.get(topic)
+    if before is None:
+        return recorder.tap(topic, callback)
+
+    def both(data: bytes) -> None:
+        before(data)
+        callback(data)
+    return recorder.tap(topic, both)
+
+
+def start_live_view(sc: Scenario, args, recorder: Optional[McapRecorder]):
+    """The live view node in this process: it takes every recorded topic from the recorder as
+    written (no second DDS delivery) and subscribes the rest."""
+    from live_view.live_view_node import LiveViewNode
+    from rclpy.parameter import Parameter
+    topics = live_topics(sc)
+    offered = [t[0] for t in topics if recorder is not None and t[0] in recorder.channels]
+    node = LiveViewNode(topics=topics, offered_topics=offered, parameter_overrides=[
+        Parameter("port", value=int(args.live_port)), Parameter("host", value=str(args.live_host)),
+        Parameter("rate", value=float(args.live_rate)), Parameter("discover", value=False)])
+    for t in offered:
+        _add_tap(recorder, t, lambda data, t=t: node.offer(t, data))
+    return node
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -223,7 +269,21 @@ def main(argv: Optional[List[str]] = None) -> int:
         rclpy.try_shutdown()
         return 2
     mon = Monitor(plan.sc, recorder)
-    stats, exit_code = execute(plan, args, recorder, mon)
+    live = None
+    if args.live:
+        try:
+            live = start_live_view(plan.sc, args, recorder)
+        except Exception as exc:  # noqa: BLE001 - e.g. the port is taken: said before anything starts
+            sys.stderr.write(f"run_scenario: --live: cannot start the live view on {args.live_host}:"
+                             f"{args.live_port}: {exc}\n")
+            if recorder:
+                recorder.close()
+            mon.destroy_node()
+            rclpy.try_shutdown()
+            return 2
+        print(f"live view: ws://{args.live_host}:{live.port} (Foxglove / Lichtblick: open connection, "
+              f"Foxglove WebSocket)", flush=True)
+    stats, exit_code = execute(plan, args, recorder, mon, live)
     if stats is None:
         return exit_code
     print(summary(plan.sc, stats, mon))
@@ -264,7 +324,8 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
     return RunPlan(path, sc, steps, output, log_dir, record), 0
 
 
-def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor) -> Tuple[Optional[cd.RunStats], int]:
+def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
+            live: Optional[Node] = None) -> Tuple[Optional[cd.RunStats], int]:
     """Run the scenario with a progress bar; (stats, 0), or (None, exit status) with the reason
     on stderr. The recording is finalised and ROS shut down whatever happens."""
     output = plan.output
@@ -274,7 +335,8 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor)
         progress = tqdm(total=plan.steps, unit="step", desc=plan.sc.name, file=sys.stderr, mininterval=0.5)
     finalise_failed = False
     try:
-        stats = cd.run(plan.sc, plan.path, plan.log_dir, steps=plan.steps, extra_nodes=[mon], recorder=recorder,
+        stats = cd.run(plan.sc, plan.path, plan.log_dir, steps=plan.steps, extra_nodes=[mon] + ([live] if live else []),
+                       recorder=recorder,
                        layout=args.layout, on_step=(lambda k: progress.update(1)) if progress else None,
                        on_finished=mon.finish)
     except OSError as exc:  # the recording could not be written (disk full, file system gone)
@@ -312,6 +374,8 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor)
                                  f"{readable_extent(output)}\n")
                 finalise_failed = True
         mon.destroy_node()
+        if live is not None:
+            live.destroy_node()
         rclpy.try_shutdown()
     if finalise_failed:
         return None, 3

@@ -250,21 +250,64 @@ def sim_step_cdr(stamp_ns: int, step: int, period: float, ordered: Sequence[str]
     return w.getvalue()
 
 
-def line_strip_marker_array_cdr(stamp_ns: int, frame_id: str, ns: str, marker_id: int, width: float,
-                                points, colors_rgba) -> bytes:
-    """visualization_msgs/MarkerArray holding one LINE_STRIP marker (action ADD, identity pose,
-    scale.x = width, lifetime 0) through points (N, 3) with per-point colors (N, 4)."""
-    pts = np.ascontiguousarray(points, dtype="<f8").reshape(-1, 3)
-    cols = np.ascontiguousarray(colors_rgba, dtype="<f4").reshape(-1, 4)
-    w = CdrWriter()
-    w.uint32(1)  # markers
+class TFMessageEncoder:
+    """tf2_msgs/TFMessage of a fixed list of (parent frame, child frame) transforms: stamps,
+    translations and rotations change per message, the frame names never."""
+
+    _TRANSFORM = struct.Struct("<7d")  # translation x y z, rotation x y z w
+
+    def __init__(self, frames: Sequence[Tuple[str, str]]):
+        t = self.t = Template()
+        t.const(_U32, 4, len(frames))
+        for parent, child in frames:
+            _header_template(t, parent)
+            t.string(child)
+            t.slot(self._TRANSFORM, 8)
+        t.seal()
+        self.n = len(frames)
+
+    def encode(self, stamp_ns: int, transforms: Sequence[Tuple[Sequence[float], Sequence[float]]]) -> bytes:
+        """transforms: (translation (3,), rotation quaternion x y z w) per frame pair, in order."""
+        stamp = stamp_parts(stamp_ns)
+        groups = []
+        for translation, rotation in transforms:
+            groups.append(stamp)
+            groups.append((*translation, *rotation))
+        return self.t.pack(*groups)
+
+
+# visualization_msgs/Marker types and actions used here
+MARKER_ARROW, MARKER_SPHERE_LIST, MARKER_LINE_STRIP, MARKER_TRIANGLE_LIST, MARKER_TEXT = 0, 7, 4, 11, 9
+MARKER_ADD = 0
+_IDENTITY_POSE = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+
+
+class MarkerSpec(NamedTuple):
+    """One visualization_msgs/Marker (action ADD, lifetime 0). points (N, 3), colors (N, 4)
+    per point or empty; scale: the type's meaning (line width; arrow shaft, head, head length;
+    sphere diameters; text height)."""
+    ns: str
+    marker_id: int
+    marker_type: int
+    scale: Tuple[float, float, float]
+    color: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    points: object = ()
+    colors: object = ()
+    pose: Tuple[float, ...] = _IDENTITY_POSE  # position x y z, orientation x y z w
+    text: str = ""
+    frame_locked: bool = False
+
+
+def _write_marker(w: CdrWriter, stamp_ns: int, frame_id: str, m: MarkerSpec) -> None:
+    pts = np.ascontiguousarray(m.points, dtype="<f8").reshape(-1, 3)
+    cols = np.ascontiguousarray(m.colors, dtype="<f4").reshape(-1, 4)
     w.stamp(stamp_ns)
     w.string(frame_id)
-    w.string(ns)
-    w.raw(struct.pack("<iii", marker_id, 4, 0), 4)  # id, type LINE_STRIP, action ADD
-    w.float64s(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, width, 0.0, 0.0]))  # pose, scale
-    w.raw(struct.pack("<4f", 0.0, 0.0, 0.0, 0.0), 4)  # color (unused: per-point colors)
-    w.raw(struct.pack("<iI?", 0, 0, False), 4)  # lifetime, frame_locked
+    w.string(m.ns)
+    w.raw(struct.pack("<iii", m.marker_id, m.marker_type, MARKER_ADD), 4)
+    w.float64s(np.array([*m.pose, *m.scale], float))  # pose, scale
+    w.raw(struct.pack("<4f", *m.color), 4)
+    w.raw(struct.pack("<iI?", 0, 0, m.frame_locked), 4)  # lifetime, frame_locked
     w.uint32(len(pts))
     w.float64s(pts)
     w.uint32(len(cols))
@@ -276,12 +319,28 @@ def line_strip_marker_array_cdr(stamp_ns: int, frame_id: str, ns: str, marker_id
     w.string("")
     w.uint32(0)
     w.uint32(0)  # uv_coordinates
-    w.string("")  # text
+    w.string(m.text)
     w.string("")  # mesh_resource
     w.string("")  # mesh_file: filename, data
     w.uint32(0)
     w.raw(b"\x00", 1)  # mesh_use_embedded_materials
+
+
+def marker_array_cdr(stamp_ns: int, frame_id: str, markers: Sequence[MarkerSpec]) -> bytes:
+    """visualization_msgs/MarkerArray of these markers, all in one frame and stamp."""
+    w = CdrWriter()
+    w.uint32(len(markers))
+    for m in markers:
+        _write_marker(w, stamp_ns, frame_id, m)
     return w.getvalue()
+
+
+def line_strip_marker_array_cdr(stamp_ns: int, frame_id: str, ns: str, marker_id: int, width: float,
+                                points, colors_rgba) -> bytes:
+    """visualization_msgs/MarkerArray holding one LINE_STRIP marker (action ADD, identity pose,
+    scale.x = width, lifetime 0) through points (N, 3) with per-point colors (N, 4)."""
+    return marker_array_cdr(stamp_ns, frame_id, [MarkerSpec(ns, marker_id, MARKER_LINE_STRIP, (width, 0.0, 0.0),
+                                                             points=points, colors=colors_rgba)])
 
 
 def clock_cdr(stamp_ns: int) -> bytes:

@@ -30,6 +30,15 @@ COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
 # event would report them but deadlocks rmw_fastrtps on Jazzy, so no node takes it (stepping.py).
 COMMAND_SUB_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.VOLATILE)
+# Frames (tf2_msgs/TFMessage) with tf2_ros's QoS: /tf as its TransformBroadcaster (reliable,
+# volatile, keep last 100), /tf_static as its StaticTransformBroadcaster (reliable,
+# transient-local, keep last 1: a late subscriber gets each publisher's static frames).
+TF_TOPIC = "/tf"
+TF_STATIC_TOPIC = "/tf_static"
+TF_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.VOLATILE)
+TF_STATIC_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                           durability=DurabilityPolicy.TRANSIENT_LOCAL)
 EVENTS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                         reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
 

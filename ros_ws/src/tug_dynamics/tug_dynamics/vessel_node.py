@@ -5,8 +5,12 @@
 Subscribes ``command`` (tug_msgs/VesselCommand) and every topic named in ``wrench_topics``
 (geometry_msgs/WrenchStamped; frame_id "<vessel>/<attachment>" or "<vessel>/base_link").
 Publishes ``odom`` (nav_msgs/Odometry), ``attachments`` (tug_msgs/AttachmentArray) and
-``status`` (tug_msgs/VesselStatus) once per exchange step. The physics lives in the ship
-model (tug_dynamics.ship_file.load_ship); this node only converts messages.
+``status`` (tug_msgs/VesselStatus) once per exchange step; the frames on ``/tf``
+(tf2_msgs/TFMessage, map -> <vessel>/base_link, every step, the odometry's pose) and
+``/tf_static`` (<vessel>/base_link -> <vessel>/<attachment>, once, latched); and its scene on
+``markers`` (visualization_msgs/MarkerArray: hull, deck, attachment points, thrust and rope end
+force arrows; sim_plumbing.scene) at ``marker_rate``. The physics lives in the ship model
+(tug_dynamics.ship_file.load_ship); this node only converts messages.
 """
 from __future__ import annotations
 
@@ -20,12 +24,15 @@ from typing import List, Optional
 import numpy as np
 import yaml
 from geometry_msgs.msg import WrenchStamped
+from visualization_msgs.msg import MarkerArray
 from nav_msgs.msg import Odometry
+from tf2_msgs.msg import TFMessage
 from tug_msgs.msg import AttachmentArray, ScenarioEvent, VesselCommand, VesselStatus
 
 from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
 from sim_plumbing import ros_common as rc
+from sim_plumbing.scene import HullDimensions, VesselScene
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
 from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
@@ -36,7 +43,17 @@ _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
 _STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
 
 
+def _merged(base: dict, over: Optional[dict]) -> dict:
+    """base with the mapping over merged in (nested mappings merged key by key)."""
+    out = dict(base)
+    for key, value in (over or {}).items():
+        out[key] = _merged(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+    return out
+
+
 class VesselNode(SteppedNode):
+    LIVE_PARAMETERS = ("marker_rate", "marker_force_scale")  # the scene only: no effect on the physics
+
     def __init__(self, node_name: str = "vessel", **kwargs):
         super().__init__(node_name, **kwargs)
         self.declare_parameter("ship_file", "", rc.text_param(
@@ -72,6 +89,10 @@ class VesselNode(SteppedNode):
             "Heading of a prescribed motion: track (follows the track tangent) or fixed"))
         self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
         self.declare_parameter("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
+        self.declare_parameter("marker_rate", 10.0, rc.float_param(
+            "Rate of the scene markers (hull, attachments, force arrows; at most the exchange rate)", 0.1, 1000.0, "Hz"))
+        self.declare_parameter("marker_force_scale", 1e-4, rc.float_param(
+            "Length of the thrust and rope force arrows per newton", 0.0, 1.0, "m/N"))
 
         ship_file = self.get_parameter("ship_file").value
         if not ship_file:
@@ -119,6 +140,13 @@ class VesselNode(SteppedNode):
         self.wrench_topics = [t for t in self.get_parameter("wrench_topics").value if t]
 
         self.odom_pub = self.create_fed_publisher(Odometry, "odom", rc.LATCHED_STATE_QOS)
+        self.tf_pub = self.create_fed_publisher(TFMessage, rc.TF_TOPIC, rc.TF_QOS)
+        self.tf_static_pub = self.create_fed_publisher(TFMessage, rc.TF_STATIC_TOPIC, rc.TF_STATIC_QOS)
+        self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
+        with open(path) as f:  # checked by load_ship above
+            ship_cfg = _merged(yaml.safe_load(f), overrides)
+        self.scene = VesselScene(self.vessel_name, HullDimensions.from_ship_config(ship_cfg), self.model.attachments)
+        self._rope_forces = {}  # wrench topic -> (attachment point, force in body axes) of the last step
         self.attach_pub = self.create_fed_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
         self.status_pub = self.create_fed_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
@@ -126,6 +154,7 @@ class VesselNode(SteppedNode):
         # commands raw: bytes that are not a VesselCommand are refused and counted, never crash the node
         self.init_stepping([StepInput("command", VesselCommand, kind="order", decode=cdr.decode_vessel_command)] +
                            [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics])
+        self.on_live_parameters({n: self.get_parameter(n).value for n in self.LIVE_PARAMETERS})
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
         # now, on a copy, not in the first step of a paced run.
         copy.deepcopy(self.model).step(self.dt, [])
@@ -194,9 +223,10 @@ class VesselNode(SteppedNode):
             msg = inputs.get(topic)
             if msg is None:
                 continue
-            wrenches.append(ExternalWrench(force_world=rot @ np.array(msg.force),
-                                           point_body=self._wrench_points[msg.frame_id],
+            point = self._wrench_points[msg.frame_id]
+            wrenches.append(ExternalWrench(force_world=rot @ np.array(msg.force), point_body=point,
                                            moment_world=rot @ np.array(msg.torque)))
+            self._rope_forces[topic] = (point, msg.force)
         self.model.step(self.dt, wrenches)
         self._check_finite()
 
@@ -222,14 +252,26 @@ class VesselNode(SteppedNode):
         self._odom_cdr = cdr.OdometryEncoder(rc.WORLD_FRAME, self.body_frame)
         self._attach_cdr = cdr.AttachmentArrayEncoder(rc.WORLD_FRAME, self.vessel_name, self._names)
         self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name)
+        self._tf_cdr = cdr.TFMessageEncoder([(rc.WORLD_FRAME, self.body_frame)])
+        # the attachment frames: fixed in the body, axes of the body; published once, latched
+        frames = [(self.body_frame, f"{self.vessel_name}/{n}") for n in self._names]
+        self.tf_static_pub.publish(cdr.TFMessageEncoder(frames).encode(
+            self.stamp_ns(), [(p.tolist(), (0.0, 0.0, 0.0, 1.0)) for p in self._points_body]), self.stamp_ns())
+
+    def on_live_parameters(self, changes) -> None:
+        if "marker_rate" in changes:
+            self.marker_every = max(1, round(1e9 / self.period_ns / changes["marker_rate"]))
+        if "marker_force_scale" in changes:
+            self.force_scale = float(changes["marker_force_scale"])
 
     def publish_outputs(self) -> None:
         stamp_ns = self.stamp_ns()
         s = self.model.state
         q = quaternion_from_rpy(*s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
-        self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, s.position.tolist(), q, v.tolist(), w.tolist()),
-                              stamp_ns)
+        position = s.position.tolist()
+        self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, position, q, v.tolist(), w.tolist()), stamp_ns)
+        self.tf_pub.publish(self._tf_cdr.encode(stamp_ns, [(position, q)]), stamp_ns)  # the odometry's pose
 
         # All attachment points at once: p = x + R r, v = R (v_b + w x r).
         rot = rotation_body_to_world(s.rpy)
@@ -243,6 +285,9 @@ class VesselNode(SteppedNode):
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
             st.girting_warning, self.rejected, self.clamped), stamp_ns)
+        if self.step_index % self.marker_every == 0:
+            self.marker_pub.publish(self.scene.markers(stamp_ns, st.thrust, list(self._rope_forces.values()),
+                                                       self.force_scale), stamp_ns)
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,

@@ -1,0 +1,1 @@
+"""Live view of a running simulation (Foxglove WebSocket server)."""

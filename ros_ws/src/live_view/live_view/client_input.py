@@ -1,0 +1,142 @@
+"""What a live-view client may send, checked (no ROS import).
+
+Anything arriving over the WebSocket is untrusted. Only the vessels' ``command``
+(tug_msgs/VesselCommand: engine order, steering and the anchor order, which is part of the
+command) and the ropes' ``winch`` (tug_msgs/WinchCommand) topics take client messages, in CDR
+(as Foxglove's publish panel sends for a ROS 2 server) or JSON (a mapping of exactly the
+message's order fields). A message is refused (InputRefused, with the reason) when it is too
+large, not the type, has a non-finite value or an unknown anchor order; out-of-range values are
+clamped (the notes say which). The accepted order is written anew (sim_plumbing.cdr), stamped
+with the simulation time the live view knows, so nothing but checked numbers leaves the server.
+"""
+from __future__ import annotations
+
+import json
+import math
+import struct
+from typing import Callable, Dict, List, NamedTuple, Tuple
+
+from sim_plumbing import cdr
+
+MAX_MESSAGE_BYTES = 4096
+# Generic bounds (the vessel and rope nodes clamp again to the ship's and rope's own limits)
+ENGINE_LIMIT = 1.0
+STEERING_LIMIT = math.pi / 2  # rad
+PAYOUT_LIMIT = 10.0  # m/s
+ANCHOR_ORDERS = (0, 1, 2)  # no change, let go, heave up (tug_msgs/VesselCommand)
+
+VESSEL_COMMAND = "tug_msgs/msg/VesselCommand"
+WINCH_COMMAND = "tug_msgs/msg/WinchCommand"
+ENCODINGS = ("cdr", "json")
+
+
+class InputRefused(ValueError):
+    """A client message that is not used (the reason in args[0])."""
+
+
+class Order(NamedTuple):
+    data: bytes  # the CDR message to publish
+    notes: Tuple[str, ...]  # what was clamped
+
+
+def _finite(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputRefused(f"{name}={value!r} is not a number")
+    value = float(value)
+    if not math.isfinite(value):
+        raise InputRefused(f"{name}={value!r} is not a finite number")
+    return value
+
+
+def _clamp(name: str, value: float, limit: float, notes: List[str]) -> float:
+    if abs(value) > limit:
+        notes.append(f"{name} {value:g} clamped to {math.copysign(limit, value):g}")
+        return math.copysign(limit, value)
+    return value
+
+
+def _json_fields(data: bytes, fields: Tuple[str, ...]) -> Dict[str, object]:
+    try:
+        obj = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise InputRefused(f"not JSON: {exc}") from None
+    if not isinstance(obj, dict):
+        raise InputRefused(f"expected a JSON object with {', '.join(fields)}")
+    unknown = sorted(set(obj) - set(fields) - {"header"})
+    if unknown:
+        raise InputRefused(f"unknown field(s) {unknown}; expected {', '.join(fields)}")
+    return obj
+
+
+def vessel_command(data: bytes, encoding: str, stamp_ns: int) -> Order:
+    if encoding == "cdr":
+        try:
+            msg = cdr.decode_vessel_command(data)
+        except cdr.CdrError as exc:
+            raise InputRefused(f"not a VesselCommand: {exc}") from None
+        engine, steering, anchor = msg.engine_order, msg.steering_angle, msg.anchor
+    else:
+        obj = _json_fields(data, ("engine_order", "steering_angle", "anchor"))
+        engine, steering, anchor = obj.get("engine_order", 0.0), obj.get("steering_angle", 0.0), obj.get("anchor", 0)
+    engine, steering = _finite("engine_order", engine), _finite("steering_angle", steering)
+    if isinstance(anchor, bool) or not isinstance(anchor, int) or anchor not in ANCHOR_ORDERS:
+        raise InputRefused(f"anchor={anchor!r} is not one of 0 (no change), 1 (let go), 2 (heave up)")
+    notes: List[str] = []
+    engine = _clamp("engine_order", engine, ENGINE_LIMIT, notes)
+    steering = _clamp("steering_angle", steering, STEERING_LIMIT, notes)
+    w = cdr.CdrWriter()
+    w.stamp(stamp_ns)
+    w.string("")
+    w.raw(struct.pack("<ddB", engine, steering, anchor), 8)
+    return Order(w.getvalue(), tuple(notes))
+
+
+def winch_command(data: bytes, encoding: str, stamp_ns: int) -> Order:
+    if encoding == "cdr":
+        try:
+            rate = cdr.decode_winch_command(data).payout_rate
+        except cdr.CdrError as exc:
+            raise InputRefused(f"not a WinchCommand: {exc}") from None
+    else:
+        rate = _json_fields(data, ("payout_rate",)).get("payout_rate", 0.0)
+    notes: List[str] = []
+    rate = _clamp("payout_rate", _finite("payout_rate", rate), PAYOUT_LIMIT, notes)
+    w = cdr.CdrWriter()
+    w.stamp(stamp_ns)
+    w.string("")
+    w.raw(struct.pack("<d", rate), 8)
+    return Order(w.getvalue(), tuple(notes))
+
+
+CHECKS: Dict[str, Callable[[bytes, str, int], Order]] = {VESSEL_COMMAND: vessel_command, WINCH_COMMAND: winch_command}
+
+
+def schema_matches(full_type: str, schema_name: str) -> bool:
+    """A client channel's schema name names the type ('pkg/msg/Type' or 'pkg/Type')."""
+    pkg, _, name = full_type.split("/")
+    return schema_name in (full_type, f"{pkg}/{name}")
+
+
+def check(full_type: str, data: bytes, encoding: str, stamp_ns: int) -> Order:
+    """The order to publish for a client message of this type, or InputRefused."""
+    if len(data) > MAX_MESSAGE_BYTES:
+        raise InputRefused(f"{len(data)} bytes: more than {MAX_MESSAGE_BYTES}")
+    if encoding not in ENCODINGS:
+        raise InputRefused(f"encoding {encoding!r}: expected one of {ENCODINGS}")
+    return CHECKS[full_type](bytes(data), encoding, stamp_ns)
+
+
+class TokenBucket:
+    """At most `rate` messages a second on average, bursts up to `burst`."""
+
+    def __init__(self, rate: float, burst: float, now: float):
+        self.rate, self.burst = rate, burst
+        self.tokens, self.t = burst, now
+
+    def take(self, now: float) -> bool:
+        self.tokens = min(self.burst, self.tokens + (now - self.t) * self.rate)
+        self.t = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False

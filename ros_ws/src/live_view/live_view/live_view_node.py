@@ -1,0 +1,364 @@
+"""The live view: a Foxglove WebSocket server (foxglove-sdk) showing a running simulation.
+
+    ros2 run live_view live_view                       # every topic on the graph, ws://127.0.0.1:8765
+    ros2 run scenario_runner run_scenario default_demo.yaml --live
+
+Every topic is served as a channel with message encoding ``cdr`` and a ``ros2msg`` schema (the
+rosbag2 text of sim_plumbing.msg_definitions): the bytes the nodes publish go out unchanged,
+so Foxglove and Lichtblick decode them as their own ROS 2 messages (3D scene from /tf,
+/tf_static and the markers, plots, raw messages).
+
+Cost (never holds up the lockstep): messages are only stored as they arrive (the newest per
+topic; on /tf the newest per frame; every one of the rare order and event topics, bounded); a
+wall-clock timer at ``rate`` (default 20 Hz) sends what is new to subscribed clients, the
+WebSocket I/O runs in foxglove-sdk's own threads. Started by ``run_scenario --live`` the node
+lives in the runner's process and takes the bytes from the recorder as it writes them (no
+second DDS delivery of anything); started alone, it subscribes the topics it serves (raw; the
+step protocol best-effort, so a slow viewer can never make a keep-all writer wait).
+
+Client input: only the vessels' ``command`` and the ropes' ``winch`` topics take client
+messages (client_input.py: checked, clamped, written anew, stamped with the simulation time,
+published); anything else a client advertises or sends is refused, logged (at most once a
+second per kind) and counted, and so is input beyond ``input_rate`` messages a second per
+client. The counts are in ``refused`` and ``accepted`` and in the log on shutdown.
+
+The node holds its servers in ``self.servers`` (each with a ``stop()``): a further server, e.g.
+the browser instructor station's HTTP server, is added with add_server() and stopped with the
+node.
+"""
+from __future__ import annotations
+
+import collections
+import struct
+import sys
+import threading
+import time
+from typing import Callable, Deque, Dict, List, Optional, Sequence, Tuple
+
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from live_view import client_input
+from sim_plumbing import cdr
+from sim_plumbing import ros_common as rc
+from sim_plumbing.msg_definitions import message_definition
+from sim_plumbing.stepping import RateLimitedLog
+
+DEFAULT_PORT = 8765
+STATIC_RESEND = 1.0  # s: latched topics (/tf_static) go out again so a client that joins late has them
+MAX_QUEUED = 1000  # messages of an every-message topic held between two sends
+MAX_CLIENT_CHANNELS = 64  # channels one client may advertise
+PROTOCOL_TOPICS = (rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
+_STAMP = struct.Struct("<iI")
+
+
+def _import_type(full_type: str):
+    import importlib
+    pkg, sub, name = full_type.split("/")
+    return getattr(importlib.import_module(f"{pkg}.{sub}"), name)
+
+
+def _tf_key(data: bytes) -> Tuple[str, str]:
+    """(parent, child) of the first transform of a tf2_msgs/TFMessage."""
+    r = cdr.CdrReader(data)
+    if r.uint32() == 0:
+        return "", ""
+    r.stamp_ns()
+    return r.string(), r.string()
+
+
+class TopicSlot:
+    """What arrived on a topic since the last send. policy: latest (the newest message),
+    keyed (the newest per key, /tf), static (the newest per key, re-sent every
+    STATIC_RESEND s, /tf_static), every (each message, up to MAX_QUEUED)."""
+
+    def __init__(self, topic: str, full_type: str, policy: str, channel):
+        self.topic, self.full_type, self.policy, self.channel = topic, full_type, policy, channel
+        self.latest: Optional[bytes] = None
+        self.keyed: Dict[object, bytes] = {}
+        self.fresh: set = set()
+        self.queue: Deque[bytes] = collections.deque(maxlen=MAX_QUEUED)
+        self.dropped = 0
+        self.received = 0
+        self.sent = 0
+        self.last_static = 0.0
+        self.lock = threading.Lock()
+
+    def offer(self, data: bytes) -> None:
+        self.received += 1
+        if self.policy == "latest":
+            self.latest = data
+            return
+        if self.policy == "every":
+            if len(self.queue) == MAX_QUEUED:
+                self.dropped += 1
+            self.queue.append(data)
+            return
+        try:
+            key = _tf_key(data)
+        except cdr.CdrError:
+            return
+        with self.lock:
+            self.keyed[key] = data
+            self.fresh.add(key)
+
+    def take(self, now: float) -> List[bytes]:
+        """The messages to send now."""
+        if self.policy == "latest":
+            data, self.latest = self.latest, None
+            return [data] if data is not None else []
+        if self.policy == "every":
+            out = []
+            while self.queue:
+                out.append(self.queue.popleft())
+            return out
+        with self.lock:
+            if self.policy == "static" and now - self.last_static >= STATIC_RESEND:
+                self.last_static = now
+                self.fresh.clear()
+                return list(self.keyed.values())
+            out = [self.keyed[k] for k in self.fresh]
+            self.fresh.clear()
+            return out
+
+
+def policy_of(topic: str, full_type: str) -> str:
+    if topic == rc.TF_STATIC_TOPIC:
+        return "static"
+    if topic == rc.TF_TOPIC:
+        return "keyed"
+    if full_type in client_input.CHECKS or topic == rc.EVENTS_TOPIC:
+        return "every"
+    return "latest"
+
+
+def subscription_qos(topic: str, transient_local: bool) -> QoSProfile:
+    """A reader that can never make a writer wait: the keep-all step protocol best-effort;
+    otherwise reliable keep-last (a keep-last writer overwrites rather than waits), transient-
+    local where the publishers offer it (the step-0 state, /tf_static)."""
+    if topic in PROTOCOL_TOPICS:
+        return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
+                          durability=DurabilityPolicy.VOLATILE)
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100 if topic.startswith("/tf") else 10,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if transient_local else DurabilityPolicy.VOLATILE)
+
+
+class _Listener:
+    """foxglove-sdk ServerListener: client channels and their messages (called in the server's
+    threads)."""
+
+    def __init__(self, node: "LiveViewNode"):
+        self.node = node
+
+    def on_client_advertise(self, client, channel) -> None:
+        self.node.client_advertise(client.id, channel)
+
+    def on_client_unadvertise(self, client, client_channel_id: int) -> None:
+        self.node.client_channels.pop((client.id, client_channel_id), None)
+
+    def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
+        self.node.client_message(client.id, client_channel_id, data)
+
+    def on_subscribe(self, client, channel) -> None:
+        self.node.subscribed_once = True
+
+    def on_unsubscribe(self, client, channel) -> None:
+        pass
+
+
+class LiveViewNode(Node):
+    """See the module docstring. topics: (topic, 'pkg/msg/Type', transient-local publishers?) to
+    serve from the start;
+    none (and discover:=true, the default alone): every topic on the graph of a known type,
+    looked up every 2 s. offered_topics: topics someone in this process hands over with
+    offer() (run_scenario --live: the recorder), not subscribed."""
+
+    def __init__(self, node_name: str = "live_view", *, topics: Sequence[Tuple[str, str, bool]] = (),
+                 offered_topics: Sequence[str] = (), **kwargs):
+        super().__init__(node_name, **kwargs)
+        self.declare_parameter("host", "127.0.0.1", rc.text_param("Address the WebSocket server listens on"))
+        self.declare_parameter("port", DEFAULT_PORT, rc.int_param("WebSocket port (0: any free port)", 0, 65535))
+        self.declare_parameter("rate", 20.0, rc.float_param("Rate at which new messages go to the clients",
+                                                            0.5, 200.0, "Hz"))
+        self.declare_parameter("input_rate", 20.0, rc.float_param(
+            "Client messages accepted per second and client (more are refused and counted)", 0.1, 1000.0, "1/s"))
+        self.declare_parameter("discover", not topics, rc.text_param(
+            "true: serve every topic on the ROS graph of a known type (looked up every 2 s)"))
+        self.complaints = RateLimitedLog(self.get_logger())
+        self.slots: Dict[str, TopicSlot] = {}
+        self.offered = set(offered_topics)
+        self.sim_time_ns = 0
+        self.refused: collections.Counter = collections.Counter()  # why -> client messages refused
+        self.accepted = 0
+        self.clamped = 0
+        self.client_channels: Dict[Tuple[int, int], Tuple[str, str, str]] = {}  # -> topic, type, encoding
+        self._refused_channels: Dict[Tuple[int, int], str] = {}
+        self._buckets: Dict[int, client_input.TokenBucket] = {}
+        self._input_pubs: Dict[str, object] = {}
+        self.subscribed_once = False
+        self.servers: List[object] = []
+
+        import foxglove
+        from foxglove.websocket import Capability
+        self._foxglove = foxglove
+        self.fg_context = foxglove.Context()
+        for topic, full_type, latched in topics:
+            self.add_topic(topic, full_type, latched)
+        self.server = foxglove.start_server(
+            name="tugsim live view", host=self.get_parameter("host").value, port=self.get_parameter("port").value,
+            capabilities=[Capability.ClientPublish, Capability.Time], supported_encodings=list(client_input.ENCODINGS),
+            server_listener=_Listener(self), context=self.fg_context)
+        self.add_server(self.server)
+        self.port = self.server.port
+        self.timer = self.create_timer(1.0 / self.get_parameter("rate").value, self.send,
+                                       clock=rclpy.clock.Clock(clock_type=rclpy.clock.ClockType.STEADY_TIME))
+        if self.get_parameter("discover").value:
+            self._discover_timer = self.create_timer(
+                2.0, self.discover, clock=rclpy.clock.Clock(clock_type=rclpy.clock.ClockType.STEADY_TIME))
+            self.discover()
+        self.get_logger().info(f"live view on ws://{self.get_parameter('host').value}:{self.port} "
+                               f"({len(self.slots)} topics, {self.get_parameter('rate').value:g} Hz)")
+
+    # -- servers ---------------------------------------------------------------------------
+    def add_server(self, server) -> None:
+        """A server that lives as long as the node (anything with stop())."""
+        self.servers.append(server)
+
+    def destroy_node(self) -> None:
+        for server in self.servers:
+            try:
+                server.stop()
+            except Exception as exc:  # noqa: BLE001 - stopping is best effort at shutdown
+                self.get_logger().warning(f"stopping {server!r}: {exc}")
+        if self.refused or self.accepted:
+            self.get_logger().info(f"client input: {self.accepted} accepted ({self.clamped} clamped), refused: "
+                                   f"{dict(self.refused) or 'none'}")
+        super().destroy_node()
+
+    # -- topics ----------------------------------------------------------------------------
+    def add_topic(self, topic: str, full_type: str, transient_local: bool) -> bool:
+        """Serve a topic (once); False if its type's definition is not installed."""
+        if topic in self.slots:
+            return True
+        try:
+            schema = self._foxglove.Schema(name=full_type, encoding="ros2msg",
+                                           data=message_definition(full_type).encode())
+            msg_class = _import_type(full_type)
+        except (OSError, LookupError, ImportError, AttributeError, ValueError):
+            self.complaints("unknown type", f"{topic}: type {full_type} not installed here: not served", "warning")
+            return False
+        channel = self._foxglove.Channel(topic, schema=schema, message_encoding="cdr", context=self.fg_context)
+        slot = self.slots[topic] = TopicSlot(topic, full_type, policy_of(topic, full_type), channel)
+        if full_type in client_input.CHECKS:
+            self._input_pubs[topic] = self.create_publisher(msg_class, topic, rc.COMMAND_QOS)
+        if topic not in self.offered:
+            self.create_subscription(msg_class, topic, slot.offer if topic != "/clock" else self._on_clock,
+                                     subscription_qos(topic, transient_local), raw=True)
+        return True
+
+    def discover(self) -> None:
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self.slots or topic.startswith(("/rosout", "/parameter_events")) or len(types) != 1:
+                continue
+            infos = self.get_publishers_info_by_topic(topic)
+            if not infos:
+                continue
+            latched = any(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
+            self.add_topic(topic, types[0], latched)
+
+    def offer(self, topic: str, data: bytes) -> None:
+        """A message of a served topic, handed over in this process."""
+        if topic == "/clock":
+            self._on_clock(data)
+            return
+        slot = self.slots.get(topic)
+        if slot is not None:
+            slot.offer(data)
+
+    def _on_clock(self, data: bytes) -> None:
+        if len(data) >= 12:
+            sec, nanosec = _STAMP.unpack_from(data, 4)
+            self.sim_time_ns = max(0, sec) * 1_000_000_000 + nanosec
+        slot = self.slots.get("/clock")
+        if slot is not None:
+            slot.offer(data)
+
+    def send(self) -> None:
+        """Timer: what is new goes to the subscribed clients, logged at the simulation time."""
+        now = time.monotonic()
+        t = self.sim_time_ns
+        for slot in self.slots.values():
+            messages = slot.take(now)
+            if not messages or not slot.channel.has_sinks():
+                continue
+            for data in messages:
+                slot.channel.log(data, log_time=t)
+            slot.sent += len(messages)
+        self.server.broadcast_time(t)
+
+    # -- client input ----------------------------------------------------------------------
+    def _refuse(self, kind: str, text: str) -> None:
+        self.refused[kind] += 1
+        if self.complaints("client " + kind, f"client input refused: {text}", "warning"):
+            try:
+                self.server.publish_status(f"refused: {text}", self._foxglove.StatusLevel.Warning,
+                                           "live_view_refused")
+            except Exception:  # noqa: BLE001 - telling the clients is a courtesy
+                pass
+
+    def client_advertise(self, client_id: int, channel) -> None:
+        key = (client_id, channel.id)
+        slot = self.slots.get(channel.topic)
+        why = None
+        if sum(1 for c, _ in self.client_channels if c == client_id) >= MAX_CLIENT_CHANNELS:
+            why = f"client {client_id} advertises more than {MAX_CLIENT_CHANNELS} channels"
+        elif slot is None or slot.full_type not in client_input.CHECKS:
+            why = (f"client {client_id} advertised '{channel.topic[:200]}': clients may publish only on the vessel "
+                   f"command and rope winch topics ({', '.join(sorted(self._input_pubs)) or 'none here'})")
+        elif channel.encoding not in client_input.ENCODINGS:
+            why = f"client {client_id} advertised {channel.topic} with encoding {channel.encoding[:50]!r}"
+        elif channel.encoding == "cdr" and not client_input.schema_matches(slot.full_type, channel.schema_name):
+            why = (f"client {client_id} advertised {channel.topic} as {channel.schema_name[:100]!r}, "
+                   f"expected {slot.full_type}")
+        if why is not None:
+            if len(self._refused_channels) < 10_000:
+                self._refused_channels[key] = why
+            self._refuse("channel", why)
+            return
+        self.client_channels[key] = (channel.topic, slot.full_type, channel.encoding)
+
+    def client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
+        bucket = self._buckets.get(client_id)
+        now = time.monotonic()
+        if bucket is None:
+            rate = self.get_parameter("input_rate").value
+            bucket = self._buckets[client_id] = client_input.TokenBucket(rate, max(1.0, rate), now)
+        if not bucket.take(now):
+            self._refuse("rate", f"client {client_id} sends more than {bucket.rate:g} messages/s")
+            return
+        target = self.client_channels.get((client_id, channel_id))
+        if target is None:
+            why = self._refused_channels.get((client_id, channel_id), f"channel {channel_id} was never advertised")
+            self._refuse("channel", f"message on a refused channel ({why})")
+            return
+        topic, full_type, encoding = target
+        try:
+            order = client_input.check(full_type, data, encoding, self.sim_time_ns)
+        except client_input.InputRefused as exc:
+            self._refuse("message", f"{topic} from client {client_id}: {exc}")
+            return
+        if order.notes:
+            self.clamped += 1
+            self.complaints("client clamped", f"{topic} from client {client_id}: {'; '.join(order.notes)}", "warning")
+        self.accepted += 1
+        self._input_pubs[topic].publish(order.data)
+
+
+def main(args: Optional[List[str]] = None) -> int:
+    return rc.run_node(LiveViewNode, "live_view", args, bad_input=(ValueError, KeyError, OSError, RuntimeError))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
