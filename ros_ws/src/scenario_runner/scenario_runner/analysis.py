@@ -290,29 +290,25 @@ class Recording:
         self.events.sort(key=lambda e: e["stamp_ns"])
 
     # -- manoeuvres -----------------------------------------------------------------------
-    def steering_orders(self, name: str):
-        """(times, steering angles) of the helm orders given to a vessel: from its command topic
-        (order stamps), else from its status topic (the time of the last state before the held
-        order changed)."""
+    def _orders(self, name: str, command_column: int, status_field: str):
+        """(times, values) of one order given to a vessel: from its command topic (order stamps),
+        else from its status topic (the time of the last state before the held order changed)."""
         v = self.vessels[name]
         if "command" in v and v["command"]["t"].size:
-            return v["command"]["t"], v["command"]["data"][:, 1]
+            return v["command"]["t"], v["command"]["data"][:, command_column]
         if "status" in v and v["status"]["t"].size:
-            t, d = v["status"]["t"], status_column(v["status"], "steering_angle_ordered")
+            t, d = v["status"]["t"], status_column(v["status"], status_field)
             change = np.nonzero(np.abs(np.diff(d)) > 1e-9)[0]
             return np.concatenate([[t[0]], t[change]]), np.concatenate([[d[0]], d[change + 1]])
         return np.zeros(0), np.zeros(0)
 
+    def steering_orders(self, name: str):
+        """(times, steering angles) of the helm orders given to a vessel (_orders)."""
+        return self._orders(name, 1, "steering_angle_ordered")
+
     def engine_orders(self, name: str):
-        """(times, engine orders) given to a vessel, as steering_orders finds its helm orders."""
-        v = self.vessels[name]
-        if "command" in v and v["command"]["t"].size:
-            return v["command"]["t"], v["command"]["data"][:, 0]
-        if "status" in v and v["status"]["t"].size:
-            t, e = v["status"]["t"], status_column(v["status"], "engine_order")
-            change = np.nonzero(np.abs(np.diff(e)) > 1e-9)[0]
-            return np.concatenate([[t[0]], t[change]]), np.concatenate([[e[0]], e[change + 1]])
-        return np.zeros(0), np.zeros(0)
+        """(times, engine orders) given to a vessel (_orders)."""
+        return self._orders(name, 0, "engine_order")
 
     def find_zigzag(self, name: str):
         """(order times, order angles) of a zig-zag: from the first helm order of at least 5 deg,

@@ -37,64 +37,9 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from scenario_runner.mcap_io import ros_decode_errors
+from sim_plumbing.msg_definitions import message_definition  # noqa: F401 - the recorder's schemas
 from sim_plumbing.record_feed import PipeReader
 from sim_plumbing.stepping import RateLimitedLog
-
-PRIMITIVES = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
-              "int64", "uint64", "string", "wstring"}
-SEPARATOR = "=" * 80
-
-
-def _msg_file(full_type: str) -> str:
-    pkg, _, name = full_type.split("/")
-    from ament_index_python.packages import get_package_share_directory
-    return os.path.join(get_package_share_directory(pkg), "msg", name + ".msg")
-
-
-def _dependencies(pkg: str, text: str) -> List[str]:
-    deps = []
-    for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if not line:
-            continue
-        ftype = line.split()[0]
-        if "=" in line.split(None, 1)[1] if len(line.split(None, 1)) > 1 else False:
-            continue  # constant
-        base = re.sub(r"\[.*\]$", "", ftype)
-        base = re.sub(r"<=\d+$", "", base)
-        if base in PRIMITIVES:
-            continue
-        if base == "Header":
-            base = "std_msgs/Header"
-        if "/" not in base:
-            base = f"{pkg}/{base}"
-        full = base if base.count("/") == 2 else base.replace("/", "/msg/", 1)
-        deps.append(full)
-    return deps
-
-
-def message_definition(full_type: str) -> str:
-    """rosbag2's ros2msg schema text for e.g. 'nav_msgs/msg/Odometry'."""
-    seen: List[str] = []
-
-    def visit(t: str) -> None:
-        with open(_msg_file(t)) as f:
-            text = f.read()
-        for dep in _dependencies(t.split("/")[0], text):
-            if dep not in seen and dep != full_type:
-                seen.append(dep)
-                visit(dep)
-
-    with open(_msg_file(full_type)) as f:
-        main = f.read()
-    visit(full_type)
-    parts = [main.rstrip("\n")]
-    for dep in seen:
-        pkg, _, name = dep.split("/")
-        with open(_msg_file(dep)) as f:
-            parts.append(f"{SEPARATOR}\nMSG: {pkg}/{name}\n{f.read().rstrip(chr(10))}")
-    return "\n".join(parts) + "\n"
-
 
 BAG_METADATA_VERSION = 9  # rosbag2 Jazzy
 ROS_DISTRO = "jazzy"  # the ROS 2 wheels this project runs on; ROS_DISTRO in the environment wins
