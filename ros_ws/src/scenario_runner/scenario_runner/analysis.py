@@ -598,7 +598,9 @@ def _tension_figure(out: _Figures, rec: Recording, ropes: Dict[str, dict], break
         if angles[name]:
             b = axs.pop(0)
             for vessel, t, ang, end in angles[name]:
-                b.plot(t, np.degrees(ang), label=f"end {end} on {vessel}")
+                deg = np.degrees(ang)
+                deg[1:][np.abs(np.diff(deg)) > 180.0] = np.nan  # no vertical line across the +-180 seam
+                b.plot(t, deg, label=f"end {end} on {vessel}")
             b.set_ylabel("towline angle (deg from bow, + port)")
             b.set_xlabel("time (s)")
             b.set_ylim(-185, 185)
