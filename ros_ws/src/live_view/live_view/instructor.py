@@ -1,0 +1,476 @@
+"""The browser instructor station: a page served by the live view node on http://127.0.0.1:8080.
+
+    ros2 run live_view live_view --ros-args -p http_port:=8080      # beside a run or a replay
+    ros2 run scenario_runner run_scenario default_demo.yaml --live  # in the runner's process
+
+The page (web/: index.html, app.js, style.css, and three.js from the npm registry, pinned by
+web/package-lock.json, installed by scripts/ensure_env.sh and installed into share/live_view/web/
+vendor by the build) shows a 3D view of the water, the vessels (the hull of their scene markers),
+their attachments and the ropes coloured by tension; gauges per vessel and per rope; a scrolling
+plot of the rope tensions; and controls that publish the ordinary VesselCommand and WinchCommand
+messages. Nothing is fetched from elsewhere: the server answers only its own files.
+
+Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
+  GET  /, /app.js, /style.css, /vendor/...   the page (a fixed list of files, nothing else on disk)
+  GET  /api/state    the newest snapshot (JSON), sampled at ``http_rate`` (default 10 Hz) by one
+                     thread whatever the number of clients: sim time, per vessel pose, speed (kn),
+                     heading (deg true = (90 - yaw) mod 360), engine order and rpm, rudder/bucket
+                     angle, heel, girting ratio; per rope the polyline of its connections with their
+                     tensions, peak tension, breaking load, deployed length, winch order; the
+                     tension history of the last HISTORY_SECONDS of simulated time
+  GET  /api/scene    per vessel the hull, deck and attachment points (body frame) of its markers
+  POST /api/publish?topic=/<vessel>/command | /<rope>/winch   JSON body as the WebSocket clients
+                     send it ({"engine_order": .., "steering_angle": .., "anchor": ..},
+                     {"payout_rate": ..}); handed to LiveViewNode.take_input(): client_input.py's
+                     checks, the per-client rate limit, refusals logged and counted, out-of-range
+                     values clamped. Answers 200 (accepted, with the clamp notes), 400 (refused),
+                     403 (not a command or winch topic), 413 (too large), 415 (not JSON), 429 (rate).
+
+A browser page of another site cannot send orders: a POST must be application/json (a cross-site
+page would need a CORS preflight, which is not answered), and on a loopback address the Host
+header must name a loopback host (no DNS rebinding).
+"""
+from __future__ import annotations
+
+import collections
+import http.server
+import json
+import math
+import os
+import threading
+import time
+import urllib.parse
+from typing import Deque, Dict, List, Optional, Tuple
+
+from live_view import client_input
+
+DEFAULT_HTTP_PORT = 8080
+DEFAULT_HTTP_RATE = 10.0  # Hz: samples, so the page's display period is 100 ms
+HISTORY_SECONDS = 180.0  # s of simulated time kept for the tension plot
+MAX_BODY = client_input.MAX_MESSAGE_BYTES
+KNOT = 1852.0 / 3600.0
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]", "::1")
+ANCHOR_STATES = {0: "none", 1: "stowed", 2: "letting go", 3: "dredging", 4: "heaving up"}
+
+# The page's files: URL path -> file under the web root (nothing else is served from disk)
+FILES = {
+    "/": ("index.html", "text/html; charset=utf-8"),
+    "/index.html": ("index.html", "text/html; charset=utf-8"),
+    "/app.js": ("app.js", "text/javascript; charset=utf-8"),
+    "/style.css": ("style.css", "text/css; charset=utf-8"),
+    "/vendor/three.module.js": ("vendor/three.module.js", "text/javascript; charset=utf-8"),
+    "/vendor/three.core.js": ("vendor/three.core.js", "text/javascript; charset=utf-8"),
+    "/vendor/OrbitControls.js": ("vendor/OrbitControls.js", "text/javascript; charset=utf-8"),
+}
+
+
+def _yaw_roll_pitch(q) -> Tuple[float, float, float]:
+    x, y, z, w = q.x, q.y, q.z, q.w
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    return yaw, roll, pitch
+
+
+def heading_deg_true(yaw: float) -> float:
+    """Compass heading (deg true, 0 north, 90 east) of an ENU yaw (rad, 0 east, + to port)."""
+    return (90.0 - math.degrees(yaw)) % 360.0
+
+
+def _clean(obj):
+    """JSON-safe: non-finite numbers become null (the page shows a dash)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+def _finite_or_none(v: float) -> Optional[float]:
+    return float(v) if math.isfinite(v) else None
+
+
+def rope_polyline(state) -> Tuple[List[List[float]], List[float]]:
+    """The rope's connection points (world) and the tension at each: an element chain's N
+    elements give N + 1 connections (each element's ends from its centre, axis and length); a
+    cable's nodes are its points."""
+    poses, lengths, tensions = state.element_poses, list(state.element_lengths), list(state.connection_tensions)
+    centres = [(p.position.x, p.position.y, p.position.z) for p in poses]
+    if state.model != "element_chain" or len(lengths) != len(poses) or len(tensions) != len(poses) + 1:
+        pts = [list(c) for c in centres]
+        if len(tensions) != len(pts) and pts:
+            # spread the tensions over the points (nearest)
+            tensions = [tensions[min(len(tensions) - 1, round(i * (len(tensions) - 1) / max(1, len(pts) - 1)))]
+                        if tensions else 0.0 for i in range(len(pts))]
+        return pts, tensions
+    ends_a, ends_b = [], []
+    for p, c, length in zip(poses, centres, lengths):
+        q = p.orientation
+        # body x axis of the element (points towards end a)
+        ax = (1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z), 2.0 * (q.x * q.z - q.w * q.y))
+        h = 0.5 * length
+        ends_a.append([c[0] + h * ax[0], c[1] + h * ax[1], c[2] + h * ax[2]])
+        ends_b.append([c[0] - h * ax[0], c[1] - h * ax[1], c[2] - h * ax[2]])
+    pts = [ends_a[0]]
+    for i in range(1, len(poses)):
+        pts.append([(ends_b[i - 1][k] + ends_a[i][k]) / 2.0 for k in range(3)])
+    pts.append(ends_b[-1])
+    return pts, tensions
+
+
+def breaking_loads_from(path: str) -> Dict[str, Optional[float]]:
+    """Rope name -> breaking load (N) from a scenario file or a recording's 'tugsim' metadata."""
+    if path.endswith(".mcap"):
+        from mcap.reader import make_reader
+        with open(path, "rb") as f:
+            for record in make_reader(f).iter_metadata():
+                if record.name == "tugsim" and "particulars" in record.metadata:
+                    ropes = json.loads(record.metadata["particulars"]).get("ropes", {})
+                    return {name: r.get("breaking_load") for name, r in ropes.items()}
+        return {}
+    import yaml
+    from rope_model.models import load_params
+    from sim_plumbing import ros_common as rc
+    if not os.path.isfile(path):
+        path = rc.resolve_data_file("scenario_runner", "scenarios", path)
+    with open(path) as f:
+        sc = yaml.safe_load(f) or {}
+    out: Dict[str, Optional[float]] = {}
+    for r in sc.get("ropes") or []:
+        name = os.path.join(os.path.dirname(os.path.abspath(path)), r["rope_file"])
+        if not os.path.isfile(name):
+            name = rc.resolve_data_file("rope_model", "ropes", r["rope_file"])
+        load = getattr(load_params(name), "breaking_load", None)
+        out[str(r["name"])] = float(load) if load is not None and math.isfinite(load) else None
+    return out
+
+
+class InstructorStation:
+    """The HTTP server of the page and its sampler thread (see the module docstring). Lives as long
+    as the live view node: started by it, stopped with its servers."""
+
+    def __init__(self, node):
+        from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+        self.node = node
+        self.log = node.get_logger()
+        host = node.get_parameter("host").value
+        self.loopback = host in ("127.0.0.1", "localhost", "::1") or host.startswith("127.")
+        self.period = 1.0 / node.get_parameter("http_rate").value
+        root = node.get_parameter("web_root").value
+        if not root:
+            try:
+                root = os.path.join(get_package_share_directory("live_view"), "web")
+            except PackageNotFoundError:
+                root = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "web")
+        self.web_root = root
+        missing = [f for f, _ in FILES.values() if not os.path.isfile(os.path.join(root, f))]
+        if missing:
+            self.log.warning(f"instructor station: {', '.join(sorted(set(missing)))} missing in {root} (three.js is "
+                             "installed by scripts/ensure_env.sh with npm ci; is npm installed?): the page says so")
+        self.breaking: Dict[str, Optional[float]] = {}
+        particulars = node.get_parameter("particulars").value
+        if particulars:
+            try:
+                self.breaking.update(breaking_loads_from(particulars))
+            except Exception as exc:  # noqa: BLE001 - a bad file only costs the breaking loads
+                self.log.warning(f"instructor station: no breaking loads from {particulars!r}: {exc}")
+        self._asked: Dict[str, float] = {}
+        self._spent_clients: List[object] = []
+        self._history: Dict[str, Deque[Tuple[float, float]]] = {}
+        self._scene: Dict[str, dict] = {}
+        self._state_json = b'{"t": null, "vessels": {}, "ropes": {}, "history": {}}'
+        self._last_t: Optional[float] = None
+        self.samples = 0
+        self._stop = threading.Event()
+        self._types = None
+
+        station = self
+
+        class Handler(_Handler):
+            pass
+        Handler.station = station
+        self.httpd = _Server((host, node.get_parameter("http_port").value), Handler)
+        self.port = self.httpd.server_address[1]
+        self.url = f"http://{'localhost' if self.loopback else host}:{self.port}/"
+        self._threads = [threading.Thread(target=self.httpd.serve_forever, kwargs={"poll_interval": 0.2},
+                                          name="instructor-http", daemon=True),
+                         threading.Thread(target=self._sample_loop, name="instructor-sampler", daemon=True)]
+        for t in self._threads:
+            t.start()
+        from rclpy.clock import Clock, ClockType
+        self._ask_timer = node.create_timer(2.0, self._ask_rope_nodes, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.log.info(f"instructor station on {self.url} (display period {1000 * self.period:.0f} ms)")
+
+    def stop(self) -> None:
+        self._stop.set()
+        self.httpd.shutdown()
+        self.httpd.server_close()
+        for t in self._threads:
+            t.join(2.0)
+
+    # -- message types (imported once, in the sampler) -------------------------------------
+    def types(self):
+        if self._types is None:
+            from nav_msgs.msg import Odometry
+            from rclpy.serialization import deserialize_message
+            from tug_msgs.msg import RopeState, VesselCommand, VesselStatus, WinchCommand
+            from visualization_msgs.msg import MarkerArray
+            self._types = dict(odom=Odometry, status=VesselStatus, state=RopeState, command=VesselCommand,
+                               winch=WinchCommand, markers=MarkerArray, decode=deserialize_message)
+        return self._types
+
+    def _decode(self, topic: str, kind: str):
+        slot = self.node.slots.get(topic)
+        data = slot.last if slot is not None else None
+        if data is None:
+            return None
+        t = self.types()
+        try:
+            return t["decode"](data, t[kind])
+        except Exception:  # noqa: BLE001 - a message that does not decode is left out
+            return None
+
+    # -- breaking loads from the running rope nodes ----------------------------------------
+    def _ask_rope_nodes(self) -> None:
+        """Timer (ROS executor): the rope_file parameter of each rope node whose breaking load is
+        not known yet, then its breaking load from the rope file (rope_model.models.load_params)."""
+        from rcl_interfaces.srv import GetParameters
+        now = time.monotonic()
+        while self._spent_clients:  # answered (or given up) at an earlier tick
+            self.node.destroy_client(self._spent_clients.pop())
+        for topic in list(self.node.slots):
+            if not topic.endswith("/state"):
+                continue
+            rope = topic[1:-len("/state")]
+            if rope in self.breaking or now - self._asked.get(rope, -1e9) < 10.0:
+                continue
+            infos = self.node.get_publishers_info_by_topic(topic)
+            if not infos:
+                continue
+            self._asked[rope] = now
+            info = infos[0]
+            service = f"{info.node_namespace.rstrip('/')}/{info.node_name}/get_parameters"
+            client = self.node.create_client(GetParameters, service)
+
+            def done(future, rope=rope, client=client):
+                try:
+                    values = future.result().values
+                    if values and values[0].type == 4 and values[0].string_value:  # PARAMETER_STRING
+                        from rope_model.models import load_params
+                        load = getattr(load_params(values[0].string_value), "breaking_load", None)
+                        self.breaking[rope] = float(load) if load is not None and math.isfinite(load) else None
+                except Exception as exc:  # noqa: BLE001 - asked again later
+                    self.log.debug(f"instructor station: breaking load of {rope}: {exc}")
+                finally:
+                    self._spent_clients.append(client)
+            if not client.service_is_ready():
+                self.node.destroy_client(client)
+                self._asked[rope] = now - 8.0  # again at the next tick
+                continue
+            client.call_async(GetParameters.Request(names=["rope_file"])).add_done_callback(done)
+
+    # -- sampling --------------------------------------------------------------------------
+    def _sample_loop(self) -> None:
+        next_t = time.monotonic()
+        while not self._stop.is_set():
+            try:
+                self.sample()
+            except Exception as exc:  # noqa: BLE001 - the page keeps the last snapshot
+                self.node.complaints("instructor sample", f"instructor station: sampling failed: {exc!r}", "warning")
+            next_t += self.period
+            delay = next_t - time.monotonic()
+            if delay < 0:
+                next_t, delay = time.monotonic(), 0.0
+            self._stop.wait(delay)
+
+    def _names(self, suffix: str) -> List[str]:
+        return sorted(t[1:-len(suffix)] for t in self.node.slots if t.endswith(suffix) and t.count("/") == 2)
+
+    def sample(self) -> None:
+        """One snapshot of everything the page shows, encoded once for every client."""
+        vessels, ropes = {}, {}
+        t_sim = None
+        for v in self._names("/odom"):
+            odom = self._decode(f"/{v}/odom", "odom")
+            if odom is None:
+                continue
+            status = self._decode(f"/{v}/status", "status")
+            stamp = odom.header.stamp.sec + 1e-9 * odom.header.stamp.nanosec
+            t_sim = stamp if t_sim is None else max(t_sim, stamp)
+            p, q, lin = odom.pose.pose.position, odom.pose.pose.orientation, odom.twist.twist.linear
+            yaw, roll, pitch = _yaw_roll_pitch(q)
+            d = {"t": stamp, "x": p.x, "y": p.y, "z": p.z, "q": [q.x, q.y, q.z, q.w],
+                 "speed_kn": math.hypot(lin.x, lin.y) / KNOT, "heading_deg": heading_deg_true(yaw),
+                 "heel_deg": math.degrees(roll), "trim_deg": math.degrees(pitch),
+                 "has_command": f"/{v}/command" in self.node.input_topics()}
+            if status is not None:
+                d.update(step=status.step, engine_order=status.engine_order,
+                         rpm=status.shaft_speed * 60.0 / (2.0 * math.pi),
+                         steering_deg=math.degrees(status.steering_angle),
+                         steering_ordered_deg=math.degrees(status.steering_angle_ordered),
+                         heel_deg=math.degrees(status.heel), trim_deg=math.degrees(status.trim),
+                         stw_kn=status.speed_through_water / KNOT, thrust=status.thrust,
+                         girting_ratio=_finite_or_none(status.girting_ratio),
+                         girting_threshold=_finite_or_none(status.girting_threshold),
+                         girting_warning=bool(status.girting_warning),
+                         anchor=ANCHOR_STATES.get(status.anchor_state, str(status.anchor_state)))
+            vessels[v] = d
+        for r in self._names("/state"):
+            state = self._decode(f"/{r}/state", "state")
+            if state is None:
+                continue
+            stamp = state.header.stamp.sec + 1e-9 * state.header.stamp.nanosec
+            t_sim = stamp if t_sim is None else max(t_sim, stamp)
+            pts, tensions = rope_polyline(state)
+            peak = max(tensions) if tensions else 0.0
+            load = self.breaking.get(r)
+            winch = self._decode(f"/{r}/winch", "winch")
+            rate = winch.payout_rate if winch is not None else None
+            ropes[r] = {"t": stamp, "step": state.step, "model": state.model,
+                        "points": [[round(c, 3) for c in p] for p in pts],
+                        "tensions": [round(x, 1) for x in tensions], "tension": peak,
+                        "tension_a": tensions[0] if tensions else 0.0, "tension_b": tensions[-1] if tensions else 0.0,
+                        "breaking_load": load, "ratio": peak / load if load else None,
+                        "deployed_length": state.unstretched_length, "stretched_length": state.stretched_length,
+                        "broken": bool(state.broken), "payout_rate": rate,
+                        "winch": ("no order" if rate is None else "paying out" if rate > 0 else
+                                  "heaving in" if rate < 0 else "holding"),
+                        "has_winch": f"/{r}/winch" in self.node.input_topics()}
+            hist = self._history.setdefault(r, collections.deque())
+            if hist and stamp < hist[-1][0]:  # a new run or a replay started again
+                hist.clear()
+            if not hist or stamp > hist[-1][0]:
+                hist.append((stamp, peak))
+            while hist and hist[0][0] < stamp - HISTORY_SECONDS:
+                hist.popleft()
+        history = {r: [[round(t, 2), round(x, 1)] for t, x in h] for r, h in self._history.items()}
+        self._state_json = json.dumps(_clean({
+            "t": t_sim, "sample": self.samples, "period": self.period, "vessels": vessels, "ropes": ropes,
+            "history": history, "input_topics": self.node.input_topics()}), allow_nan=False).encode()
+        self.samples += 1
+
+    def state_json(self) -> bytes:
+        return self._state_json
+
+    def scene_json(self) -> bytes:
+        """The vessels' hull, deck and attachments from their markers (body frame), once found."""
+        for v in self._names("/odom"):
+            if v in self._scene:
+                continue
+            markers = self._decode(f"/{v}/markers", "markers")
+            if markers is None:
+                continue
+            d = {}
+            for m in markers.markers:
+                key = {0: "hull", 1: "deck", 2: "attachments"}.get(m.id)
+                if key is None or not m.frame_locked:
+                    continue
+                d[key] = [round(c, 3) for p in m.points for c in (p.x, p.y, p.z)]
+                if key != "attachments":
+                    d[key + "_color"] = [m.color.r, m.color.g, m.color.b]
+            if "hull" in d:
+                self._scene[v] = d
+        return json.dumps({"vessels": self._scene}).encode()
+
+    # -- orders ----------------------------------------------------------------------------
+    def publish(self, client: str, topic: str, body: bytes) -> Tuple[int, dict]:
+        outcome, why, notes = self.node.take_input(client, topic, body, "json")
+        code = {"accepted": 200, "rate": 429, "topic": 403, "message": 400}[outcome]
+        return code, {"accepted": outcome == "accepted", "topic": topic, "reason": why, "clamped": list(notes)}
+
+    def refuse(self, kind: str, text: str) -> None:
+        self.node._refuse(kind, text)
+
+
+class _Server(http.server.ThreadingHTTPServer):
+    daemon_threads = True
+    allow_reuse_address = True
+    request_queue_size = 32
+
+
+class _Handler(http.server.BaseHTTPRequestHandler):
+    station: InstructorStation
+    server_version = "tugsim-instructor/1"
+    protocol_version = "HTTP/1.1"
+    timeout = 30
+
+    def log_message(self, fmt, *args) -> None:  # no line per request
+        pass
+
+    def _send(self, code: int, body: bytes, ctype: str = "application/json", cache: bool = False) -> None:
+        self.send_response(code)
+        self.send_header("Content-Type", ctype)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "max-age=3600" if cache else "no-store")
+        self.send_header("X-Content-Type-Options", "nosniff")
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(body)
+
+    def _json(self, code: int, obj: dict) -> None:
+        self._send(code, json.dumps(obj).encode())
+
+    def _host_ok(self) -> bool:
+        if not self.station.loopback:
+            return True
+        host = (self.headers.get("Host") or "").strip().lower()
+        name = host.rsplit(":", 1)[0] if not host.endswith("]") else host
+        return name in LOOPBACK_NAMES or name.startswith("127.")
+
+    def do_GET(self) -> None:
+        if not self._host_ok():
+            self._json(403, {"reason": "Host header is not this machine"})
+            return
+        path = urllib.parse.urlsplit(self.path).path
+        if path == "/api/state":
+            self._send(200, self.station.state_json())
+        elif path == "/api/scene":
+            self._send(200, self.station.scene_json())
+        elif path in FILES:
+            name, ctype = FILES[path]
+            try:
+                with open(os.path.join(self.station.web_root, name), "rb") as f:
+                    body = f.read()
+            except OSError:
+                self._send(404, f"{name} is missing in {self.station.web_root}: run scripts/ensure_env.sh with npm "
+                                f"installed (it installs three.js with npm ci)".encode(), "text/plain; charset=utf-8")
+                return
+            self._send(200, body, ctype, cache=path.startswith("/vendor/"))
+        else:
+            self._send(404, b"not found", "text/plain; charset=utf-8")
+
+    do_HEAD = do_GET
+
+    def do_POST(self) -> None:
+        client = f"http {self.client_address[0]}"
+        path, _, query = self.path.partition("?")
+        length = self.headers.get("Content-Length")
+        try:
+            n = int(length)
+        except (TypeError, ValueError):
+            n = -1
+        if path != "/api/publish":
+            self.close_connection = True
+            self._json(404, {"accepted": False, "reason": "not found"})
+            return
+        if not self._host_ok():
+            self.close_connection = True
+            self.station.refuse("channel", f"{client}: Host header {self.headers.get('Host')!r} is not this machine")
+            self._json(403, {"accepted": False, "reason": "Host header is not this machine"})
+            return
+        if n < 0 or n > MAX_BODY:
+            self.close_connection = True
+            self.station.refuse("message", f"{client}: a body of {length} bytes (at most {MAX_BODY})")
+            self._json(413, {"accepted": False, "reason": f"body must have a length of at most {MAX_BODY} bytes"})
+            return
+        body = self.rfile.read(n)
+        ctype = (self.headers.get("Content-Type") or "").split(";")[0].strip().lower()
+        if ctype != "application/json":
+            self.station.refuse("message", f"{client}: Content-Type {ctype[:60]!r}, expected application/json")
+            self._json(415, {"accepted": False, "reason": "Content-Type must be application/json"})
+            return
+        topic = urllib.parse.parse_qs(query).get("topic", [""])[0]
+        code, answer = self.station.publish(client, topic, body)
+        self._json(code, answer)

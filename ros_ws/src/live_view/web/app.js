@@ -1,0 +1,499 @@
+// tugsim instructor station: 3D view, gauges, tension plot and orders for a running simulation or
+// a replay. Talks only to the live view node that served it: GET /api/state (a snapshot sampled at
+// the node's http_rate), GET /api/scene (hull shapes), POST /api/publish?topic=... (orders, checked
+// by the node like any client's). World frame: ENU (x east, y north, z up), as the simulation's.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/OrbitControls.js';
+
+const params = new URLSearchParams(location.search);
+const KN = 1852 / 3600;
+const $ = (id) => document.getElementById(id);
+const fmt = (v, d) => (v === null || v === undefined || !Number.isFinite(v)) ? '--' : v.toFixed(d);
+
+const app = {
+  snap: null, scene: {}, selected: params.get('vessel') || null, rope: params.get('rope') || null,
+  camera: params.get('camera') || 'follow', touched: 0, frames: 0, updates: 0, lastSceneAsk: 0,
+  peakSeen: 1, answers: [],
+};
+window.instructor = app;  // for tests and the curious: app.snap, app.project(name), app.send(...)
+
+// ---------------------------------------------------------------- 3D scene
+const canvas = $('scene');
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(Math.min(2, window.devicePixelRatio || 1));
+const scene3 = new THREE.Scene();
+scene3.background = new THREE.Color(0x9cc3dd);
+scene3.fog = new THREE.Fog(0x9cc3dd, 1500, 6000);
+const camera = new THREE.PerspectiveCamera(45, 1, 0.5, 20000);
+camera.up.set(0, 0, 1);
+camera.position.set(-80, -80, 60);
+const orbit = new OrbitControls(camera, canvas);
+orbit.enabled = false;
+orbit.maxPolarAngle = Math.PI * 0.495;
+scene3.add(new THREE.HemisphereLight(0xdfefff, 0x1c3a4a, 1.6));
+const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+sun.position.set(-300, -200, 500);
+scene3.add(sun);
+const water = new THREE.Mesh(new THREE.PlaneGeometry(40000, 40000),
+  new THREE.MeshPhongMaterial({ color: 0x1d5b7d, shininess: 60, transparent: true, opacity: 0.93 }));
+scene3.add(water);
+const grid = new THREE.GridHelper(2000, 40, 0x5b8fb0, 0x3f7494);  // 50 m squares
+grid.rotation.x = Math.PI / 2;
+grid.position.z = 0.02;
+grid.material.transparent = true;
+grid.material.opacity = 0.45;
+scene3.add(grid);
+
+const vessels3 = new Map();  // name -> {group, length, hasGeometry, label}
+const ropes3 = new Map();    // name -> {group, meshes: []}
+const segGeom = new THREE.CylinderGeometry(1, 1, 1, 10, 1);
+const Y = new THREE.Vector3(0, 1, 0);
+
+function textSprite(text) {
+  const c = document.createElement('canvas');
+  c.width = 256; c.height = 64;
+  const g = c.getContext('2d');
+  g.font = 'bold 34px sans-serif'; g.fillStyle = '#ffffff'; g.strokeStyle = '#000000'; g.lineWidth = 6;
+  g.textAlign = 'center'; g.textBaseline = 'middle';
+  g.strokeText(text, 128, 32); g.fillText(text, 128, 32);
+  const s = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(c), depthTest: false }));
+  s.scale.set(16, 4, 1);
+  return s;
+}
+
+function meshFrom(flat, color) {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(flat, 3));
+  g.computeVertexNormals();
+  return new THREE.Mesh(g, new THREE.MeshPhongMaterial({ color: new THREE.Color(...color), side: THREE.DoubleSide,
+    flatShading: true }));
+}
+
+function vessel3(name) {
+  let v = vessels3.get(name);
+  if (v) return v;
+  const group = new THREE.Group();
+  const box = new THREE.Mesh(new THREE.BoxGeometry(20, 7, 4), new THREE.MeshPhongMaterial({ color: 0x8c1f1a }));
+  box.position.z = 0.5;
+  group.add(box);
+  const label = textSprite(name);
+  label.position.set(0, 0, 10);
+  group.add(label);
+  scene3.add(group);
+  v = { group, length: 20, hasGeometry: false, label, placeholder: box };
+  vessels3.set(name, v);
+  return v;
+}
+
+function applyGeometry(name, d) {
+  const v = vessel3(name);
+  if (v.hasGeometry || !d.hull) return;
+  v.group.remove(v.placeholder);
+  const hull = meshFrom(d.hull, d.hull_color || [0.55, 0.12, 0.1]);
+  v.group.add(hull);
+  if (d.deck) v.group.add(meshFrom(d.deck, d.deck_color || [0.75, 0.75, 0.72]));
+  hull.geometry.computeBoundingBox();
+  const bb = hull.geometry.boundingBox;
+  v.length = Math.max(1, bb.max.x - bb.min.x);
+  const size = Math.max(0.3, 0.02 * v.length);
+  const att = d.attachments || [];
+  for (let i = 0; i + 2 < att.length; i += 3) {
+    const s = new THREE.Mesh(new THREE.SphereGeometry(size, 12, 8), new THREE.MeshPhongMaterial({ color: 0xffd900 }));
+    s.position.set(att[i], att[i + 1], att[i + 2]);
+    v.group.add(s);
+  }
+  const k = Math.max(0.5, v.length / 30);
+  v.label.scale.set(16 * k, 4 * k, 1);
+  v.label.position.set(0, 0, bb.max.z + 4 * k);
+  v.hasGeometry = true;
+}
+
+function tensionColor(ratio) {
+  // green (slack) -> yellow (half the breaking load) -> red (breaking load)
+  const r = Math.max(0, Math.min(1, ratio));
+  const c = new THREE.Color();
+  if (r < 0.5) c.lerpColors(new THREE.Color(0x23d160), new THREE.Color(0xffdd57), r / 0.5);
+  else c.lerpColors(new THREE.Color(0xffdd57), new THREE.Color(0xff3860), (r - 0.5) / 0.5);
+  return c;
+}
+
+function updateRope(name, r) {
+  let o = ropes3.get(name);
+  if (!o) {
+    o = { group: new THREE.Group(), meshes: [] };
+    scene3.add(o.group);
+    ropes3.set(name, o);
+  }
+  const pts = r.points || [];
+  const n = Math.max(0, pts.length - 1);
+  while (o.meshes.length < n) {
+    const m = new THREE.Mesh(segGeom, new THREE.MeshPhongMaterial({ color: 0x23d160 }));
+    o.group.add(m); o.meshes.push(m);
+  }
+  const radius = Math.max(0.25, 0.004 * camera.position.distanceTo(orbit.target));
+  const scale = r.breaking_load || Math.max(app.peakSeen, 1);
+  const a = new THREE.Vector3(), b = new THREE.Vector3(), d = new THREE.Vector3();
+  o.meshes.forEach((m, i) => {
+    m.visible = i < n;
+    if (!m.visible) return;
+    a.set(...pts[i]); b.set(...pts[i + 1]);
+    d.subVectors(b, a);
+    const len = d.length();
+    m.position.addVectors(a, b).multiplyScalar(0.5);
+    m.scale.set(radius, Math.max(len, 1e-3), radius);
+    if (len > 1e-6) m.quaternion.setFromUnitVectors(Y, d.normalize());
+    const t = 0.5 * ((r.tensions[i] || 0) + (r.tensions[i + 1] || 0));
+    m.material.color.copy(tensionColor(t / scale));
+  });
+}
+
+function resize() {
+  const w = canvas.clientWidth, h = canvas.clientHeight;
+  if (canvas.width !== Math.floor(w * renderer.getPixelRatio()) ||
+      canvas.height !== Math.floor(h * renderer.getPixelRatio())) {
+    renderer.setSize(w, h, false);
+    camera.aspect = w / Math.max(1, h);
+    camera.updateProjectionMatrix();
+  }
+}
+
+// ---------------------------------------------------------------- cameras
+const followPos = new THREE.Vector3(), lastTarget = new THREE.Vector3();
+let cameraInit = false;
+function targetVessel() {
+  const s = app.snap;
+  if (!s || !app.selected || !s.vessels[app.selected]) return null;
+  return s.vessels[app.selected];
+}
+function setCamera(mode) {
+  app.camera = mode;
+  for (const b of document.querySelectorAll('#camera-bar button')) b.classList.toggle('on', b.dataset.camera === mode);
+  orbit.enabled = mode === 'orbit';
+  camera.up.set(0, mode === 'birdseye' ? 1 : 0, mode === 'birdseye' ? 0 : 1);
+  if (mode === 'orbit') {
+    // OrbitControls takes its up axis from the camera when made: keep ENU z up
+    camera.up.set(0, 0, 1);
+    orbit.object.up.set(0, 0, 1);
+    orbit.update();
+  }
+  cameraInit = false;
+}
+for (const b of document.querySelectorAll('#camera-bar button')) b.onclick = () => setCamera(b.dataset.camera);
+
+function placeCamera() {
+  const v = targetVessel();
+  if (!v) return;
+  const L = (vessels3.get(app.selected) || { length: 30 }).length;
+  const p = new THREE.Vector3(v.x, v.y, 0);
+  const yaw = Math.atan2(2 * (v.q[3] * v.q[2] + v.q[0] * v.q[1]), 1 - 2 * (v.q[1] * v.q[1] + v.q[2] * v.q[2]));
+  if (app.camera === 'follow') {
+    const back = 2.5 * L + 50, up = 1.1 * L + 26;
+    followPos.set(p.x - back * Math.cos(yaw), p.y - back * Math.sin(yaw), up);
+    if (!cameraInit) camera.position.copy(followPos); else camera.position.lerp(followPos, 0.15);
+    orbit.target.copy(p);
+    camera.lookAt(p.x + 0.3 * L * Math.cos(yaw), p.y + 0.3 * L * Math.sin(yaw), 0);
+  } else if (app.camera === 'birdseye') {
+    const h = Math.max(150, 7 * L);
+    camera.position.set(p.x, p.y, h);
+    orbit.target.copy(p);
+    camera.lookAt(p);
+  } else {
+    if (!cameraInit) {
+      camera.position.set(p.x - 2.5 * L - 70, p.y - 2.5 * L - 70, 1.2 * L + 40);
+      orbit.target.copy(p);
+      lastTarget.copy(p);
+    }
+    // the orbit centre travels with the vessel
+    const dx = p.x - lastTarget.x, dy = p.y - lastTarget.y;
+    camera.position.x += dx; camera.position.y += dy;
+    orbit.target.x += dx; orbit.target.y += dy;
+    lastTarget.copy(p);
+    orbit.update();
+  }
+  cameraInit = true;
+  grid.position.set(Math.round(p.x / 50) * 50, Math.round(p.y / 50) * 50, 0.02);
+}
+
+function render() {
+  resize();
+  placeCamera();
+  renderer.render(scene3, camera);
+  app.frames += 1;
+  requestAnimationFrame(render);
+}
+
+// screen position (CSS pixels, in the canvas) of a vessel's origin: for tests
+app.project = (name) => {
+  const v = vessels3.get(name);
+  if (!v) return null;
+  const p = v.group.position.clone().project(camera);
+  const r = canvas.getBoundingClientRect();
+  return { x: r.left + (p.x + 1) / 2 * r.width, y: r.top + (1 - p.y) / 2 * r.height, visible: Math.abs(p.z) <= 1 };
+};
+
+app.hasGeometry = (name) => !!(vessels3.get(name) || {}).hasGeometry;
+app.setVisible = (name, on) => { const v = vessels3.get(name); if (v) v.group.visible = on; };
+
+// ---------------------------------------------------------------- gauges
+function gauge(id, name) {
+  return `<div class="gauge" id="${id}"><div class="name">${name}</div><div class="value">--</div>` +
+         `<div class="bar"><i></i></div></div>`;
+}
+function setGauge(id, text, value, t, frac, level) {
+  const el = $(id);
+  if (!el) return;
+  el.querySelector('.value').textContent = text;
+  el.dataset.value = (value === null || value === undefined) ? '' : String(value);
+  el.dataset.t = t === undefined ? '' : String(t);
+  const bar = el.querySelector('.bar i');
+  bar.style.width = `${Math.round(100 * Math.max(0, Math.min(1, frac || 0)))}%`;
+  bar.style.background = level === 'alarm' ? '#ff3860' : level === 'warn' ? '#ffdd57' : '#23d160';
+  el.classList.toggle('warn', level === 'warn');
+  el.classList.toggle('alarm', level === 'alarm');
+}
+const safe = (s) => s.replace(/[^A-Za-z0-9_-]/g, '_');
+
+function buildGauges(s) {
+  const vs = Object.keys(s.vessels).sort(), rs = Object.keys(s.ropes).sort();
+  const key = vs.join(',') + '|' + rs.join(',');
+  if (key === app.gaugeKey || !vs.length) return;
+  app.gaugeKey = key;
+  $('vessel-gauges').innerHTML = vs.map((v) => {
+    const n = safe(v);
+    return `<div class="gauge" style="grid-column: 1 / -1; border: none; padding: 0">` +
+      `<b>${v}</b> <span class="muted" id="g-${n}-anchor"></span></div>` +
+      gauge(`g-${n}-speed`, 'speed kn') + gauge(`g-${n}-heading`, 'heading deg T') +
+      gauge(`g-${n}-engine`, 'engine order') + gauge(`g-${n}-rpm`, 'shaft rpm') +
+      gauge(`g-${n}-rudder`, 'rudder / bucket deg') + gauge(`g-${n}-heel`, 'heel deg') +
+      gauge(`g-${n}-girting`, 'girting ratio');
+  }).join('');
+  $('rope-gauges').innerHTML = rs.map((r) => {
+    const n = safe(r);
+    return `<div class="gauge" style="grid-column: 1 / -1; border: none; padding: 0"><b>${r}</b> ` +
+      `<span class="muted" id="g-${n}-model"></span></div>` +
+      gauge(`g-${n}-tension`, 'tension kN') + gauge(`g-${n}-length`, 'deployed m') + gauge(`g-${n}-winch`, 'winch');
+  }).join('');
+  const sel = $('vessel');
+  sel.innerHTML = vs.map((v) => `<option>${v}</option>`).join('');
+  const want = params.get('vessel');  // the page's ?vessel=, until the user picks one
+  if (!app.userChose && want && s.vessels[want]) app.selected = want;
+  else if (!app.selected || !s.vessels[app.selected]) app.selected = vs.includes('tug') ? 'tug' : vs[0];
+  sel.value = app.selected;
+  const withWinch = rs.filter((r) => s.ropes[r].has_winch);
+  $('rope').innerHTML = withWinch.map((r) => `<option>${r}</option>`).join('');
+  if (!app.rope || !withWinch.includes(app.rope)) app.rope = withWinch[0] || null;
+  if (app.rope) $('rope').value = app.rope;
+  selectVessel(app.selected);
+}
+
+function updateGauges(s) {
+  for (const [name, v] of Object.entries(s.vessels)) {
+    const n = safe(name);
+    const spd = Number(v.speed_kn.toFixed(2));
+    setGauge(`g-${n}-speed`, fmt(v.speed_kn, 2), spd, v.t, v.speed_kn / 15);
+    setGauge(`g-${n}-heading`, fmt(v.heading_deg, 1).padStart(5, '0'), Number(v.heading_deg.toFixed(1)), v.t,
+      v.heading_deg / 360);
+    setGauge(`g-${n}-engine`, v.engine_order === undefined ? '--' : (v.engine_order >= 0 ? '+' : '') +
+      fmt(v.engine_order, 2), v.engine_order, v.t, Math.abs(v.engine_order || 0));
+    setGauge(`g-${n}-rpm`, fmt(v.rpm, 0), v.rpm, v.t, 0);
+    setGauge(`g-${n}-rudder`, `${fmt(v.steering_deg, 1)} (${fmt(v.steering_ordered_deg, 0)})`, v.steering_deg, v.t,
+      Math.abs(v.steering_deg || 0) / 45);
+    setGauge(`g-${n}-heel`, fmt(v.heel_deg, 1), v.heel_deg, v.t, Math.abs(v.heel_deg || 0) / 20,
+      Math.abs(v.heel_deg || 0) > 10 ? 'warn' : '');
+    const gr = v.girting_ratio, thr = v.girting_threshold || 1;
+    setGauge(`g-${n}-girting`, gr === null || gr === undefined ? '--' : `${fmt(gr, 2)} / ${fmt(thr, 2)}`, gr, v.t,
+      (gr || 0) / thr, v.girting_warning ? 'alarm' : (gr || 0) > 0.7 * thr ? 'warn' : '');
+    const an = $(`g-${n}-anchor`);
+    if (an) an.textContent = `anchor ${v.anchor || '-'}; through water ${fmt(v.stw_kn, 2)} kn`;
+  }
+  for (const [name, r] of Object.entries(s.ropes)) {
+    const n = safe(name);
+    const kn = r.tension / 1000;
+    const bl = r.breaking_load;
+    const ratio = bl ? r.tension / bl : null;
+    setGauge(`g-${n}-tension`, bl ? `${fmt(kn, 1)} (${fmt(100 * ratio, 0)}% BL)` : fmt(kn, 1),
+      Number(kn.toFixed(1)), r.t, ratio === null ? kn / 200 : ratio,
+      r.broken || (ratio !== null && ratio > 0.8) ? 'alarm' : ratio !== null && ratio > 0.5 ? 'warn' : '');
+    setGauge(`g-${n}-length`, fmt(r.deployed_length, 1), Number(r.deployed_length.toFixed(1)), r.t, 0);
+    setGauge(`g-${n}-winch`, r.payout_rate === null || r.payout_rate === undefined ? r.winch :
+      `${r.winch} ${fmt(Math.abs(r.payout_rate), 1)}`, r.payout_rate, r.t, 0);
+    const m = $(`g-${n}-model`);
+    if (m) m.textContent = `${r.model}${bl ? `, breaking load ${fmt(bl / 1000, 0)} kN` : ''}` +
+      `${r.broken ? ', PARTED' : ''}`;
+  }
+}
+
+// ---------------------------------------------------------------- tension plot
+const plot = $('plot');
+const COLORS = ['#ffb347', '#6ec6ff', '#c792ea', '#a5e075'];
+function drawPlot(s) {
+  const dpr = window.devicePixelRatio || 1;
+  const W = plot.clientWidth, H = plot.clientHeight;
+  if (plot.width !== Math.floor(W * dpr)) { plot.width = Math.floor(W * dpr); plot.height = Math.floor(H * dpr); }
+  const g = plot.getContext('2d');
+  g.setTransform(dpr, 0, 0, dpr, 0, 0);
+  g.clearRect(0, 0, W, H);
+  const span = 120, t1 = s.t || 0, t0 = t1 - span;
+  let ymax = 10;
+  for (const h of Object.values(s.history)) for (const [t, x] of h) if (t >= t0) ymax = Math.max(ymax, x / 1000 * 1.15);
+  const L = 40, B = 18, X = (t) => L + (t - t0) / span * (W - L - 6), Yp = (x) => H - B - x / ymax * (H - B - 6);
+  g.strokeStyle = '#26394a'; g.fillStyle = '#8aa3b8'; g.font = '10px sans-serif'; g.lineWidth = 1;
+  const step = Math.pow(10, Math.floor(Math.log10(ymax / 2)));
+  const ystep = ymax / step > 8 ? 5 * step : ymax / step > 4 ? 2 * step : step;
+  for (let y = 0; y <= ymax; y += ystep) {
+    g.beginPath(); g.moveTo(L, Yp(y)); g.lineTo(W - 6, Yp(y)); g.stroke();
+    g.fillText(y.toFixed(ystep < 1 ? 1 : 0), 4, Yp(y) + 3);
+  }
+  for (let t = Math.ceil(t0 / 20) * 20; t <= t1; t += 20) {
+    g.beginPath(); g.moveTo(X(t), H - B); g.lineTo(X(t), 6); g.stroke();
+    if (t >= 0) g.fillText(`${t}s`, X(t) - 8, H - 5);
+  }
+  Object.keys(s.history).sort().forEach((name, i) => {
+    const h = s.history[name];
+    g.strokeStyle = COLORS[i % COLORS.length]; g.lineWidth = 1.8;
+    g.beginPath();
+    let first = true;
+    for (const [t, x] of h) {
+      if (t < t0) continue;
+      if (first) { g.moveTo(X(t), Yp(x / 1000)); first = false; } else g.lineTo(X(t), Yp(x / 1000));
+    }
+    g.stroke();
+    const bl = s.ropes[name] && s.ropes[name].breaking_load;
+    if (bl && bl / 1000 <= ymax) {
+      g.setLineDash([4, 3]); g.strokeStyle = '#ff3860';
+      g.beginPath(); g.moveTo(L, Yp(bl / 1000)); g.lineTo(W - 6, Yp(bl / 1000)); g.stroke(); g.setLineDash([]);
+    }
+    g.fillStyle = COLORS[i % COLORS.length];
+    g.fillText(name, L + 4 + 70 * i, 14);
+  });
+}
+
+// ---------------------------------------------------------------- orders
+async function sendRaw(topic, body) {
+  const r = await fetch(`/api/publish?topic=${encodeURIComponent(topic)}`,
+    { method: 'POST', headers: { 'Content-Type': 'application/json' }, body });
+  let a;
+  try { a = await r.json(); } catch (e) { a = { accepted: false, reason: `HTTP ${r.status}` }; }
+  a.status = r.status;
+  app.answers.push(a);
+  const el = $('answer');
+  el.className = a.accepted ? (a.clamped && a.clamped.length ? 'warn' : 'muted') : 'bad';
+  el.textContent = a.accepted ? `${topic}: sent${a.clamped && a.clamped.length ? ` (${a.clamped.join('; ')})` : ''}`
+    : `${topic}: refused (${a.status}): ${a.reason}`;
+  return a;
+}
+const send = (topic, obj) => sendRaw(topic, JSON.stringify(obj));
+app.send = send;
+app.sendRaw = sendRaw;
+
+function vesselOrder(anchor = 0) {
+  if (!app.selected) return null;
+  return send(`/${app.selected}/command`, {
+    engine_order: Number($('engine').value), steering_angle: Number($('steering').value) * Math.PI / 180, anchor });
+}
+app.vesselOrder = vesselOrder;
+let throttle = null;
+function touched() { app.touched = performance.now(); }
+function showSliders() {
+  $('engine-out').textContent = Number($('engine').value).toFixed(2);
+  $('steering-out').textContent = String(Number($('steering').value));
+}
+for (const id of ['engine', 'steering']) {
+  $(id).addEventListener('input', () => {
+    touched(); showSliders();
+    if (!throttle) throttle = setTimeout(() => { throttle = null; vesselOrder(); }, 250);
+  });
+  $(id).addEventListener('change', () => { touched(); showSliders(); vesselOrder(); });
+}
+const setAndSend = (id, value) => () => { touched(); $(id).value = String(value); showSliders(); vesselOrder(); };
+$('engine-stop').onclick = setAndSend('engine', 0);
+$('engine-half').onclick = setAndSend('engine', 0.5);
+$('engine-full').onclick = setAndSend('engine', 1);
+$('engine-astern').onclick = setAndSend('engine', -0.5);
+$('steer-port').onclick = setAndSend('steering', 20);
+$('midships').onclick = setAndSend('steering', 0);
+$('steer-stbd').onclick = setAndSend('steering', -20);
+$('anchor-let-go').onclick = () => { touched(); vesselOrder(1); };
+$('anchor-heave-up').onclick = () => { touched(); vesselOrder(2); };
+const winch = (sign) => () => {
+  if (!app.rope) return;
+  const rate = Math.abs(Number($('winch-rate').value) || 0);
+  send(`/${app.rope}/winch`, { payout_rate: sign * rate });
+};
+$('winch-payout').onclick = winch(1);
+$('winch-hold').onclick = winch(0);
+$('winch-heave').onclick = winch(-1);
+$('rope').onchange = () => { app.rope = $('rope').value; };
+
+function selectVessel(name) {
+  app.selected = name;
+  $('ctl-vessel').textContent = name || '-';
+  app.touched = 0;  // the sliders take the new vessel's orders
+  cameraInit = false;
+  const v = app.snap && app.snap.vessels[name];
+  const has = !!(v && v.has_command);
+  for (const id of ['engine', 'steering', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern', 'steer-port',
+    'midships', 'steer-stbd', 'anchor-let-go', 'anchor-heave-up']) $(id).disabled = !has;
+  for (const id of ['winch-payout', 'winch-hold', 'winch-heave', 'winch-rate']) $(id).disabled = !app.rope;
+}
+$('vessel').onchange = () => { app.userChose = true; selectVessel($('vessel').value); };
+
+function syncSliders(s) {
+  const v = targetVessel();
+  if (!v || performance.now() - app.touched < 3000 || v.engine_order === undefined) return;
+  $('engine').value = String(v.engine_order);
+  $('steering').value = String(Math.round(v.steering_ordered_deg));
+  showSliders();
+}
+
+// ---------------------------------------------------------------- polling
+async function askScene(s) {
+  const missing = Object.keys(s.vessels).some((v) => !(vessels3.get(v) || {}).hasGeometry);
+  if (!missing || performance.now() - app.lastSceneAsk < 1000) return;
+  app.lastSceneAsk = performance.now();
+  try {
+    const d = await (await fetch('/api/scene', { cache: 'no-store' })).json();
+    for (const [name, geom] of Object.entries(d.vessels)) applyGeometry(name, geom);
+  } catch (e) { /* asked again */ }
+}
+
+function apply(s) {
+  app.snap = s;
+  buildGauges(s);
+  $('clock').textContent = s.t === null ? 't = --' : `t = ${s.t.toFixed(1)} s`;
+  $('clock').dataset.t = s.t === null ? '' : String(s.t);
+  for (const [name, v] of Object.entries(s.vessels)) {
+    const o = vessel3(name);
+    o.group.position.set(v.x, v.y, v.z);
+    o.group.quaternion.set(v.q[0], v.q[1], v.q[2], v.q[3]);
+  }
+  for (const r of Object.values(s.ropes)) app.peakSeen = Math.max(app.peakSeen, r.tension);
+  for (const [name, r] of Object.entries(s.ropes)) updateRope(name, r);
+  updateGauges(s);
+  drawPlot(s);
+  syncSliders(s);
+  askScene(s);
+  app.updates += 1;
+}
+
+async function poll() {
+  let period = 0.1;
+  try {
+    const r = await fetch('/api/state', { cache: 'no-store' });
+    const s = await r.json();
+    period = s.period || period;
+    apply(s);
+    $('conn').textContent = s.t === null ? 'waiting for the simulation' : 'live';
+    $('conn').className = s.t === null ? 'bad' : 'good';
+  } catch (e) {
+    $('conn').textContent = 'no connection to the live view node';
+    $('conn').className = 'bad';
+    period = 1.0;
+  }
+  setTimeout(poll, 1000 * period);
+}
+
+setCamera(app.camera);
+showSliders();
+poll();
+requestAnimationFrame(render);

@@ -1,0 +1,333 @@
+"""The browser instructor station (live_view.instructor, web/), driven in headless Chromium
+(Debian's /usr/bin/chromium through Playwright; scripts/ensure_env.sh installs it for ./test.sh):
+
+- a paced run (run_scenario --live, the station on a free port): the 3D canvas renders (the
+  pixels where the tug is change when the tug is hidden), the speed and tension gauges show the
+  recording's values of the step they are stamped with, no older than about one display period;
+  moving the engine control sends an order that is recorded and changes the tug's speed; bad
+  input sent through the page (NaN, malformed, unknown fields, an unknown anchor order, a topic
+  clients may not publish, an oversized body, a wrong content type) is refused and counted, an
+  out-of-range order is clamped, and the log says so;
+- a replay of a recording, the station of a stand-alone live_view node: the gauges show the
+  recorded values, the breaking load from the recording's metadata.
+
+Screenshots are kept as test artifacts in output/test_artifacts/instructor_station/ (and the
+test's tmp_path).
+"""
+import io
+import json
+import math
+import os
+import re
+import shutil
+import socket
+import subprocess
+import time
+import urllib.request
+
+import pytest
+import yaml
+
+from conftest import executable_path
+from test_recording import decoded
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(420)]
+
+CHROMIUM = "/usr/bin/chromium"
+KN = 1852.0 / 3600.0
+BROWSER_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist",
+                "--disable-dev-shm-usage"]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def browser():
+    playwright = pytest.importorskip("playwright.sync_api")
+    if not os.path.exists(CHROMIUM):
+        if os.environ.get("CI"):
+            pytest.fail(f"{CHROMIUM} missing: scripts/ensure_env.sh installs it (apt-get install chromium)")
+        pytest.skip(f"{CHROMIUM} missing (apt-get install chromium)")
+    with playwright.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=BROWSER_ARGS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+@pytest.fixture
+def artifacts(tmp_path, repo_root):
+    out = os.path.join(repo_root, "output", "test_artifacts", "instructor_station")
+    os.makedirs(out, exist_ok=True)
+
+    def keep(name: str, png: bytes) -> str:
+        (tmp_path / name).write_bytes(png)
+        path = os.path.join(out, name)
+        with open(path, "wb") as f:
+            f.write(png)
+        return path
+    return keep
+
+
+def _get(url: str, timeout: float = 2.0):
+    with urllib.request.urlopen(url, timeout=timeout) as r:
+        return json.loads(r.read())
+
+
+def _wait_http(url: str, proc, timeout: float = 120.0) -> None:
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            _get(url + "api/state")
+            return
+        except OSError:
+            if proc.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"instructor station not up at {url}")
+            time.sleep(0.3)
+
+
+def _open_page(browser, url):
+    page = browser.new_page(viewport={"width": 1400, "height": 820})
+    errors = []  # script errors (a refused order's HTTP status is the browser's console "error" too: not one)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text)
+            if m.type == "error" and not m.text.startswith("Failed to load resource") else None)
+    page.goto(url + "?vessel=tug&camera=follow")
+    return page, errors
+
+
+def _wait_page(page, predicate_js: str, timeout: float = 90.0):
+    page.wait_for_function(predicate_js, timeout=timeout * 1000, polling=100)
+
+
+def _png_rgb(png: bytes):
+    import numpy as np
+    from PIL import Image
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+def _check_vessel_pixels(page, name: str):
+    """The canvas is not blank where the vessel is: hiding the vessel changes those pixels."""
+    import numpy as np
+    page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+    pos = page.evaluate(f"instructor.project({name!r})")
+    assert pos and pos["visible"], pos
+    png_with = page.screenshot()
+    page.evaluate(f"""() => new Promise(r => {{ instructor.setVisible({name!r}, false);
+        requestAnimationFrame(() => requestAnimationFrame(() => r())); }})""")
+    png_without = page.screenshot()
+    page.evaluate(f"instructor.setVisible({name!r}, true)")
+    a, b = _png_rgb(png_with), _png_rgb(png_without)
+    assert a.std() > 10.0, "blank canvas"
+    x, y = int(pos["x"]), int(pos["y"])
+    box = (slice(max(0, y - 25), y + 25), slice(max(0, x - 25), x + 25))
+    changed = (np.abs(a[box] - b[box]).sum(axis=2) > 40).sum()
+    assert changed >= 30, f"only {changed} pixels of {name} near ({x}, {y})"
+    return png_with, changed
+
+
+def _read_gauges(page):
+    return page.evaluate("""() => {
+        const g = (id) => { const e = document.getElementById(id);
+            return e ? {text: e.querySelector('.value').textContent, value: e.dataset.value, t: e.dataset.t} : null; };
+        return {t: instructor.snap && instructor.snap.t, period: instructor.snap && instructor.snap.period,
+                speed: g('g-tug-speed'), heading: g('g-tug-heading'), tension: g('g-towline-tension'),
+                length: g('g-towline-length'), model: (document.getElementById('g-towline-model') || {}).textContent};
+    }""")
+
+
+def _stamp(m) -> float:
+    return m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
+
+
+def _check_gauges_against(msgs, readings):
+    """Each reading's speed and tension equal the recording's at the reading's stamps."""
+    odom = {round(_stamp(m), 3): m for m in msgs["/tug/odom"]}
+    rope = {round(_stamp(m), 3): m for m in msgs["/towline/state"]}
+    for r in readings:
+        m = odom[round(float(r["speed"]["t"]), 3)]
+        speed = math.hypot(m.twist.twist.linear.x, m.twist.twist.linear.y) / KN
+        assert float(r["speed"]["text"]) == pytest.approx(round(speed, 2), abs=0.0051), (r, speed)
+        q = m.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        heading = (90.0 - math.degrees(yaw)) % 360.0
+        assert float(r["heading"]["value"]) == pytest.approx(round(heading, 1), abs=0.051)
+        s = rope[round(float(r["tension"]["t"]), 3)]
+        tension = max(s.connection_tensions) / 1000.0
+        assert float(r["tension"]["value"]) == pytest.approx(round(tension, 1), abs=0.051), (r, tension)
+        assert float(r["length"]["value"]) == pytest.approx(round(s.unstretched_length, 1), abs=0.051)
+
+
+def _scenario(tmp_path, name, duration, mode):
+    from ament_index_python.packages import get_package_share_directory
+    share = get_package_share_directory("scenario_runner")
+    sc = dict(yaml.safe_load(open(f"{share}/scenarios/default_demo.yaml")), name=name, mode=mode, duration=duration)
+    sc["events"] = [{"time": 0.0, "vessel": "tug", "engine_order": 0.0}]
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    return path
+
+
+BAD = [  # (topic, body, content type, expected HTTP status) sent from the page
+    ("/tug/command", '{"engine_order": NaN, "steering_angle": 0.0}', "application/json", 400),
+    ("/tug/command", '{"engine_order": Infinity, "steering_angle": 0.0}', "application/json", 400),
+    ("/tug/command", "this is not JSON", "application/json", 400),
+    ("/tug/command", '{"engine_order": 0.2, "steering_angle": 0.0, "rudder": 3}', "application/json", 400),
+    ("/tug/command", '{"engine_order": "full", "steering_angle": 0.0}', "application/json", 400),
+    ("/tug/command", '{"engine_order": 0.2, "steering_angle": 0.0, "anchor": 7}', "application/json", 400),
+    ("/towline/winch", '{"payout_rate": NaN}', "application/json", 400),
+    ("/towline/winch", "[1, 2]", "application/json", 400),
+    ("/tug/command", '{"engine_order": 0.2, "pad": "' + "x" * 5000 + '"}', "application/json", 413),
+    ("/tug/command", '{"engine_order": 0.2, "steering_angle": 0.0}', "text/plain", 415),
+    ("/tug/odom", '{"engine_order": 0.2}', "application/json", 403),
+    ("/sim/step", "{}", "application/json", 403),
+]
+
+
+def _send_from_page(page, topic, body, ctype):
+    return page.evaluate("""async ([topic, body, ctype]) => {
+        const r = await fetch('/api/publish?topic=' + encodeURIComponent(topic),
+            {method: 'POST', headers: {'Content-Type': ctype}, body});
+        return {status: r.status, answer: await r.json()}; }""", [topic, body, ctype])
+
+
+def test_instructor_station_in_a_paced_run(tmp_path, ros_domain, browser, artifacts):
+    duration = 40.0
+    path = _scenario(tmp_path, "station", duration, "realtime")
+    out = tmp_path / "station.mcap"
+    http_port = _free_port()
+    url = f"http://127.0.0.1:{http_port}/"
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out),
+                             "--quiet", "--live", "--live-port", str(_free_port()),
+                             "--ros-args", "-p", f"live_view:http_port:={http_port}"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    readings, lags, report = [], [], {}
+    try:
+        _wait_http(url, proc)
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "instructor.snap && instructor.snap.t > 3 && instructor.hasGeometry('tug') && "
+                         "instructor.hasGeometry('barge')")
+        # the 3D view: the tug where the camera follows it, then the other cameras
+        png, changed = _check_vessel_pixels(page, "tug")
+        report["tug_pixels"] = changed
+        artifacts("follow.png", png)
+        for mode in ("birdseye", "orbit"):
+            page.click(f"#camera-bar button[data-camera={mode}]")
+            png, _ = _check_vessel_pixels(page, "tug")
+            artifacts(f"{mode}.png", png)
+        page.click("#camera-bar button[data-camera=follow]")
+        # gauges, and how far behind the node's newest sample they are
+        for _ in range(12):
+            r = _read_gauges(page)
+            newest = _get(url + "api/state")["t"]
+            readings.append(r)
+            lags.append(newest - float(r["speed"]["t"]))
+            time.sleep(0.37)
+        period = readings[-1]["period"]
+        # bad input through the page
+        report["bad"] = [(_send_from_page(page, t, b, c), code) for t, b, c, code in BAD]
+        # the engine control, moved as a person would
+        t_order = page.evaluate("instructor.snap.t")
+        page.locator("#engine").fill("0.5")
+        page.wait_for_function("instructor.answers.length > 0 && instructor.answers.at(-1).accepted", timeout=10000)
+        report["t_order"] = t_order
+        _wait_page(page, f"instructor.snap.t > {t_order + 12.0}", timeout=60)
+        readings.append(_read_gauges(page))
+        artifacts("engine_ahead.png", page.screenshot())
+        page.click("#camera-bar button[data-camera=orbit]")
+        page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+        artifacts("engine_ahead_orbit.png", page.screenshot())
+        # out of range: clamped (at the end, after the speed was measured)
+        report["clamped"] = _send_from_page(page, "/tug/command", '{"engine_order": 5.0, "steering_angle": 0.0}',
+                                            "application/json")
+        report["errors"] = list(errors)
+        page.close()
+        stdout, stderr = proc.communicate(timeout=200)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    print(stdout, stderr[-4000:], report, lags)
+    assert proc.returncode == 0, stdout + stderr
+    assert not report["errors"], report["errors"]
+
+    msgs = decoded(str(out))
+    # the gauges show the recording's values of the step they are stamped with ...
+    _check_gauges_against(msgs, readings)
+    assert readings[0]["model"].startswith("element_chain, breaking load 157 kN"), readings[0]["model"]
+    # ... and are at most about one display period behind the node's newest sample
+    lags.sort()
+    assert lags[len(lags) // 2] <= period + 0.05 and lags[-1] <= 3 * period + 0.1, (lags, period)
+
+    # bad input refused with its reason, out of range clamped, and logged
+    for (got, code), (topic, body, _, _) in zip(report["bad"], BAD):
+        assert got["status"] == code and got["answer"]["accepted"] is False, (topic, body[:60], got)
+    clamped = report["clamped"]
+    assert clamped["status"] == 200 and clamped["answer"]["clamped"] == ["engine_order 5 clamped to 1"], clamped
+    assert "client input refused" in stderr and "engine_order 5 clamped to 1" in stderr
+    counts = re.search(r"client input: (\d+) accepted \((\d+) clamped\), refused: (\{.*\})", stderr)
+    assert counts, stderr[-3000:]
+    refused = eval(counts.group(3))  # noqa: S307 - the node's own dict of counts
+    assert refused.get("message") == 10 and refused.get("channel") == 2, refused
+    assert int(counts.group(2)) == 1
+
+    # the engine order is recorded, and the tug answers it
+    orders = [(_stamp(m), m.engine_order) for m in msgs["/tug/command"]]
+    page_orders = [t for t, e in orders if e == pytest.approx(0.5)]
+    assert page_orders and min(page_orders) >= report["t_order"] - 0.5, orders
+    assert any(e == 1.0 for _, e in orders)  # the clamped one
+    t0 = min(page_orders)
+    odom = msgs["/tug/odom"]
+    speed = lambda t: next(math.hypot(m.twist.twist.linear.x, m.twist.twist.linear.y) / KN  # noqa: E731
+                           for m in odom if _stamp(m) >= t)
+    held = [_stamp(m) for m in msgs["/tug/status"] if m.engine_order == pytest.approx(0.5)]
+    assert held and min(held) <= t0 + 0.1, (t0, held[:3])
+    assert speed(t0) < 0.5 and speed(t0 + 10.0) > speed(t0) + 1.0, (speed(t0), speed(t0 + 10.0))
+
+
+def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifacts):
+    path = _scenario(tmp_path, "rec", 20.0, "lockstep")
+    out = tmp_path / "rec.mcap"
+    subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out), "--quiet"],
+                   check=True, timeout=300, capture_output=True)
+    http_port = _free_port()
+    url = f"http://127.0.0.1:{http_port}/"
+    log = open(tmp_path / "live_view.log", "wb")
+    live = subprocess.Popen([executable_path("live_view", "live_view"), "--ros-args", "-p", f"port:={_free_port()}",
+                             "-p", f"http_port:={http_port}", "-p", f"particulars:={out}"],
+                            stdout=log, stderr=subprocess.STDOUT)
+    replay = None
+    readings = []
+    try:
+        _wait_http(url, live)
+        replay = subprocess.Popen([executable_path("scenario_runner", "replay"), str(out)],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "instructor.snap && instructor.snap.t > 4 && instructor.hasGeometry('tug') && "
+                         "document.getElementById('g-towline-tension')")
+        for _ in range(8):
+            readings.append(_read_gauges(page))
+            time.sleep(0.45)
+        png, _ = _check_vessel_pixels(page, "tug")
+        artifacts("replay.png", png)
+        page.close()
+        assert replay.wait(60) == 0
+    finally:
+        for p in (replay, live):
+            if p is not None and p.poll() is None:
+                p.send_signal(2)
+                try:
+                    p.wait(10)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+        log.close()
+    print((tmp_path / "live_view.log").read_text()[-3000:])
+    assert not errors, errors
+    assert len({r["speed"]["t"] for r in readings}) >= 4  # it moves
+    _check_gauges_against(decoded(str(out)), readings)
+    assert readings[0]["model"].startswith("element_chain, breaking load 157 kN"), readings[0]["model"]
