@@ -40,7 +40,7 @@ def test_plumbing_imports_no_model_package():
     assert offenders == []
 
 
-@pytest.mark.parametrize("package", ["tug_dynamics", "rope_model"])
+@pytest.mark.parametrize("package", ["tug_dynamics", "rope_model", "sea_environment", "sim_math"])
 def test_physics_modules_import_no_ros(package):
     offenders = [(os.path.basename(p), m) for p in _modules(package) if os.path.basename(p) not in NODE_MODULES
                  for m in _imports(p) if m in ROS_MODULES]

@@ -1,0 +1,1 @@
+"""ROS-free environment models (wind; depth and currents to follow)."""
