@@ -285,9 +285,28 @@ class Recording:
                 a = np.asarray([s.rows[i][0] for i in idx], float)
                 self.ropes.setdefault(name, {})[kind] = {"t": t, "tension": a}
         self.vessels = {k: v for k, v in self.vessels.items() if "t" in v}  # vessels need odom
+        for name, v in self.vessels.items():
+            self._check_order_stamps(name, v)
         for ev in self.events:
             ev["time"] = ev["stamp_ns"] * 1e-9 - self.t_ref
         self.events.sort(key=lambda e: e["stamp_ns"])
+
+    def _check_order_stamps(self, name: str, v: dict) -> None:
+        """Orders stamped outside the recording's time (an outside tool's wall-clock stamps in a
+        run on simulation time, as send_command wrote before it read /clock) cannot be placed:
+        the orders are then read from the commanded values the vessel reports in its status,
+        and a note says so (never silently dropped)."""
+        cmd = v.get("command")
+        if cmd is None or not cmd["t"].size or "status" not in v:
+            return
+        lo, hi = v["t"][0] - 1.0, v["t"][-1] + 1.0
+        stray = int(np.count_nonzero((cmd["t"] < lo) | (cmd["t"] > hi)))
+        if stray:
+            del v["command"]
+            self.decoder.notes.append(
+                f"/{name}/command: {stray} of {cmd['t'].size} orders are stamped outside the recording's time "
+                f"({lo + 1.0:.2f} .. {hi - 1.0:.2f} s; wall-clock stamps of an outside tool?); the orders of {name} "
+                f"are taken from the commanded engine order and steering angle in /{name}/status instead")
 
     # -- manoeuvres -----------------------------------------------------------------------
     def _orders(self, name: str, command_column: int, status_field: str):

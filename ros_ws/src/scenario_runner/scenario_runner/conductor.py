@@ -164,6 +164,26 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
     return specs
 
 
+def instrument_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
+    """Processes that connect the run to bridge equipment (not step participants): the NMEA 0183 /
+    AIS out node when the scenario has `nmea`."""
+    if sc.nmea is None:
+        return []
+    n = sc.nmea
+    params = {"vessels": [v.name for v in sc.vessels],
+              "outputs": [f"{o.vessel}@[{o.host}]:{o.port}" if ":" in o.host else f"{o.vessel}@{o.host}:{o.port}"
+                          for o in n.outputs],
+              "ropes": [f"{r.name}={r.end_a},{r.end_b}" for r in sc.ropes] or [""],
+              "ship_files": [f"{v.name}={resolve('tug_dynamics', 'ships', v.ship_file, scenario_path)}"
+                             for v in sc.vessels],
+              "mmsi": [f"{k}={m}" for k, m in n.mmsi.items()] or [""],
+              "gear_ratios": [f"{k}={g!r}" for k, g in n.gear_ratios.items()] or [""],
+              "rate": float(n.rate), "exchange_rate": float(sc.exchange_rate), "utc_start": n.utc_start,
+              "static_every": int(n.static_every), "origin_latitude": float(sc.origin.latitude),
+              "origin_longitude": float(sc.origin.longitude), "origin_height": float(sc.origin.height)}
+    return [NodeSpec("/bridge", "nmea_out", "bridge_instruments", "nmea_out", params)]
+
+
 def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
     """A node blocks when its feed pipe is full (64 KiB by default): give it room for many steps."""
     try:
@@ -592,7 +612,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     run_id = run_id or new_run_id()
     specs = node_specs(sc, scenario_path, run_id)
     n_steps = sc.steps if steps is None else steps
-    session = _Session(sc, specs, log_dir, recorder, layout, run_id)
+    session = _Session(sc, specs, log_dir, recorder, layout, run_id, instrument_specs(sc, scenario_path))
     with StopSignals() as session.stop:
         try:
             session.start(extra_nodes or [], ready_timeout)
@@ -606,10 +626,13 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
 class _Session:
     """One run of run(): the conductor, its executor and the nodes, from start-up to shutdown."""
 
-    def __init__(self, sc: Scenario, specs: List[NodeSpec], log_dir: str, recorder, layout: str, run_id: str):
+    def __init__(self, sc: Scenario, specs: List[NodeSpec], log_dir: str, recorder, layout: str, run_id: str,
+                 instruments: List[NodeSpec] = ()):
         self.sc, self.specs, self.recorder, self.layout = sc, specs, recorder, layout
         self.stop: Optional[StopSignals] = None  # set by run() for the time the run handles the signals
         self.procs = NodeProcesses(specs if layout == "processes" else [], log_dir, recorder)
+        # bridge equipment: own processes in either layout, outside the step protocol
+        self.instruments = NodeProcesses(instruments, log_dir)
         self.conductor = Conductor(sc, [s.name for s in specs], recorder, run_id)
         self.executor = rc.make_executor()
         self.executor.add_node(self.conductor)
@@ -635,6 +658,7 @@ class _Session:
         for node in extra_nodes + ([recorder] if recorder else []) + self.local_nodes:
             self.executor.add_node(node)
         self.procs.start()
+        self.instruments.start()
         self.wait_for(0, ready_timeout, "starting up")
         self._wait_for_matches(ready_timeout)
 
@@ -755,6 +779,7 @@ class _Session:
         self.stats.node_refused = dict(self.conductor.node_refused)
         self.stats.rescued = self.conductor.rescued
         self.procs.stop()
+        self.instruments.stop()
         self.executor.shutdown()
         for node in self.local_nodes:
             node.destroy_node()

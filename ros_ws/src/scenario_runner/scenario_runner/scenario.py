@@ -34,6 +34,7 @@ from typing import Any, Dict, List, Literal, Optional
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
+from bridge_instruments.geo import DEFAULT_ORIGIN, KNOT
 from sim_math.input_files import YamlInputError, load_yaml
 
 
@@ -61,7 +62,17 @@ class Environment(_Strict):
     gravity: float = Field(9.80665, gt=9.0, lt=10.5)
 
 
+def _number(value, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{key}: expected a finite number, got {value!r}")
+    return float(value)
+
+
 class InitialState(_Strict):
+    """Also accepted where a person types them (converted here, before anything else sees them):
+    heading_true_deg (compass, deg true, clockwise from north) for heading_deg, speed_kn for
+    speed, and latitude / longitude (WGS-84 deg, converted with the scenario's origin in
+    Scenario) for x / y."""
     x: Coord = 0.0  # m east
     y: Coord = 0.0  # m north
     heading_deg: float = Field(0.0, ge=-360.0, le=360.0)  # 0 = bow east, counter-clockwise positive (REP-103)
@@ -70,6 +81,23 @@ class InitialState(_Strict):
     # 9 kn at half ahead"); 0 keeps the model's own start.
     engine_order: float = Field(0.0, ge=-1.0, le=1.0)
     steering_deg: float = Field(0.0, ge=-90.0, le=90.0)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _human_units(cls, data):
+        if not isinstance(data, dict):
+            return data
+        data = dict(data)
+        for human, si, convert in (("heading_true_deg", "heading_deg", lambda h: 90.0 - h),
+                                   ("speed_kn", "speed", lambda kn: kn * KNOT)):
+            if human in data:
+                if si in data:
+                    raise ValueError(f"give {si} or {human}, not both")
+                value = _number(data.pop(human), human)
+                if human == "heading_true_deg" and not 0.0 <= value <= 360.0:
+                    raise ValueError(f"heading_true_deg: expected 0-360 deg true, got {value!r}")
+                data[si] = convert(value)
+        return data
 
 
 class Motion(_Strict):
@@ -208,6 +236,31 @@ class AutopilotSpec(_Strict):
     params: Dict[str, Any] = Field(default_factory=dict)  # ROS parameters of the controller
 
 
+class GeoOrigin(_Strict):
+    """WGS-84 position of the map origin (x = y = 0) and ellipsoid height of the water there.
+    Default: the Port of Rotterdam, in the Maasmond (bridge_instruments.geo.DEFAULT_ORIGIN)."""
+    latitude: float = Field(DEFAULT_ORIGIN.latitude, ge=-85.0, le=85.0)  # deg north
+    longitude: float = Field(DEFAULT_ORIGIN.longitude, ge=-180.0, le=180.0)  # deg east
+    height: float = Field(DEFAULT_ORIGIN.height, ge=-1e3, le=1e4)  # m
+
+
+class NmeaOutput(_Strict):
+    vessel: str  # the own vessel whose bridge this destination is
+    host: str = Field("127.0.0.1", min_length=1, max_length=253)  # checked by the node: reported, not fatal
+    port: int = Field(10110, ge=1, le=65535)
+
+
+class NmeaSpec(_Strict):
+    """Starts `bridge_instruments nmea_out` beside the run: NMEA 0183 of each output's vessel and
+    AIS of every other vessel over UDP (README, "Bridge instruments")."""
+    outputs: List[NmeaOutput] = Field(min_length=1)
+    rate: float = Field(1.0, ge=0.01, le=50.0)  # Hz of simulation time
+    utc_start: str = "2026-06-01T08:00:00Z"  # UTC of t = 0 (ISO 8601, whole hundredths of a second)
+    static_every: int = Field(10, ge=1, le=100000)  # AIS type 5 with every n-th report
+    mmsi: Dict[str, int] = Field(default_factory=dict)  # vessel -> MMSI (default 244990001, 244990002, ...)
+    gear_ratios: Dict[str, Annotated[float, Field(gt=0.0, le=100.0)]] = Field(default_factory=dict)  # engine/shaft rpm
+
+
 class Recording(_Strict):
     enabled: bool = True
     path: Optional[str] = None  # default: output/<scenario name>.mcap; the command line wins
@@ -225,6 +278,36 @@ class Scenario(_Strict):
     autopilots: List[AutopilotSpec] = Field(default_factory=list)
     events: List[Event] = Field(default_factory=list)
     recording: Recording = Recording()
+    origin: GeoOrigin = GeoOrigin()
+    nmea: Optional[NmeaSpec] = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _geographic_positions(cls, data):
+        """vessels[].initial.latitude / longitude -> x / y (ENU metres about `origin`, pymap3d)."""
+        if not isinstance(data, dict) or not isinstance(data.get("vessels"), list):
+            return data
+        origin = data.get("origin", {})
+        origin = GeoOrigin.model_validate(origin) if isinstance(origin, dict) else GeoOrigin()
+        vessels = []
+        for i, v in enumerate(data["vessels"]):
+            init = v.get("initial") if isinstance(v, dict) else None
+            if isinstance(init, dict) and ("latitude" in init or "longitude" in init):
+                key = f"vessels[{i}].initial"
+                if "latitude" not in init or "longitude" not in init:
+                    raise ValueError(f"{key}: give both latitude and longitude")
+                if "x" in init or "y" in init:
+                    raise ValueError(f"{key}: give x / y or latitude / longitude, not both")
+                init = dict(init)
+                lat, lon = _number(init.pop("latitude"), f"{key}.latitude"), _number(init.pop("longitude"),
+                                                                                    f"{key}.longitude")
+                if not (-85.0 <= lat <= 85.0 and -180.0 <= lon <= 180.0):
+                    raise ValueError(f"{key}: latitude {lat!r} / longitude {lon!r} out of range")
+                from bridge_instruments.geo import Origin, geodetic_to_enu
+                init["x"], init["y"], _ = geodetic_to_enu(lat, lon, Origin(*origin.model_dump().values()))
+                v = dict(v, initial=init)
+            vessels.append(v)
+        return dict(data, vessels=vessels)
 
     @field_validator("exchange_rate")
     @classmethod
@@ -382,6 +465,26 @@ def _check_references(path: str, sc: Scenario) -> None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' already has an autopilot")
         driven[a.vessel] = a.name
         _check_autopilot_params(path, i, a)
+    if sc.nmea is not None:
+        for i, o in enumerate(sc.nmea.outputs):
+            if o.vessel not in vessels:
+                raise ScenarioError(f"{path}: key 'nmea.outputs[{i}].vessel': '{o.vessel}' is not in 'vessels' "
+                                    f"({vessels})")
+        for key, table in (("mmsi", sc.nmea.mmsi), ("gear_ratios", sc.nmea.gear_ratios)):
+            for name in table:
+                if name not in vessels:
+                    raise ScenarioError(f"{path}: key 'nmea.{key}.{name}': '{name}' is not in 'vessels' ({vessels})")
+        from bridge_instruments.sentences import check_mmsi, parse_utc
+        for name, m in sc.nmea.mmsi.items():
+            if check_mmsi(m):
+                raise ScenarioError(f"{path}: key 'nmea.mmsi.{name}': {check_mmsi(m)}")
+        if len(set(sc.nmea.mmsi.values())) != len(sc.nmea.mmsi):
+            raise ScenarioError(f"{path}: key 'nmea.mmsi': two vessels with one MMSI")
+        try:
+            parse_utc(sc.nmea.utc_start)
+        except ValueError as exc:
+            raise ScenarioError(f"{path}: key 'nmea.utc_start': expected an ISO 8601 UTC time such as "
+                                f"2026-06-01T08:00:00Z: {exc}") from None
     if sc.steps < 1:
         raise ScenarioError(f"{path}: key 'duration': {sc.duration} s is less than one step at "
                             f"{sc.exchange_rate:g} Hz (exchange_rate)")

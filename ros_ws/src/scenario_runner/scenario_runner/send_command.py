@@ -4,8 +4,9 @@
     ros2 run scenario_runner send_command s175 --anchor let_go
 
 Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
-exits. Exit status 1 if no vessel node listens within --wait seconds, 2 for a value that is not a
-finite number (the vessel would reject it anyway).
+exits. The order is stamped with the simulation time (the newest /clock) whenever /clock is
+published, else with wall time (sim_plumbing.sim_time); it says which. Exit status 1 if no
+vessel node listens within --wait seconds, 2 for a value that is not a finite number (the vessel would reject it anyway).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from rclpy.node import Node
 from tug_msgs.msg import VesselCommand
 
 from sim_plumbing import ros_common as rc
+from sim_plumbing.sim_time import SimClock
 
 ANCHOR_ORDERS = {"none": VesselCommand.ANCHOR_NO_CHANGE, "let_go": VesselCommand.ANCHOR_LET_GO,
                  "heave_up": VesselCommand.ANCHOR_HEAVE_UP}
@@ -49,6 +51,7 @@ def main(argv=None) -> int:
     try:
         topic = f"/{args.vessel.strip('/')}/command"
         pub = node.create_publisher(VesselCommand, topic, rc.COMMAND_QOS)
+        clock = SimClock(node)
         deadline = time.monotonic() + args.wait
         while pub.get_subscription_count() == 0:
             if time.monotonic() > deadline:
@@ -58,7 +61,8 @@ def main(argv=None) -> int:
             rclpy.spin_once(node, timeout_sec=0.05)
         msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
                             anchor=ANCHOR_ORDERS[args.anchor])
-        msg.header.stamp = node.get_clock().now().to_msg()
+        clock.wait(lambda timeout_sec: rclpy.spin_once(node, timeout_sec=timeout_sec), timeout=2.0)
+        msg.header.stamp = clock.now()
         pub.publish(msg)
         # Reliable delivery: wait for the subscribers' acknowledgement before the process ends.
         # A reader that has not yet matched us asks for the sample at the writer's next
@@ -67,7 +71,8 @@ def main(argv=None) -> int:
             sys.stderr.write(f"send_command: {topic} did not acknowledge the command within 10 s\n")
             return 1
         print(f"sent to {topic}: engine {args.engine:+.2f}, steering {args.steering_deg:+.1f} deg, "
-              f"anchor {args.anchor}")
+              f"anchor {args.anchor}; stamped {msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9:.3f} s, "
+              f"{clock.source}")
         return 0
     finally:
         node.destroy_node()

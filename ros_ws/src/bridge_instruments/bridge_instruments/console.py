@@ -1,0 +1,242 @@
+"""A terminal console to drive one vessel of a running simulation (a paced, realtime run).
+
+    ros2 run bridge_instruments console tug --scenario default_demo.yaml
+
+Keys (controls.HELP): engine order in steps of 0.1, helm in steps of 5 deg, winch pay out /
+heave in / hold, anchor let go / heave up; a joystick (SDL through pygame) when one is present.
+It shows speed over ground (kn), heading (deg true), rate of turn (deg/min), engine order and
+shaft rpm, helm ordered and actual, each towline's tension against its breaking load, the
+girting ratio against its threshold, and a warning when either comes near its limit (80 %).
+
+It is an ordinary outside controller: tug_msgs/VesselCommand on /<vessel>/command and
+tug_msgs/WinchCommand on /<rope>/winch, stamped with simulation time whenever /clock is
+published (sim_plumbing.sim_time), sent the moment a key is pressed.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import threading
+import time
+from typing import Dict, List, Optional, Tuple
+
+import rclpy
+from rclpy.node import Node
+
+from bridge_instruments import controls, geo
+
+ANCHOR = {"let_go": 1, "heave_up": 2}
+
+
+class ConsoleNode(Node):
+    """Subscriptions and publishers of the console; state read by the screen thread."""
+
+    def __init__(self, vessel: str, ropes: List[Tuple[str, str, bool]], **kwargs):
+        from geometry_msgs.msg import WrenchStamped
+        from nav_msgs.msg import Odometry
+        from tug_msgs.msg import VesselCommand, VesselStatus, WinchCommand
+        from sim_plumbing import ros_common as rc
+        from sim_plumbing.sim_time import SimClock
+        super().__init__("console", **kwargs)
+        self.VesselCommand, self.WinchCommand = VesselCommand, WinchCommand
+        self.vessel = vessel
+        self.clock = SimClock(self)
+        self.odom = None
+        self.status = None
+        self.tension: Dict[str, float] = {}
+        self.sent = 0
+        self.create_subscription(Odometry, f"/{vessel}/odom", self._on_odom, rc.STATE_QOS)
+        self.create_subscription(VesselStatus, f"/{vessel}/status", self._on_status, rc.STATE_QOS)
+        for rope, end, _winch in ropes:
+            self.create_subscription(WrenchStamped, f"/{rope}/end_{end}/wrench",
+                                     lambda m, rope=rope: self._on_wrench(rope, m), rc.STATE_QOS)
+        self.cmd_pub = self.create_publisher(VesselCommand, f"/{vessel}/command", rc.COMMAND_QOS)
+        self.winch_pubs = {rope: self.create_publisher(WinchCommand, f"/{rope}/winch", rc.COMMAND_QOS)
+                           for rope, _end, winch in ropes if winch}
+
+    def _on_odom(self, m) -> None:
+        self.odom = m
+
+    def _on_status(self, m) -> None:
+        self.status = m
+
+    def _on_wrench(self, rope: str, m) -> None:
+        f = m.wrench.force
+        self.tension[rope] = math.sqrt(f.x * f.x + f.y * f.y + f.z * f.z)
+
+    def send_vessel(self, orders: controls.Orders) -> None:
+        msg = self.VesselCommand(engine_order=float(orders.engine), steering_angle=math.radians(orders.helm_deg),
+                                 anchor=ANCHOR.get(orders.take_anchor(), 0))
+        msg.header.stamp = self.clock.now()
+        self.cmd_pub.publish(msg)
+        self.sent += 1
+
+    def send_winch(self, orders: controls.Orders) -> None:
+        for pub in self.winch_pubs.values():
+            msg = self.WinchCommand(payout_rate=float(orders.payout))
+            msg.header.stamp = self.clock.now()
+            pub.publish(msg)
+            self.sent += 1
+
+
+def readout(node: ConsoleNode, orders: controls.Orders, breaking: Dict[str, Optional[float]]) -> Tuple[str, list]:
+    """The text of the screen and its warnings, from the newest state."""
+    lines = [f"{node.vessel.upper()}   orders: engine {orders.engine:+.1f}   helm {abs(orders.helm_deg):.0f} deg "
+             f"{'port' if orders.helm_deg > 0 else 'stbd' if orders.helm_deg < 0 else 'midships'}   winch "
+             f"{orders.payout:+.1f} m/s   (sent {node.sent}, {node.clock.source})"]
+    warn = []
+    od, st = node.odom, node.status
+    if od is None or st is None:
+        lines.append("waiting for the vessel's state ...")
+        return "\n".join(lines), warn
+    q, tw = od.pose.pose.orientation, od.twist.twist
+    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    t = st.header.stamp.sec + st.header.stamp.nanosec * 1e-9
+    lines.append(f"t {t:8.2f} s   speed {geo.knots(math.hypot(tw.linear.x, tw.linear.y)):5.2f} kn   heading "
+                 f"{geo.compass_deg(yaw):6.1f} deg true   rate of turn {geo.rate_of_turn(tw.angular.z):+7.1f} deg/min")
+    lines.append(f"engine {st.engine_order:+.2f} ({st.shaft_speed * 60 / (2 * math.pi):+6.1f} rpm)   rudder "
+                 f"{-math.degrees(st.steering_angle):+5.1f} deg (ordered {-math.degrees(st.steering_angle_ordered):+5.1f}"
+                 f"; + starboard)   heel {math.degrees(st.heel):+5.1f} deg")
+    lines.append(f"girting ratio {st.girting_ratio:.2f} of limit {st.girting_threshold:.2f}")
+    warn += controls.warnings(st.girting_ratio, st.girting_threshold, 0.0, None)
+    if st.girting_warning and not any(w.startswith("GIRTING") for w in warn):
+        warn.append("GIRTING WARNING")
+    for rope, tension in sorted(node.tension.items()):
+        bl = breaking.get(rope)
+        lines.append(f"towline {rope}: tension {tension / 1e3:6.1f} kN" +
+                     (f" of breaking load {bl / 1e3:.1f} kN ({100 * tension / bl:.0f} %)" if bl else ""))
+        warn += controls.warnings(0.0, 0.0, tension, bl)
+    return "\n".join(lines), warn
+
+
+class Joystick:
+    """The first SDL joystick (pygame), if any: axis 1 throttle, axis 0 rudder."""
+
+    def __init__(self):
+        self.stick = None
+        try:
+            os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+            os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+            import pygame
+            pygame.display.init()
+            pygame.joystick.init()
+            if pygame.joystick.get_count() > 0:
+                self.stick = pygame.joystick.Joystick(0)
+                self.pygame = pygame
+        except Exception:  # noqa: BLE001 - no SDL, no device: keys only
+            self.stick = None
+
+    def axes(self) -> Optional[Tuple[float, float]]:
+        if self.stick is None:
+            return None
+        self.pygame.event.pump()
+        try:
+            return self.stick.get_axis(1), self.stick.get_axis(0)
+        except Exception:  # noqa: BLE001 - unplugged
+            self.stick = None
+            return None
+
+
+def build_app(node: ConsoleNode, orders: controls.Orders, breaking, joystick: Joystick):
+    from textual.app import App, ComposeResult
+    from textual.widgets import Static
+
+    class ConsoleApp(App):
+        CSS = "#warn {color: red; text-style: bold;} #help {color: grey;}"
+
+        def compose(self) -> ComposeResult:
+            yield Static("", id="state")
+            yield Static("", id="warn")
+            yield Static(controls.HELP, id="help")
+
+        def on_mount(self) -> None:
+            self.set_interval(0.1, self.refresh_state)
+            if joystick.stick is not None:
+                self.set_interval(0.02, self.poll_joystick)
+
+        def refresh_state(self) -> None:
+            if node.status is not None and time.monotonic() > orders.last_key + 1.0:
+                # follow the orders the vessel holds (the scenario's, another controller's) while
+                # no key is being pressed: a key steps from what is held, not from stop
+                orders.sync(node.status.engine_order, math.degrees(node.status.steering_angle_ordered))
+            text, warn = readout(node, orders, breaking)
+            self.query_one("#state", Static).update(text)
+            self.query_one("#warn", Static).update("\n".join(warn))
+
+        def poll_joystick(self) -> None:
+            axes = joystick.axes()
+            if axes is not None and orders.joystick(*axes):
+                node.send_vessel(orders)
+
+        def on_key(self, event) -> None:
+            if event.key in ("q", "ctrl+c"):
+                self.exit()
+                return
+            what = orders.key(event.key)
+            if what is not None:
+                orders.last_key = time.monotonic()
+            if what == "vessel":
+                node.send_vessel(orders)
+            elif what == "winch":
+                node.send_winch(orders)
+
+    return ConsoleApp()
+
+
+def _rope_setup(vessel: str, scenario: Optional[str]):
+    """(ropes at the vessel as (name, end, has winch), breaking loads) from a scenario."""
+    if not scenario:
+        return [], {}
+    from scenario_runner.run_scenario import particulars, scenario_path
+    from scenario_runner.scenario import load_scenario
+    path = scenario_path(scenario)
+    sc = load_scenario(path)
+    ropes = []
+    for r in sc.ropes:
+        for end in "ab":
+            if getattr(r, f"end_{end}").split("/")[0] == vessel:
+                ropes.append((r.name, end, end == "a" and r.layout == "winch"))
+    loads = {n: p.get("breaking_load") for n, p in particulars(path, sc)["ropes"].items()}
+    return ropes, loads
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    p = argparse.ArgumentParser(prog="console", description=__doc__.split("\n\n")[0])
+    p.add_argument("vessel", help="the vessel to drive (its namespace), e.g. tug")
+    p.add_argument("--scenario", help="the running scenario (its ropes, winch and breaking loads)")
+    p.add_argument("--max-helm-deg", type=float, default=35.0, help="helm limit of the keys and stick (default 35)")
+    p.add_argument("--winch-rate", type=float, default=0.5, help="m/s of a pay-out / heave-in order (default 0.5)")
+    args = p.parse_args(rclpy.utilities.remove_ros_args(argv))
+    for name in ("max_helm_deg", "winch_rate"):
+        v = getattr(args, name)
+        if not math.isfinite(v) or not 0 < v <= 90:
+            p.error(f"--{name.replace('_', '-')}: expected a number in (0, 90], got {v!r}")
+    ropes, breaking = _rope_setup(args.vessel.strip("/"), args.scenario)
+    rclpy.init(args=argv)
+    node = ConsoleNode(args.vessel.strip("/"), ropes)
+    executor = rclpy.executors.SingleThreadedExecutor()
+    executor.add_node(node)
+    stop = threading.Event()
+
+    def spin():
+        while not stop.is_set() and rclpy.ok():
+            executor.spin_once(timeout_sec=0.05)
+
+    thread = threading.Thread(target=spin, daemon=True)
+    thread.start()
+    orders = controls.Orders(args.max_helm_deg, args.winch_rate)
+    try:
+        build_app(node, orders, breaking, Joystick()).run()
+    finally:
+        stop.set()
+        thread.join(2.0)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,314 @@
+"""NMEA 0183 and AIS out: a running simulation as an ECDIS sees it.
+
+    ros2 run bridge_instruments nmea_out --ros-args -p vessels:=[tug,barge] \
+        -p outputs:=[tug@127.0.0.1:10110] -p rate:=1.0
+
+For every own vessel (`outputs`: "vessel@host:port") it sends, over UDP to that destination, one
+sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one XDR per rope
+with an end on the vessel (its tension), and for every other vessel of the run an AIS VDM
+position report (type 1) and, the first time and every `static_every`-th time, its static data
+(type 5, length and beam from its ship file). Sentence formats: bridge_instruments/sentences.py.
+
+It reads the topic contract only (/<vessel>/odom, /<vessel>/status, /<rope>/end_<x>/wrench) and
+sends the state of one simulation step at a time: the first step of every 1/rate s of
+simulation time (the step stamped t with t mod (1/rate) < one exchange period), once every
+topic of that step has arrived. So in a paced run it is real time, in a lockstep run as fast as
+the simulation, and the time in RMC / GGA names the step (UTC = utc_start + t).
+
+A destination that cannot be resolved or refuses a datagram (no route, permission, ...) is
+reported once per kind (and counted); the node and the simulation go on.
+"""
+from __future__ import annotations
+
+import collections
+import math
+import os
+import re
+import socket
+import sys
+from typing import Dict, List, Optional, Tuple
+
+import rclpy
+from rclpy.node import Node
+from rclpy.serialization import deserialize_message
+from nav_msgs.msg import Odometry
+from geometry_msgs.msg import WrenchStamped
+from tug_msgs.msg import VesselStatus
+from rcl_interfaces.msg import ParameterDescriptor
+
+from sim_plumbing import cdr
+from sim_plumbing import ros_common as rc
+from bridge_instruments import geo
+from bridge_instruments import sentences as S
+
+DEFAULT_PORT = 10110  # the port IEC 61162-450-less NMEA over UDP uses by convention (OpenCPN, gpsd)
+DEFAULT_UTC_START = "2026-06-01T08:00:00Z"
+_HOST = re.compile(r"^(?=.{1,253}$)[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?(\.[A-Za-z0-9]([A-Za-z0-9-]{0,61}"
+                   r"[A-Za-z0-9])?)*\.?$|^[0-9A-Fa-f:.]+$")
+_KEEP_STEPS = 16  # stamps held while waiting for every topic of a due step
+
+
+def parse_output(text: str) -> Tuple[str, str, int]:
+    """'vessel@host:port' (port default 10110; IPv6 hosts in brackets) -> (vessel, host, port);
+    ValueError naming what is wrong."""
+    vessel, sep, dest = text.partition("@")
+    if not sep or not vessel:
+        raise ValueError(f"output {text!r}: expected 'vessel@host:port'")
+    host, port = dest, DEFAULT_PORT
+    m = re.fullmatch(r"\[([^\]]*)\](?::(.*))?|([^:]*)(?::(.*))?", dest)
+    if m:
+        host = m.group(1) if m.group(1) is not None else m.group(3)
+        p = m.group(2) if m.group(1) is not None else m.group(4)
+        if p is not None:
+            if not p.isdigit():
+                raise ValueError(f"output {text!r}: port {p!r} is not a number")
+            port = int(p)
+    return vessel, host, port
+
+
+def check_destination(host: str, port: int) -> Optional[str]:
+    """Why host:port cannot be a UDP destination (None if it can be tried)."""
+    if not 1 <= port <= 65535:
+        return f"port {port} is outside 1-65535"
+    if not host or not _HOST.match(host):
+        return f"host {host!r} is not a host name or address"
+    return None
+
+
+def _pairs(items: List[str], what: str) -> Dict[str, str]:
+    out = {}
+    for item in items:
+        if not item:
+            continue
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ValueError(f"{what} {item!r}: expected 'name=value'")
+        out[key] = value
+    return out
+
+
+class Destination:
+    """One UDP destination; reports each kind of failure once, counts all."""
+
+    def __init__(self, vessel: str, host: str, port: int, logger):
+        self.vessel, self.host, self.port, self.logger = vessel, host, port, logger
+        self.address = None
+        self.sock: Optional[socket.socket] = None
+        self.sent = 0
+        self.failed = 0
+        self.reported: set = set()
+        why = check_destination(host, port)
+        if why is None:
+            try:
+                family, _type, _proto, _name, addr = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)[0]
+                self.sock = socket.socket(family, socket.SOCK_DGRAM)
+                self.sock.setblocking(False)
+                self.address = addr
+            except OSError as exc:
+                why = f"cannot resolve {host!r}: {exc}"
+        if why is not None:
+            self.report("invalid", f"NMEA destination {self.name} for '{vessel}' is invalid ({why}): its "
+                                   "sentences are not sent; the simulation goes on")
+
+    @property
+    def name(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    def report(self, kind: str, text: str) -> None:
+        if kind not in self.reported:
+            self.reported.add(kind)
+            self.logger.error(text)
+
+    def send(self, lines: List[str]) -> None:
+        if self.sock is None:
+            self.failed += len(lines)
+            return
+        for line in lines:
+            try:
+                self.sock.sendto((line + "\r\n").encode("ascii"), self.address)
+                self.sent += 1
+            except OSError as exc:
+                self.failed += 1
+                self.report(f"errno {exc.errno}", f"NMEA destination {self.name} for '{self.vessel}' refuses "
+                                                  f"datagrams ({exc.strerror or exc}); reported once, counted; the "
+                                                  "simulation goes on")
+
+    def close(self) -> None:
+        if self.sock is not None:
+            self.sock.close()
+
+
+def _stamp_ns(data: bytes) -> Optional[int]:
+    """The header stamp of a serialized message whose first field is a std_msgs/Header."""
+    if len(data) < 12 or data[1] not in (0, 1):
+        return None
+    order = "little" if data[1] == 1 else "big"
+    sec = int.from_bytes(data[4:8], order, signed=True)
+    nsec = int.from_bytes(data[8:12], order)
+    return sec * 1_000_000_000 + nsec
+
+
+class NmeaOut(Node):
+    def __init__(self, name: str = "nmea_out", **kwargs):
+        super().__init__(name, **kwargs)
+        text = ParameterDescriptor(read_only=True)
+        self.declare_parameter("vessels", [""], text)  # every vessel of the run
+        self.declare_parameter("outputs", [""], text)  # own vessels: "vessel@host:port"
+        self.declare_parameter("ropes", [""], text)  # "rope=<end_a>,<end_b>" as in the scenario
+        self.declare_parameter("ship_files", [""], text)  # "vessel=path" (AIS dimensions)
+        self.declare_parameter("mmsi", [""], text)  # "vessel=244990001"
+        self.declare_parameter("gear_ratios", [""], text)  # "vessel=5.2": engine rpm / shaft rpm (default 1)
+        self.declare_parameter("rate", 1.0, rc.float_param("sentences per second of simulation time", 0.01, 50.0,
+                                                           "Hz"))
+        self.declare_parameter("exchange_rate", 50.0, rc.float_param("the run's step rate", 1.0, 1000.0, "Hz"))
+        self.declare_parameter("origin_latitude", geo.DEFAULT_ORIGIN.latitude,
+                               rc.float_param("latitude of the map origin (WGS-84)", -90.0, 90.0, "deg"))
+        self.declare_parameter("origin_longitude", geo.DEFAULT_ORIGIN.longitude,
+                               rc.float_param("longitude of the map origin (WGS-84)", -180.0, 180.0, "deg"))
+        self.declare_parameter("origin_height", 0.0, rc.float_param("ellipsoid height of the water", -1e3, 1e4, "m"))
+        self.declare_parameter("utc_start", DEFAULT_UTC_START, rc.text_param("UTC of simulation time 0 (ISO 8601)"))
+        self.declare_parameter("static_every", 10, rc.int_param("AIS type 5 every n-th report", 1, 100000))
+        gp = self.get_parameter
+        self.vessels = [v for v in gp("vessels").value if v]
+        if not self.vessels:
+            raise ValueError("parameter 'vessels': name the vessels of the run, e.g. [tug, barge]")
+        self.origin = geo.Origin(gp("origin_latitude").value, gp("origin_longitude").value, gp("origin_height").value)
+        self.utc_start = S.parse_utc(gp("utc_start").value)
+        self.tick_ns = max(1, round(1e9 / gp("rate").value))
+        self.period_ns = rc.period_ns(gp("exchange_rate").value)
+        self.static_every = int(gp("static_every").value)
+        log = self.get_logger()
+        self.outputs: Dict[str, List[Destination]] = collections.defaultdict(list)
+        for item in gp("outputs").value:
+            if item:
+                vessel, host, port = parse_output(item)
+                if vessel not in self.vessels:
+                    raise ValueError(f"parameter 'outputs': vessel {vessel!r} is not in 'vessels' {self.vessels}")
+                self.outputs[vessel].append(Destination(vessel, host, port, log))
+        mmsi = {k: int(v) for k, v in _pairs(gp("mmsi").value, "mmsi").items()}
+        self.mmsi = {v: mmsi.get(v, S.default_mmsi(i)) for i, v in enumerate(self.vessels)}
+        for v, m in self.mmsi.items():
+            if S.check_mmsi(m):
+                raise ValueError(f"parameter 'mmsi': {v}: {S.check_mmsi(m)}")
+        self.gear = {k: float(v) for k, v in _pairs(gp("gear_ratios").value, "gear_ratios").items()}
+        # rope ends on vessels: vessel -> [(rope, end)]
+        self.rope_ends: Dict[str, List[Tuple[str, str]]] = collections.defaultdict(list)
+        towing = set()
+        for rope, ends in _pairs(gp("ropes").value, "ropes").items():
+            for end, spec in zip("ab", ends.split(",")):
+                vessel = spec.split("/")[0] if "/" in spec else None
+                if vessel in self.vessels:
+                    self.rope_ends[vessel].append((rope, end))
+                    if end == "a":
+                        towing.add(vessel)
+        self.particulars = self._particulars(_pairs(gp("ship_files").value, "ship_files"), towing)
+        # latest serialized messages of due steps: stamp -> {topic: bytes}
+        self.pending: Dict[int, Dict[str, bytes]] = {}
+        self.needed = [f"/{v}/odom" for v in self.vessels] + [f"/{v}/status" for v in self.vessels]
+        self.needed += [f"/{r}/end_{e}/wrench" for v in self.vessels for r, e in self.rope_ends[v]]
+        self.last_sent = -1
+        self.reports = 0
+        for topic in self.needed:
+            self.create_subscription(_TYPES[topic.rsplit("/", 1)[1]], topic,
+                                     lambda data, topic=topic: self._on_message(topic, data), rc.STATE_QOS, raw=True)
+        dests = ", ".join(f"{v} -> {d.name}" for v, ds in self.outputs.items() for d in ds)
+        log.info(f"NMEA 0183 / AIS out at {gp('rate').value:g} Hz of simulation time: {dests or 'no output'}; "
+                 f"origin {self.origin.latitude:.6f}, {self.origin.longitude:.6f}; MMSI {self.mmsi}")
+
+    def _particulars(self, files: Dict[str, str], towing: set) -> Dict[str, S.Particulars]:
+        import yaml
+        from sim_plumbing.scene import HullDimensions
+        out = {}
+        for v in self.vessels:
+            length = beam = draft = 0.0
+            kind = ""
+            path = files.get(v)
+            if path:
+                if not os.path.isabs(path) and not os.path.isfile(path):
+                    path = rc.resolve_data_file("tug_dynamics", "ships", path)
+                with open(path) as f:
+                    d = HullDimensions.from_ship_config(yaml.safe_load(f))
+                length, beam, draft, kind = d.length, d.beam, d.draft, d.kind
+            ship_type = 31 if v in towing else (52 if "tug" in v.lower() else 0)  # 31 towing, 52 tug
+            out[v] = S.Particulars(self.mmsi[v], v, length, beam, draft, ship_type)
+        return out
+
+    def _on_message(self, topic: str, data: bytes) -> None:
+        stamp = _stamp_ns(data)
+        if stamp is None or stamp <= self.last_sent or stamp % self.tick_ns >= self.period_ns:
+            return
+        slot = self.pending.setdefault(stamp, {})
+        slot[topic] = data
+        if len(slot) == len(self.needed):
+            self._send(stamp, slot)
+            self.last_sent = stamp
+            for s in [s for s in self.pending if s <= stamp]:
+                del self.pending[s]
+        while len(self.pending) > _KEEP_STEPS:
+            del self.pending[min(self.pending)]
+
+    def _kinematics(self, v: str, slot: Dict[str, bytes]):
+        od = deserialize_message(slot[f"/{v}/odom"], Odometry)
+        st = deserialize_message(slot[f"/{v}/status"], VesselStatus)
+        p, q, tw = od.pose.pose.position, od.pose.pose.orientation, od.twist.twist
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        # twist in the body frame: velocity over ground in the map frame (the horizontal part)
+        roll = math.atan2(2.0 * (q.w * q.x + q.y * q.z), 1.0 - 2.0 * (q.x * q.x + q.y * q.y))
+        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (q.w * q.y - q.z * q.x))))
+        u, vv, w = tw.linear.x, tw.linear.y, tw.linear.z
+        cy, sy, cp, sp, cr, sr = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch), math.cos(roll), \
+            math.sin(roll)
+        ve = cy * cp * u + (cy * sp * sr - sy * cr) * vv + (cy * sp * cr + sy * sr) * w
+        vn = sy * cp * u + (sy * sp * sr + cy * cr) * vv + (sy * sp * cr - cy * sr) * w
+        lat, lon, _ = geo.enu_to_geodetic(p.x, p.y, self.origin)
+        # yaw rate about the world vertical (r of the body frame for a level vessel)
+        r = (tw.angular.y * sr + tw.angular.z * cr) / cp if abs(cp) > 1e-9 else tw.angular.z
+        return dict(lat=lat, lon=lon, sog=geo.knots(math.hypot(ve, vn)), cog=geo.course_over_ground(ve, vn),
+                    hdg=geo.compass_deg(yaw), rot=geo.rate_of_turn(r), status=st)
+
+    def _send(self, stamp: int, slot: Dict[str, bytes]) -> None:
+        t = stamp * 1e-9
+        kin = {v: self._kinematics(v, slot) for v in self.vessels}
+        static = self.reports % self.static_every == 0
+        self.reports += 1
+        for own, dests in self.outputs.items():
+            k = kin[own]
+            st = k["status"]
+            shaft_rpm = st.shaft_speed * 60.0 / (2.0 * math.pi)
+            tensions = []
+            for rope, end in self.rope_ends[own]:
+                w = cdr.decode_wrench_stamped(slot[f"/{rope}/end_{end}/wrench"])
+                tensions.append((rope, math.sqrt(sum(c * c for c in w.force))))
+            lines = S.own_ship_sentences(S.OwnShip(
+                t, k["lat"], k["lon"], k["sog"], k["cog"], k["hdg"], k["rot"], -math.degrees(st.steering_angle),
+                shaft_rpm, shaft_rpm * self.gear.get(own, 1.0), tuple(tensions)), self.utc_start)
+            for other in self.vessels:
+                if other == own:
+                    continue
+                o = kin[other]
+                anchored = o["status"].anchor_state in (VesselStatus.ANCHOR_DREDGING,)
+                lines += S.position_report(S.Target(self.mmsi[other], o["lat"], o["lon"], o["sog"], o["cog"], o["hdg"],
+                                                    o["rot"], 1 if anchored else 0), t, self.utc_start)
+                if static:
+                    lines += S.static_report(self.particulars[other], seq_id=self.reports)
+            for d in dests:
+                d.send(lines)
+
+    def destroy_node(self):
+        for dests in self.outputs.values():
+            for d in dests:
+                # stderr: the context may be shut down already (Ctrl-C), and rosout with it
+                sys.stderr.write(f"nmea_out: {d.vessel} -> {d.name}: {d.sent} sentences sent, {d.failed} not sent\n")
+                d.close()
+        return super().destroy_node()
+
+
+_TYPES = {"odom": Odometry, "status": VesselStatus, "wrench": WrenchStamped}
+
+
+def main(args=None) -> int:
+    return rc.run_node(lambda: NmeaOut(), "nmea_out", args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

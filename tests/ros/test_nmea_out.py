@@ -1,0 +1,212 @@
+"""NMEA 0183 and AIS out (bridge_instruments nmea_out, started by the scenario key `nmea`) in a
+paced run, read by independent parsers and compared with the recording of the same steps:
+
+- every datagram on the test's own UDP socket is one sentence; every NMEA sentence parses with
+  pynmea2 with its checksum checked, is at most 82 characters, and has the expected talker;
+  every AIS sentence decodes with pyais (multi-part type 5 assembled);
+- per report (an RMC and the sentences up to the next), the RMC / GGA time names the step
+  (UTC = utc_start + t), and against that step's recorded messages: the position converted
+  back to ENU metres (pymap3d) within 0.5 m, course and speed over ground from the recorded
+  body-frame velocity rotated with scipy, heading = (90 - yaw) mod 360, rate of turn, rudder,
+  shaft rpm and towline tension (the recorded rope state's end force); the barge as an AIS
+  target: position within 0.5 m, speed, course, heading, and its type 5 dimensions equal the
+  ship file's length and beam;
+- bad destinations (an invalid host name, a broadcast address the socket may not send to) are
+  each reported once in the node's log and the run completes with every step recorded.
+"""
+import math
+import socket
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+import yaml
+
+from conftest import executable_path
+from test_recording import decoded
+
+pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
+
+DURATION = 15.0
+RATE = 5.0
+ORIGIN = (53.5400, 9.9700)  # not the default: the key must be used
+UTC_START = "2026-03-04T05:06:07Z"
+
+
+def _scenario(tmp_path, port):
+    from ament_index_python.packages import get_package_share_directory
+    share = get_package_share_directory("scenario_runner")
+    sc = dict(yaml.safe_load(open(f"{share}/scenarios/default_demo.yaml")), name="nmea", mode="realtime",
+              duration=DURATION)
+    # the tug given at the human edge: compass heading and knots (90 deg true = REP-103 yaw 0)
+    sc["vessels"][0]["initial"] = {"x": 0.0, "y": 0.0, "heading_true_deg": 90.0, "speed_kn": 1.0}
+    sc["events"] = [{"time": 0.0, "vessel": "tug", "engine_order": 0.6},
+                    {"time": 3.0, "vessel": "tug", "steering_deg": 25.0}]
+    sc["origin"] = {"latitude": ORIGIN[0], "longitude": ORIGIN[1]}
+    sc["nmea"] = {"rate": RATE, "utc_start": UTC_START, "static_every": 5, "mmsi": {"barge": 244123456},
+                  "outputs": [{"vessel": "tug", "host": "127.0.0.1", "port": port},
+                              {"vessel": "tug", "host": "bad host!", "port": 10110},
+                              {"vessel": "tug", "host": "255.255.255.255", "port": 10110}]}
+    path = tmp_path / "nmea.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    return path, sc
+
+
+class Listener:
+    def __init__(self):
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.settimeout(0.2)
+        self.port = self.sock.getsockname()[1]
+        self.datagrams = []
+        self.stop = False
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while not self.stop:
+            try:
+                self.datagrams.append(self.sock.recv(4096))
+            except socket.timeout:
+                pass
+
+    def close(self):
+        self.stop = True
+        self.thread.join()
+        self.sock.close()
+
+
+def _reports(datagrams):
+    """[(RMC, [NMEA sentences], [AIS messages])] in arrival order, parsed by pynmea2 / pyais."""
+    import pyais
+    import pynmea2
+    reports, parts = [], []
+    for d in datagrams:
+        assert d.endswith(b"\r\n") and d.count(b"\r\n") == 1, d  # one sentence per datagram
+        line = d.decode("ascii").rstrip("\r\n")
+        assert len(line) + 2 <= 82, line
+        if line.startswith("!"):
+            parts.append(line.encode())
+            n, i = int(line.split(",")[1]), int(line.split(",")[2])
+            if i == n:
+                reports[-1][2].append(pyais.decode(*parts).asdict())
+                parts = []
+            continue
+        msg = pynmea2.parse(line, check=True)
+        assert msg.talker == {"RMC": "GP", "GGA": "GP", "VTG": "GP", "HDT": "HE", "ROT": "HE", "RSA": "II",
+                              "RPM": "ER", "XDR": "II"}[msg.sentence_type], line
+        if msg.sentence_type == "RMC":
+            reports.append((msg, [], []))
+        else:
+            reports[-1][1].append(msg)
+    return reports
+
+
+def _truth(rec, vessel, step, period_ns):
+    """What the sentences of a step should say, from the recording, computed here (scipy)."""
+    from scipy.spatial.transform import Rotation
+    stamp = step * period_ns
+    od = next(m for m in rec[f"/{vessel}/odom"] if m.header.stamp.sec * 10**9 + m.header.stamp.nanosec == stamp)
+    st = next(m for m in rec[f"/{vessel}/status"] if m.header.stamp.sec * 10**9 + m.header.stamp.nanosec == stamp)
+    q = od.pose.pose.orientation
+    rot = Rotation.from_quat([q.x, q.y, q.z, q.w])
+    tw = od.twist.twist
+    ve, vn, _ = rot.apply([tw.linear.x, tw.linear.y, tw.linear.z])
+    yaw = rot.as_euler("ZYX")[0]
+    w_world = rot.apply([tw.angular.x, tw.angular.y, tw.angular.z])
+    return {"x": od.pose.pose.position.x, "y": od.pose.pose.position.y, "sog": math.hypot(ve, vn) * 3600 / 1852,
+            "cog": math.degrees(math.atan2(ve, vn)) % 360, "hdg": (90 - math.degrees(yaw)) % 360,
+            "rot": -math.degrees(w_world[2]) * 60, "rudder": -math.degrees(st.steering_angle),
+            "rpm": st.shaft_speed * 60 / (2 * math.pi)}
+
+
+def _angle_diff(a, b):
+    return abs((a - b + 180.0) % 360.0 - 180.0)
+
+
+def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
+    import datetime as dt
+    import pymap3d
+    listener = Listener()
+    path, sc = _scenario(tmp_path, listener.port)
+    out = tmp_path / "nmea.mcap"
+    try:
+        done = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out),
+                               "--quiet"], capture_output=True, text=True, timeout=240)
+    finally:
+        listener.close()
+    assert done.returncode == 0, done.stderr
+    log = (tmp_path / "nmea_logs" / "bridge_nmea_out.log").read_text()
+    # bad destinations: each reported exactly once, the run went on (every step recorded)
+    assert log.count("'bad host!'") == 1 and "is invalid" in log, log
+    assert log.count("255.255.255.255:10110 for 'tug' refuses") == 1, log
+    rec = decoded(str(out))
+    n_steps = int(DURATION * 50)
+    assert len(rec["/tug/odom"]) == n_steps + 1
+
+    reports = _reports(listener.datagrams)
+    assert len(reports) >= 0.8 * DURATION * RATE, len(reports)
+    period_ns = 20_000_000
+    start = dt.datetime.fromisoformat(UTC_START.replace("Z", "+00:00"))
+    rope_state = {m.step: m for m in rec["/towline/state"]}
+    barge_len = yaml.safe_load(open(_ship_path("barge_002_full.yaml")))["hull"]
+    checked = {"course": 0, "rot": 0, "tension": 0, "ais": 0, "static": 0}
+    steps_seen = []
+    for rmc, rest, ais in reports:
+        kinds = [m.sentence_type for m in rest]
+        assert kinds[:7] == ["GGA", "VTG", "HDT", "ROT", "RSA", "RPM", "RPM"] and kinds[7:] == ["XDR"], kinds
+        gga, vtg, hdt, rot, rsa, rpm_e, rpm_s, xdr = rest
+        when = dt.datetime.combine(rmc.datestamp, rmc.timestamp)
+        t = (when - start).total_seconds()
+        step = round(t * 50)
+        assert abs(t - step * 0.02) < 1e-6 and step % int(50 / RATE) == 0, t
+        assert gga.timestamp == rmc.timestamp
+        steps_seen.append(step)
+        truth = _truth(rec, "tug", step, period_ns)
+        for fix in (gga, rmc):
+            e, n, _ = pymap3d.geodetic2enu(fix.latitude, fix.longitude, 0.0, *ORIGIN, 0.0)
+            assert math.hypot(e - truth["x"], n - truth["y"]) < 0.5, (step, e, n, truth)
+        assert abs(float(rmc.spd_over_grnd) - truth["sog"]) <= 0.006
+        assert abs(float(vtg.spd_over_grnd_kts) - truth["sog"]) <= 0.006
+        if truth["sog"] > 0.3:
+            assert _angle_diff(float(rmc.true_course), truth["cog"]) <= 0.02
+            assert _angle_diff(float(vtg.true_track), truth["cog"]) <= 0.02
+            checked["course"] += 1
+        assert _angle_diff(float(hdt.heading), truth["hdg"]) <= 0.006 and hdt.hdg_true == "T"
+        assert abs(float(rot.rate_of_turn) - truth["rot"]) <= 0.006 + 0.01 * abs(truth["rot"]), (step, rot, truth)
+        checked["rot"] += abs(truth["rot"]) > 5.0
+        assert abs(float(rsa.rsa_starboard) - truth["rudder"]) <= 0.006 and rsa.rsa_starboard_status == "A"
+        assert rpm_e.source == "E" and rpm_s.source == "S"
+        assert abs(float(rpm_s.speed) - truth["rpm"]) <= 0.06
+        f = rope_state[step].end_a_force
+        tension = math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2)
+        assert xdr.type == "N" and xdr.units == "N" and xdr.id == "towline"
+        assert abs(float(xdr.value) - tension) <= 0.06 + 1e-6 * tension, (step, xdr, tension)
+        checked["tension"] += tension > 100.0
+        # the barge as an AIS target
+        barge = _truth(rec, "barge", step, period_ns)
+        pos = [m for m in ais if m["msg_type"] == 1]
+        assert len(pos) == 1 and pos[0]["mmsi"] == 244123456
+        p = pos[0]
+        e, n, _ = pymap3d.geodetic2enu(p["lat"], p["lon"], 0.0, *ORIGIN, 0.0)
+        assert math.hypot(e - barge["x"], n - barge["y"]) < 0.5
+        assert abs(p["speed"] - barge["sog"]) <= 0.051 and p["second"] == when.second
+        assert _angle_diff(p["heading"], barge["hdg"]) <= 0.51
+        if barge["sog"] > 0.3:
+            assert _angle_diff(p["course"], barge["cog"]) <= 0.051
+        checked["ais"] += 1
+        for s in (m for m in ais if m["msg_type"] == 5):
+            assert s["mmsi"] == 244123456 and s["shipname"] == "BARGE"
+            assert s["to_bow"] + s["to_stern"] == round(barge_len["length"])
+            assert s["to_port"] + s["to_starboard"] == round(barge_len["beam"])
+            checked["static"] += 1
+    assert steps_seen == sorted(steps_seen) and len(set(steps_seen)) == len(steps_seen)
+    # the run turned, moved and pulled: the comparisons above were not of zeros
+    assert checked["course"] > 20 and checked["rot"] > 20 and checked["tension"] > 20, checked
+    assert checked["static"] >= len(reports) // 5, checked
+
+
+def _ship_path(name):
+    from ament_index_python.packages import get_package_share_directory
+    return f"{get_package_share_directory('tug_dynamics')}/ships/{name}"
