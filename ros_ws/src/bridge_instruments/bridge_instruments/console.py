@@ -26,6 +26,7 @@ import rclpy
 from rclpy.node import Node
 
 from bridge_instruments import controls, geo
+from sim_math.rotations import yaw_from_quaternion
 
 ANCHOR = {"let_go": 1, "heave_up": 2}
 
@@ -92,7 +93,7 @@ def readout(node: ConsoleNode, orders: controls.Orders, breaking: Dict[str, Opti
         lines.append("waiting for the vessel's state ...")
         return "\n".join(lines), warn
     q, tw = od.pose.pose.orientation, od.twist.twist
-    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
     t = st.header.stamp.sec + st.header.stamp.nanosec * 1e-9
     lines.append(f"t {t:8.2f} s   speed {geo.knots(math.hypot(tw.linear.x, tw.linear.y)):5.2f} kn   heading "
                  f"{geo.compass_deg(yaw):6.1f} deg true   rate of turn {geo.rate_of_turn(tw.angular.z):+7.1f} deg/min")

@@ -36,6 +36,7 @@ from geometry_msgs.msg import WrenchStamped
 from tug_msgs.msg import VesselStatus
 from rcl_interfaces.msg import ParameterDescriptor
 
+from sim_math.rotations import matrix_from_quaternion, rpy_from_quaternion
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from bridge_instruments import geo
@@ -251,15 +252,11 @@ class NmeaOut(Node):
         od = deserialize_message(slot[f"/{v}/odom"], Odometry)
         st = deserialize_message(slot[f"/{v}/status"], VesselStatus)
         p, q, tw = od.pose.pose.position, od.pose.pose.orientation, od.twist.twist
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        roll, pitch, yaw = (float(a) for a in rpy_from_quaternion(q.x, q.y, q.z, q.w))
         # twist in the body frame: velocity over ground in the map frame (the horizontal part)
-        roll = math.atan2(2.0 * (q.w * q.x + q.y * q.z), 1.0 - 2.0 * (q.x * q.x + q.y * q.y))
-        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (q.w * q.y - q.z * q.x))))
-        u, vv, w = tw.linear.x, tw.linear.y, tw.linear.z
-        cy, sy, cp, sp, cr, sr = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch), math.cos(roll), \
-            math.sin(roll)
-        ve = cy * cp * u + (cy * sp * sr - sy * cr) * vv + (cy * sp * cr + sy * sr) * w
-        vn = sy * cp * u + (sy * sp * sr + cy * cr) * vv + (sy * sp * cr - cy * sr) * w
+        ve, vn, _ = (float(c) for c in matrix_from_quaternion(q.x, q.y, q.z, q.w)
+                     @ (tw.linear.x, tw.linear.y, tw.linear.z))
+        cp, cr, sr = math.cos(pitch), math.cos(roll), math.sin(roll)
         lat, lon, _ = geo.enu_to_geodetic(p.x, p.y, self.origin)
         # yaw rate about the world vertical (r of the body frame for a level vessel)
         r = (tw.angular.y * sr + tw.angular.z * cr) / cp if abs(cp) > 1e-9 else tw.angular.z

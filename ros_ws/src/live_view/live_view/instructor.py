@@ -43,6 +43,7 @@ import urllib.parse
 from typing import Deque, Dict, List, Optional, Tuple
 
 from live_view import client_input
+from sim_math.rotations import rpy_from_quaternion
 
 DEFAULT_HTTP_PORT = 8080
 DEFAULT_HTTP_RATE = 10.0  # Hz: samples, so the page's display period is 100 ms
@@ -65,10 +66,7 @@ FILES = {
 
 
 def _yaw_roll_pitch(q) -> Tuple[float, float, float]:
-    x, y, z, w = q.x, q.y, q.z, q.w
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    roll, pitch, yaw = (float(a) for a in rpy_from_quaternion(q.x, q.y, q.z, q.w))
     return yaw, roll, pitch
 
 

@@ -29,6 +29,7 @@ from rosgraph_msgs.msg import Clock
 from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
+from sim_math.rotations import yaw_from_quaternion
 from scenario_runner.scenario import Scenario, heading_rad, installed_executable, resolve
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
@@ -412,7 +413,7 @@ class Conductor(Node):
         if prev is not None and stamp <= prev[0]:
             return  # a repeat (transient local) or out of order: the state of that step is known
         q = msg.pose.pose.orientation
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
         if prev is not None:
             yaw = prev[1] + math.remainder(yaw - prev[1], 2.0 * math.pi)
         lin = msg.twist.twist.linear
