@@ -3,7 +3,9 @@
     PYTHONPATH=ros_ws/src/tug_dynamics python benchmarks/bench_vessels.py [--dt 0.05] [--update-readme]
 
 Prints a markdown table (median microseconds per Vessel.step call over 2000 calls after a
-warm-up, without and with one external wrench); --update-readme writes it between the
+warm-up, without and with one external wrench, and with one wrench plus the environment: gusty
+wind, a tidal sheared current and a bathymetry grid sampled by tug_dynamics.environment_loads
+before every step, the vessel node's per-step work); --update-readme writes it between the
 <!-- bench:start --> / <!-- bench:end --> markers of ros_ws/src/tug_dynamics/README.md.
 """
 from __future__ import annotations
@@ -20,9 +22,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "tug_dynamics"))
 sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "sim_math"))
+sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "sea_environment"))
 
 from tug_dynamics.ship_file import list_ship_files, load_ship  # noqa: E402
 from tug_dynamics.vessel import Command, ExternalWrench  # noqa: E402
+from tug_dynamics.environment_loads import VesselInEnvironment  # noqa: E402
+from sea_environment.environment import Environment  # noqa: E402
 
 README = os.path.join(HERE, "..", "ros_ws", "src", "tug_dynamics", "README.md")
 
@@ -39,12 +44,45 @@ def time_steps(vessel, dt, wrenches, n=2000, repeats=5):
     return float(np.median(best))
 
 
+def time_steps_in_environment(vessel, dt, wrenches, env, n=2000, repeats=5):
+    """As time_steps, with the environment sampled and applied before every step."""
+    coupling = VesselInEnvironment(vessel, env)
+    t = 0.0
+    for _ in range(200):
+        vessel.step(dt, list(wrenches) + coupling.prepare(t))
+        t += dt
+    best = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            vessel.step(dt, list(wrenches) + coupling.prepare(t))
+            t += dt
+        best.append((time.perf_counter() - t0) / n * 1e6)
+    return float(np.median(best))
+
+
+def bench_environment(tmpdir):
+    """Gusty 25 kn wind, a 2 kn tidal stream with shear, a 41 x 41 bathymetry grid (20-60 m)."""
+    grid = os.path.join(tmpdir, "bench_depth.asc")
+    with open(grid, "w") as f:
+        f.write("ncols 41\nnrows 41\nxllcorner -10000\nyllcorner -10000\ncellsize 500\n")
+        for i in range(41):
+            f.write(" ".join(f"{40.0 + 20.0 * math.sin(0.3 * i + 0.2 * j):.2f}" for j in range(41)) + "\n")
+    return Environment.from_mapping({
+        "wind": {"speed_kn": 25.0, "from_deg": 250.0, "gusts": True, "seed": 1},
+        "current": {"speed_kn": 2.0, "towards_deg": 80.0, "shear_per_s": 0.0005, "tidal_period_s": 44712.0},
+        "depth": {"grid": grid}})
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dt", type=float, default=0.05, help="step size, s (default 0.05 = 20 Hz)")
     ap.add_argument("--update-readme", action="store_true")
     a = ap.parse_args(argv)
     rows = []
+    import tempfile
+    tmp = tempfile.mkdtemp()
+    env = bench_environment(tmp)
     for path in list_ship_files():
         name = os.path.basename(path)
         try:
@@ -54,17 +92,23 @@ def main(argv=None):
             w = [ExternalWrench(np.array([1e3, 2e3, 0.0]), np.asarray(point, float))]
             t0 = time_steps(v, a.dt, ())
             t1 = time_steps(v, a.dt, w)
+            if v.windage is not None:
+                t2 = time_steps_in_environment(v, a.dt, w, env)
+                env_cell = f"{t2:.1f} ({100.0 * (t2 - t1) / t1:+.0f} %)"
+            else:
+                env_cell = "(no windage section)"
             sub = getattr(v, "hmax", None)
             nsub = math.ceil(a.dt / sub - 1e-9) if sub else "-"
-            rows.append(f"| {name} | {type(v).__name__} | {nsub} | {t0:.1f} | {t1:.1f} |")
+            rows.append(f"| {name} | {type(v).__name__} | {nsub} | {t0:.1f} | {t1:.1f} | {env_cell} |")
         except Exception as exc:  # noqa: BLE001 - report, keep timing the others
-            rows.append(f"| {name} | (not loadable: {type(exc).__name__}: {str(exc)[:60]}) | | | |")
+            rows.append(f"| {name} | (not loadable: {type(exc).__name__}: {str(exc)[:60]}) | | | | |")
     table = "\n".join([
         f"Step dt = {a.dt} s; {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
         f"median of 5 x 2000 calls.",
         "",
-        "| ship file | model | RK4 sub-steps per call | us / step | us / step, 1 wrench |",
-        "|---|---|---|---|---|",
+        "| ship file | model | RK4 sub-steps per call | us / step | us / step, 1 wrench | "
+        "us / step, 1 wrench + environment |",
+        "|---|---|---|---|---|---|",
         *rows])
     print(table)
     if a.update_readme:

@@ -3,6 +3,8 @@
 field, and every decoder must read back the fields of a message rclpy serialized. Names of
 many lengths shift every field after them across alignment boundaries. (Bytes themselves are
 not compared: rclpy's serializer leaves padding bytes uninitialised.)"""
+import math
+
 import numpy as np
 import pytest
 from geometry_msgs.msg import WrenchStamped
@@ -70,11 +72,19 @@ def test_vessel_status(vessel):
                        commands_rejected=7, commands_clamped=4_000_000_000)
     ref.header.frame_id = vessel + "/base_link"
     _stamp(ref.header)
-    for key, value in zip(cdr.VESSEL_STATUS_FLOATS_A + cdr.VESSEL_STATUS_FLOATS_B, list(a) + list(b)):
+    env = rng.normal(size=5)
+    ref.grounded = True
+    for key, value in zip(cdr.VESSEL_STATUS_FLOATS_A + cdr.VESSEL_STATUS_FLOATS_B + cdr.VESSEL_STATUS_FLOATS_ENV,
+                          list(a) + list(b) + list(env)):
         setattr(ref, key, float(value))
     data = cdr.VesselStatusEncoder(ref.header.frame_id, vessel).encode(STAMP_NS, ref.step, a, 3, b, True, 7,
-                                                                        4_000_000_000)
+                                                                        4_000_000_000, env, True)
     assert deserialize_message(data, VesselStatus) == ref
+    # without an environment: still air, deep water (infinite depth and clearance), afloat
+    plain = deserialize_message(cdr.VesselStatusEncoder(ref.header.frame_id, vessel).encode(
+        STAMP_NS, ref.step, a, 3, b, True, 7, 4_000_000_000), VesselStatus)
+    assert (plain.apparent_wind_speed, plain.squat, plain.grounded) == (0.0, 0.0, False)
+    assert math.isinf(plain.water_depth) and math.isinf(plain.under_keel_clearance)
 
 
 @pytest.mark.parametrize("frame", NAMES)

@@ -76,6 +76,15 @@ CASES = {
     "current_nan": ([("current: [0.0, 0.0]", "current: [0.0, .nan]")], {}, ["environment.current"]),
     "current_three_numbers": ([("current: [0.0, 0.0]", "current: [0.0, 0.0, 0.0]")], {}, ["environment.current"]),
     "water_density_1e-9": ([("water_density: 1025.0", "water_density: 1.0e-9")], {}, ["environment.water_density"]),
+    "depth_negative": ([("current: [0.0, 0.0]", "current: [0.0, 0.0], depth: -4.0")], {}, ["environment.depth"]),
+    "depth_grid_missing": ([("current: [0.0, 0.0]", "current: [0.0, 0.0], depth: {grid: nowhere.asc}")], {},
+                           ["environment.depth.grid", "nowhere.asc", "not found"]),
+    "depth_grid_negative_entry": ([("current: [0.0, 0.0]", "current: [0.0, 0.0], depth: {grid: bad.asc}")],
+                                  {"bad.asc": "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n"
+                                              "5.0 6.0\n5.0 -2.0\n"},
+                                  ["environment.depth.grid", "bad.asc: line 7, column 2: depth -2.0 m is negative"]),
+    "wind_without_direction": ([("current: [0.0, 0.0]", "current: [0.0, 0.0], wind: {speed_kn: 20.0}")], {},
+                               ["environment.wind.from_deg"]),
     "turn_rate_100deg_s": ([("speed: 0.0}\n  - name: barge", "speed: 0.0}\n    motion: {type: turn, speed: 2.0, "
                              "turn_rate_deg: 100.0, turn_duration: 10.0}\n  - name: barge")], {},
                            ["vessels[0].motion.turn_rate_deg"]),

@@ -15,6 +15,6 @@ setup(
     maintainer="Tug simulator maintainers",
     maintainer_email="maintainer@tugsim.example.org",
     description="ROS-free models of the environment the vessels and ropes work in: wind (mean profile and "
-                "gusts from the NPD / ISO 19901-1 spectrum).",
+                "gusts from the NPD / ISO 19901-1 spectrum; Blendermann wind loads), depth and shallow water, currents.",
     license="Apache-2.0",
 )

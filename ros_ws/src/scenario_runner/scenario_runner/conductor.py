@@ -30,7 +30,7 @@ from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
 from sim_math.rotations import yaw_from_quaternion
-from scenario_runner.scenario import Scenario, heading_rad, installed_executable, resolve
+from scenario_runner.scenario import Scenario, environment_parameter, heading_rad, installed_executable, resolve
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import shm_hygiene
@@ -121,8 +121,11 @@ def _yaml_value(value) -> str:
 
 def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeSpec]:
     """The nodes a scenario needs, with their parameters (run_id: the run they belong to)."""
-    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True, "run_id": run_id,
-              "current_east": float(sc.environment.current[0]), "current_north": float(sc.environment.current[1])}
+    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True, "run_id": run_id}
+    if sc.environment.is_uniform:
+        common.update(current_east=float(sc.environment.current[0]), current_north=float(sc.environment.current[1]))
+    else:
+        common["environment"] = environment_parameter(sc, scenario_path)
     specs = []
     for v in sc.vessels:
         params = {"ship_file": resolve("tug_dynamics", "ships", v.ship_file, scenario_path),

@@ -6,6 +6,9 @@ starts; every error names the file, the key and what was expected.
     exchange_rate: 50.0        # Hz, vessel <-> rope exchange
     mode: lockstep             # lockstep (as fast as possible) | realtime (paced on the wall clock)
     environment: {current: [0.0, 0.0], water_density: 1025.0, gravity: 9.80665}
+    # or with wind, a current field and depth (sea_environment/environment.py has the format):
+    # environment: {wind: {speed_kn: 25, from_deg: 270}, depth: 14.0,
+    #               current: {speed_kn: 1.5, towards_deg: 90, tidal_period_s: 44712}}
     vessels:
       - name: tug              # ROS namespace
         ship_file: harbour_tug.yaml
@@ -29,12 +32,14 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from typing import Any, Dict, List, Literal, Optional
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
 from bridge_instruments.geo import DEFAULT_ORIGIN, KNOT
+from sea_environment.environment import DepthGridSpec, EnvironmentSpec
 from sim_math.input_files import YamlInputError, load_yaml
 
 
@@ -55,11 +60,16 @@ Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD)]
 Point3 = Annotated[List[Coord], Field(min_length=3, max_length=3)]
 
 
-class Environment(_Strict):
-    current: Annotated[List[Annotated[float, Field(ge=-MAX_CURRENT, le=MAX_CURRENT)]],
-                       Field(min_length=2, max_length=2)] = [0.0, 0.0]  # east, north, m/s
+class Environment(EnvironmentSpec):
+    """wind, current (uniform [east, north] m/s or a field), depth: sea_environment.environment
+    (its docstring has the format); water density and gravity for every node."""
     water_density: float = Field(1025.0, gt=900.0, lt=1100.0)
     gravity: float = Field(9.80665, gt=9.0, lt=10.5)
+
+    @property
+    def is_uniform(self) -> bool:
+        """Only a uniform current: the nodes' current_east / current_north carry it all."""
+        return self.wind is None and self.depth is None and isinstance(self.current, list)
 
 
 def _number(value, key: str) -> float:
@@ -325,11 +335,16 @@ class Scenario(_Strict):
 def _key_path(loc) -> str:
     out = ""
     for part in loc:
+        if isinstance(part, str) and _UNION_BRANCH.search(part):
+            continue   # pydantic's name of a Union member (list[...], constrained-float, CurrentFieldSpec)
         if isinstance(part, int):
             out += f"[{part}]"
         else:
             out += ("." if out else "") + str(part)
     return out
+
+
+_UNION_BRANCH = re.compile(r"\[|^constrained-|^function-|^[A-Z][A-Za-z0-9]*Spec$|^float$|^int$")
 
 
 def _explain(err: dict) -> str:
@@ -619,10 +634,34 @@ def _check_files(path: str, sc: Scenario) -> None:
             if pa is not None and pb is not None and math.dist(pa, pb) < 1e-6:
                 raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
                                     "a straight rope needs two distinct end points")
+    depth = sc.environment.depth
+    if isinstance(depth, DepthGridSpec):
+        from sea_environment.bathymetry import DepthGrid
+        try:
+            DepthGrid.load(depth_grid_path(depth, path))
+        except ValueError as exc:
+            raise ScenarioError(f"{path}: key 'environment.depth.grid': {exc}") from None
     for i, a in enumerate(sc.autopilots):
         if installed_executable(a.package, a.executable) is None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
+
+
+def depth_grid_path(depth: DepthGridSpec, scenario_path: str) -> str:
+    """A depth grid's path: absolute, or relative to the scenario file."""
+    if os.path.isabs(depth.grid):
+        return depth.grid
+    return os.path.join(os.path.dirname(os.path.abspath(scenario_path)), depth.grid)
+
+
+def environment_parameter(sc: Scenario, scenario_path: str) -> str:
+    """The scenario's environment as the nodes' `environment` parameter (JSON, a YAML subset;
+    a depth grid's path made absolute)."""
+    import json
+    data = sc.environment.model_dump()
+    if isinstance(sc.environment.depth, DepthGridSpec):
+        data["depth"] = {"grid": depth_grid_path(sc.environment.depth, scenario_path)}
+    return json.dumps(data)
 
 
 def heading_rad(v: VesselSpec) -> float:

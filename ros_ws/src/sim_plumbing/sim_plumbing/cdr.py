@@ -168,6 +168,9 @@ class AttachmentArrayEncoder:
 
 VESSEL_STATUS_FLOATS_A = ("engine_order", "steering_angle_ordered", "steering_angle", "shaft_speed", "thrust")
 VESSEL_STATUS_FLOATS_B = ("speed_through_water", "heel", "trim", "rise", "girting_ratio", "girting_threshold")
+# the environment block (tug_dynamics.environment_loads.EnvironmentStatus), then `grounded`
+VESSEL_STATUS_FLOATS_ENV = ("apparent_wind_speed", "apparent_wind_angle", "water_depth", "squat",
+                            "under_keel_clearance")
 
 
 class VesselStatusEncoder:
@@ -176,6 +179,7 @@ class VesselStatusEncoder:
     _A = struct.Struct("<5dB")
     _B = struct.Struct("<6d?")
     _C = struct.Struct("<II")
+    _D = struct.Struct("<5d?")
 
     def __init__(self, frame_id: str, vessel: str):
         t = self.t = Template()
@@ -185,12 +189,14 @@ class VesselStatusEncoder:
         t.slot(self._A, 8)   # 5 doubles, anchor_state
         t.slot(self._B, 8)   # 6 doubles, girting_warning
         t.slot(self._C, 4)   # commands_rejected, commands_clamped
+        t.slot(self._D, 8)   # environment: 5 doubles, grounded
         t.seal()
 
     def encode(self, stamp_ns: int, step: int, floats_a: Sequence[float], anchor_state: int,
-               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int) -> bytes:
+               floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int,
+               floats_env: Sequence[float] = (0.0, 0.0, math.inf, 0.0, math.inf), grounded: bool = False) -> bytes:
         return self.t.pack(stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state),
-                           (*floats_b, girting_warning), (rejected, clamped))
+                           (*floats_b, girting_warning), (rejected, clamped), (*floats_env, grounded))
 
 
 class WrenchStampedEncoder:

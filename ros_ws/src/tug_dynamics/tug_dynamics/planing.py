@@ -29,7 +29,7 @@ KNOT = 1852.0 / 3600.0
 _SCHEMA: Dict[str, Dict[str, bool]] = {
     "": {"model": True, "name": False, "description": False, "sources": False, "estimated": True,
          "environment": True, "hull": True, "resistance": True, "hydrodynamics": True,
-         "waterjet": True, "integration": False, "attachments": True},
+         "waterjet": True, "integration": False, "attachments": True, "windage": False},
     "environment": {"water_density": True, "gravity": True, "kinematic_viscosity": True},
     "hull": {"length_overall": True, "beam": True, "draft": True, "mass": True,
              "reference_point_from_transom": True, "chine_beam": True, "deadrise_deg": True,
@@ -48,6 +48,8 @@ _SCHEMA: Dict[str, Dict[str, bool]] = {
                  "position": True, "rated_impeller_rpm": True, "impeller_ramp_time": True,
                  "bucket_max_deg": True, "bucket_rate_deg_s": True},
     "integration": {"max_substep": True},
+    "windage": {k: True for k in ("type", "frontal_area", "lateral_area", "centroid_x", "centroid_height",
+                                  "length_overall")},
 }
 _POLY_ROWS = {"Y_vdot": pc.C_YVD, "Y_rdot": pc.C_YRD, "Y_v": pc.C_YV, "Y_r": pc.C_YR,
               "N_vdot": pc.C_NVD, "N_rdot": pc.C_NRD, "N_v": pc.C_NV, "N_r": pc.C_NR,
@@ -201,6 +203,15 @@ class PlaningHull(Vessel):
         boat = cls(name or str(cfg.get("name", "planing_hull")), P, C, rtab, hull, attachments,
                    limits, source, initial_state)
         boat.length = c.num("hull.length_overall", 0.0, 200.0, strict_lo=True)  # the L of the IMO criteria
+        boat.beam = c.num("hull.beam", 0.0, 50.0, strict_lo=True)
+        boat.draft = c.num("hull.draft", 0.0, 20.0, strict_lo=True)
+        boat.volume = hull.mass / hull.water_density
+        if "windage" in cfg:
+            from sea_environment.wind_loads import Windage
+            try:
+                boat.windage = Windage.from_config(cfg["windage"])
+            except ValueError as exc:
+                raise ShipFileError(f"{source}: key '{str(exc).split(':')[0]}': {str(exc).split(': ', 1)[1]}") from None
         return boat
 
     # ------------------------------------------------------------------ Vessel interface

@@ -97,6 +97,8 @@ class PrescribedMotion(Vessel):
         self.law = law
         self.name = base.name
         self.attachments = base.attachments
+        self.length, self.beam, self.draft, self.volume = base.length, base.beam, base.draft, base.volume
+        self.windage = base.windage
         self.time = 0.0
         self.set_state(base.state)
 

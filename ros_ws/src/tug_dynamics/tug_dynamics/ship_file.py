@@ -167,6 +167,16 @@ def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[Ves
     ship = validate_displacement(src, cfg, overrides=bool(overrides))
     vessel = _build_displacement(src, ship, name, initial_state)
     vessel.length = float(ship.hull.length)
+    vessel.beam, vessel.draft = float(ship.hull.beam), float(ship.hull.draft)
+    vessel.volume = float(ship.hull.mass) / float(ship.water_density)
+    if ship.windage is not None:
+        from sea_environment.wind_loads import Windage
+        w = ship.windage
+        try:
+            vessel.windage = Windage(w.type, w.frontal_area, w.lateral_area, w.centroid_x, w.centroid_height,
+                                     w.length_overall)
+        except ValueError as exc:   # names the key: windage.<key>: ...
+            raise ShipFileError(f"{src}: key {exc}") from None
     if not overrides:      # an override may remove sections the estimates refer to
         _check_estimated(src, cfg)
     return vessel

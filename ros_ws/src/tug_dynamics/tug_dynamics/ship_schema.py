@@ -18,6 +18,8 @@ from typing import Any, Dict, List, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Field
 from typing_extensions import Annotated
 
+from sea_environment.wind_loads import BLENDERMANN_TABLE
+
 G = 9.80665
 
 
@@ -193,6 +195,16 @@ class TowlineSimple(_S):
     gamma_max_deg: float = _num(-90.0, 90.0)
 
 
+class Windage(_S):
+    """Above-water particulars for the wind loads (Blendermann 1994, sea_environment.wind_loads)."""
+    type: Literal[tuple(BLENDERMANN_TABLE)]          # Blendermann's ship type
+    frontal_area: float = _num(gt=0.0)               # m^2, A_F, projected on the midship section
+    lateral_area: float = _num(gt=0.0)               # m^2, A_L, projected on the centreplane
+    centroid_x: float                                # m, A_L's centroid forward of the reference point
+    centroid_height: float = _num(gt=0.0)            # m, A_L's centroid above the waterline
+    length_overall: float = _num(gt=0.0)             # m
+
+
 class Integration(_S):
     # RK4 sub-step: 1 ms (20 sub-steps per 50 Hz exchange) .. 2 s; smaller only burns CPU
     # (1e-7 s would take days per simulated minute), larger misses the time constants
@@ -218,6 +230,7 @@ class DisplacementShip(_S):
     towline_simple: Optional[TowlineSimple] = None
     attachments: Optional[Dict[str, Vec3]] = None
     integration: Optional[Integration] = None
+    windage: Optional[Windage] = None
     current: Vec2 = Field(default_factory=lambda: [0.0, 0.0])   # m/s east, north; |c| <= 10 (cross_checks)
 
 

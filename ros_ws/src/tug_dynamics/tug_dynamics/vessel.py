@@ -143,6 +143,13 @@ class Vessel(ABC):
     # The ship file's length (hull.length, or hull.length_overall of a planing hull), m: the L
     # of the IMO manoeuvring criteria. Set by ship_file.load_ship.
     length: float = math.nan
+    # Hull particulars the environment needs (set by ship_file.load_ship): beam, draft (m),
+    # displaced volume (m^3) for shallow water and squat; windage (sea_environment.wind_loads.
+    # Windage, the ship file's `windage` section, None without one) for the wind loads.
+    beam: float = math.nan
+    draft: float = math.nan
+    volume: float = math.nan
+    windage = None
 
     # ---- commands ---------------------------------------------------------------------
     @property

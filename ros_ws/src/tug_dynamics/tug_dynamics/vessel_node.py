@@ -33,6 +33,8 @@ from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
 from sim_plumbing import ros_common as rc
 from sim_plumbing.scene import HullDimensions, VesselScene
+from sea_environment.environment import Environment
+from tug_dynamics.environment_loads import EnvironmentStatus, VesselInEnvironment
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
 from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
@@ -41,6 +43,8 @@ from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vesse
 # the status record's float fields in message order (every model's StatusRecord has them all)
 _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
 _STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
+_STATUS_FLOATS_ENV = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_ENV)
+_STILL_DEEP = EnvironmentStatus()   # what status reports without an environment
 
 
 def _merged(base: dict, over: Optional[dict]) -> dict:
@@ -89,6 +93,9 @@ class VesselNode(SteppedNode):
             "Heading of a prescribed motion: track (follows the track tangent) or fixed"))
         self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
         self.declare_parameter("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
+        self.declare_parameter("environment", "", rc.text_param(
+            "The run's environment as YAML (a scenario's environment section: wind, current, depth; "
+            "sea_environment.environment); '' = still air, deep water, current_east / current_north"))
         self.declare_parameter("marker_rate", 10.0, rc.float_param(
             "Rate of the scene markers (hull, attachments, force arrows; at most the exchange rate)", 0.1, 1000.0, "Hz"))
         self.declare_parameter("marker_force_scale", 1e-4, rc.float_param(
@@ -133,6 +140,8 @@ class VesselNode(SteppedNode):
         current = np.array([self.get_parameter("current_east").value, self.get_parameter("current_north").value, 0.0])
         if np.any(current):   # 0, 0 keeps the ship file's own current
             self.model.set_current(current)
+        self.surroundings = self._environment(self.get_parameter("environment").value, current)
+        self._was_grounded = False
 
         self.rejected = 0
         self.clamped = 0
@@ -164,6 +173,23 @@ class VesselNode(SteppedNode):
             f"vessel '{self.vessel_name}' from {path}: {type(self.model).__name__}, "
             f"attachments {sorted(self.model.attachments)}, {1e9 / self.period_ns:g} Hz, "
             f"{'lockstep' if self.lockstep else 'free-running'}")
+
+    def _environment(self, text: str, current: np.ndarray) -> Optional[VesselInEnvironment]:
+        """The environment coupling, or None when the parameter is empty (the uniform current of
+        current_east / current_north or the ship file then applies, as before)."""
+        if not text:
+            return None
+        data = yaml.safe_load(text)
+        if data is not None and not isinstance(data, dict):
+            raise ValueError(f"parameter environment:={text!r}: expected a YAML mapping")
+        data = dict(data or {})
+        if np.any(current):
+            raise ValueError("parameters current_east / current_north and environment both give a current: "
+                             "use environment.current")
+        rho = float(data.pop("water_density", 1025.0))
+        data.pop("gravity", None)
+        env = Environment.from_mapping(data, "parameter environment")
+        return VesselInEnvironment(self.model, env, rho_water=rho)
 
     # -- inputs --------------------------------------------------------------------------
     def accept_input(self, spec: StepInput, msg) -> bool:
@@ -227,6 +253,18 @@ class VesselNode(SteppedNode):
             wrenches.append(ExternalWrench(force_world=rot @ np.array(msg.force), point_body=point,
                                            moment_world=rot @ np.array(msg.torque)))
             self._rope_forces[topic] = (point, msg.force)
+        if self.surroundings is not None:
+            wrenches += self.surroundings.prepare(self.step_index * self.dt)
+            grounded = self.surroundings.status.grounded
+            if grounded != self._was_grounded:
+                st = self.surroundings.status
+                self._was_grounded = grounded
+                self.emit_event("grounded" if grounded else "refloated",
+                                f"under-keel clearance {st.under_keel_clearance:.2f} m (depth {st.water_depth:.2f} m, "
+                                f"draft {self.model.draft:.2f} m, squat {st.squat:.2f} m)", st.under_keel_clearance)
+                log = self.get_logger().warning if grounded else self.get_logger().info
+                log(f"vessel '{self.vessel_name}' {'ran aground' if grounded else 'is afloat again'} at step "
+                    f"{self.step_index}: under-keel clearance {st.under_keel_clearance:.2f} m")
         self.model.step(self.dt, wrenches)
         self._check_finite()
 
@@ -282,9 +320,10 @@ class VesselNode(SteppedNode):
                                 stamp_ns)
 
         st = self.model.status()
+        env = self.surroundings.status if self.surroundings is not None else _STILL_DEEP
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
-            st.girting_warning, self.rejected, self.clamped), stamp_ns)
+            st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded), stamp_ns)
         if self.step_index % self.marker_every == 0:
             self.marker_pub.publish(self.scene.markers(stamp_ns, st.thrust, list(self._rope_forces.values()),
                                                        self.force_scale), stamp_ns)

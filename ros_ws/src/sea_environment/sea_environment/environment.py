@@ -1,0 +1,213 @@
+"""The environment of a run in one object: wind, current and depth as fields in space and time,
+built from the scenario's ``environment`` section. Pure numpy/scipy, no ROS. The vessel and rope
+nodes sample it where their bodies and elements are, once per exchange step.
+
+Scenario form (knots and compass degrees true at this edge, SI inside)::
+
+    environment:
+      wind: {speed_kn: 30.0, from_deg: 270.0, gusts: true, seed: 7}   # 1-hour mean at 10 m
+      current: [0.3, 0.0]                  # uniform, m/s east, north; or a field:
+      current: {speed_kn: 2.0, towards_deg: 90.0,        # along the stream's axis
+                shear_per_s: 0.001,        # + this speed (m/s) per metre to the stream's left
+                tidal_period_s: 44712.0,   # reversing stream: speed * cos(2 pi t / T + phase)
+                phase_deg: 0.0}
+      depth: 15.0                          # uniform, m; or a bathymetry grid:
+      depth: {grid: harbour.asc}           # ESRI ASCII grid (bathymetry.py), path relative to the scenario
+
+Without ``wind`` the air is still; without ``depth`` the water is deep (no shallow-water effects,
+no seabed). The current field is the analytic one above: a steady or tidally reversing stream
+with a linear cross-stream shear (a channel's edge or a river bend's outer side: the speed grows
+towards one bank). Everything is validated here (pydantic, strict): a bad value fails before any
+node starts, naming the key.
+"""
+from __future__ import annotations
+
+import math
+import re
+from typing import List, Optional, Union
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+from typing_extensions import Annotated
+
+from .bathymetry import DepthGrid
+from .wind import KNOT, GustRecord
+
+# pydantic's names of Union members in an error's location (list[...], constrained-float, ...Spec)
+_UNION_BRANCH = re.compile(r"\[|^constrained-|^function-|^[A-Z][A-Za-z0-9]*Spec$|^float$|^int$")
+MAX_CURRENT = 10.0  # m/s (about 19 kn): faster than any tidal stream or river a tow works in
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+class WindSpec(_Strict):
+    speed_kn: float = Field(ge=0.0, le=120.0)       # 1-hour mean at 10 m; 120 kn: beyond hurricane force
+    from_deg: float = Field(ge=-360.0, le=360.0)     # compass, where it comes from
+    gusts: bool = True                               # NPD / ISO 19901-1 gusts (wind.py)
+    seed: int = Field(0, ge=0)
+
+
+class CurrentFieldSpec(_Strict):
+    speed_kn: float = Field(ge=0.0, le=MAX_CURRENT / KNOT)
+    towards_deg: float = Field(ge=-360.0, le=360.0)  # compass, where the stream sets (flood direction)
+    shear_per_s: float = Field(0.0, ge=-0.1, le=0.1)  # d(speed)/d(distance to the stream's left), 1/s
+    tidal_period_s: Optional[float] = Field(None, gt=60.0, le=1e6)
+    phase_deg: float = Field(0.0, ge=-360.0, le=360.0)
+    # half-width of the stream (m) beyond which the shear stops growing (keeps the speed bounded)
+    half_width_m: float = Field(2000.0, gt=0.0, le=1e6)
+
+
+class DepthGridSpec(_Strict):
+    grid: str = Field(min_length=1)                 # ESRI ASCII grid file (bathymetry.py)
+
+
+Uniform2 = Annotated[List[Annotated[float, Field(ge=-MAX_CURRENT, le=MAX_CURRENT)]],
+                     Field(min_length=2, max_length=2)]
+
+
+class EnvironmentSpec(_Strict):
+    current: Union[Uniform2, CurrentFieldSpec] = [0.0, 0.0]
+    wind: Optional[WindSpec] = None
+    depth: Optional[Union[Annotated[float, Field(gt=0.0, le=12000.0)], DepthGridSpec]] = None
+
+
+def _towards(deg: float) -> np.ndarray:
+    """Unit vector (east, north) of a compass direction (0 = north, clockwise)."""
+    th = math.radians(deg)
+    return np.array([math.sin(th), math.cos(th)])
+
+
+class WindField:
+    """The air's velocity over ground (east, north), m/s: the NPD mean profile with one gust
+    record along the mean direction (gusts are taken as coherent over the scene: a tow is a few
+    hundred metres, the gusts that move a ship are tens of seconds, i.e. several hundred metres)."""
+
+    def __init__(self, spec: WindSpec):
+        self.u10 = spec.speed_kn * KNOT
+        self.direction = tuple(-_towards(spec.from_deg))  # it blows towards the opposite of "from"
+        self.record = GustRecord(self.u10, 10.0, seed=spec.seed) if spec.gusts else None
+
+    def speed_at_10m(self, t: float) -> float:
+        return self.record.speed(t) if self.record is not None else self.u10
+
+    def velocity_xy(self, t: float) -> tuple:
+        """(east, north) m/s at 10 m: the scalar form a vessel needs every step."""
+        s10 = self.speed_at_10m(t)
+        return s10 * self.direction[0], s10 * self.direction[1]
+
+    def velocity(self, t: float, z=10.0):
+        """(2,) for a scalar height, (N, 2) for heights (N,); heights below 1 m count as 1 m."""
+        s10 = self.speed_at_10m(t)
+        if self.u10 <= 0.0:
+            return np.zeros(2) if np.ndim(z) == 0 else np.zeros((np.size(z), 2))
+        ratio = _profile_ratio(self.u10, np.maximum(np.asarray(z, float), 1.0))
+        return np.multiply.outer(s10 * ratio, np.array(self.direction))
+
+
+def _profile_ratio(u10: float, z):
+    """U(z) / U(10 m) of the ISO 19901-1 mean profile (wind.mean_speed_at)."""
+    c = 5.73e-2 * math.sqrt(1.0 + 0.148 * u10)
+    return 1.0 + c * np.log(z / 10.0)
+
+
+class CurrentField:
+    """Water velocity over ground (east, north), m/s, at (x, y) and time t (CurrentFieldSpec)."""
+
+    def __init__(self, spec: Union[List[float], CurrentFieldSpec]):
+        if isinstance(spec, CurrentFieldSpec):
+            self.axis = tuple(_towards(spec.towards_deg))
+            self.left = (-self.axis[1], self.axis[0])
+            self.speed = spec.speed_kn * KNOT
+            self.shear = spec.shear_per_s
+            self.half_width = spec.half_width_m
+            self.omega = 2.0 * math.pi / spec.tidal_period_s if spec.tidal_period_s else 0.0
+            self.phase = math.radians(spec.phase_deg)
+            self.uniform = None
+        else:
+            self.uniform = (float(spec[0]), float(spec[1]))
+        self.varies_in_space = self.uniform is None and self.shear != 0.0
+        self.varies_in_time = self.uniform is None and self.omega != 0.0
+
+    def velocity_xy(self, t: float, x: float, y: float) -> tuple:
+        """(east, north) m/s at one point: the scalar form a vessel needs every step."""
+        if self.uniform is not None:
+            return self.uniform[0], self.uniform[1]
+        s = min(max(x * self.left[0] + y * self.left[1], -self.half_width), self.half_width)
+        speed = self.speed + self.shear * s
+        if self.omega:
+            speed *= math.cos(self.omega * t + self.phase)
+        return speed * self.axis[0], speed * self.axis[1]
+
+    def velocity(self, t: float, x, y):
+        """(2,) for scalar x, y; (N, 2) for arrays."""
+        if self.uniform is not None:
+            u = np.array(self.uniform)
+            return u if np.ndim(x) == 0 else np.tile(u, (np.size(x), 1))
+        s = np.clip(np.asarray(x, float) * self.left[0] + np.asarray(y, float) * self.left[1],
+                    -self.half_width, self.half_width)
+        speed = self.speed + self.shear * s
+        if self.omega:
+            speed = speed * math.cos(self.omega * t + self.phase)
+        return np.multiply.outer(speed, np.array(self.axis))
+
+
+class DepthField:
+    """Water depth (m, positive) below the still surface at (x, y); math.inf = deep water."""
+
+    def __init__(self, spec, base_dir: str = "."):
+        self.grid = None
+        self.uniform = math.inf
+        if isinstance(spec, DepthGridSpec):
+            import os
+            path = spec.grid if os.path.isabs(spec.grid) else os.path.join(base_dir, spec.grid)
+            self.grid = DepthGrid.load(path)
+        elif spec is not None:
+            self.uniform = float(spec)
+
+    @property
+    def is_deep(self) -> bool:
+        return self.grid is None and math.isinf(self.uniform)
+
+    def at(self, x, y):
+        if self.grid is not None:
+            return self.grid.depth_at(x, y)
+        return self.uniform if np.ndim(x) == 0 else np.full(np.size(x), self.uniform)
+
+
+class Environment:
+    """Wind, current and depth of a run (an EnvironmentSpec made into fields)."""
+
+    def __init__(self, spec: Optional[EnvironmentSpec] = None, base_dir: str = "."):
+        spec = spec if spec is not None else EnvironmentSpec()
+        self.spec = spec
+        self.wind = WindField(spec.wind) if spec.wind is not None else None
+        self.current = CurrentField(spec.current)
+        self.depth = DepthField(spec.depth, base_dir)
+
+    @staticmethod
+    def from_mapping(data: Optional[dict], source: str = "environment", base_dir: str = ".") -> "Environment":
+        """From a plain mapping (a scenario's ``environment`` without water_density / gravity);
+        a bad entry raises ValueError naming `source` and the key."""
+        from pydantic import ValidationError
+        try:
+            spec = EnvironmentSpec.model_validate(data or {})
+        except ValidationError as exc:
+            lines = []
+            for err in exc.errors():
+                key = ".".join(str(p) for p in err["loc"] if not _UNION_BRANCH.search(str(p)))
+                lines.append(f"{source}: key '{key}': {err['msg']} (got {err.get('input')!r})")
+            raise ValueError("\n".join(lines)) from None
+        return Environment(spec, base_dir)
+
+    def wind_velocity(self, t: float, z=10.0):
+        if self.wind is None:
+            return np.zeros(2) if np.ndim(z) == 0 else np.zeros((np.size(z), 2))
+        return self.wind.velocity(t, z)
+
+    def current_velocity(self, t: float, x, y):
+        return self.current.velocity(t, x, y)
+
+    def depth_at(self, x, y):
+        return self.depth.at(x, y)

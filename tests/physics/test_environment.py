@@ -1,0 +1,264 @@
+"""The environment on a vessel (issue 18): Blendermann wind loads, free drift in a beam wind, a
+vessel in a current, squat, grounding, the bathymetry grid and the environment's bad input.
+No ROS; each truth is computed by hand here, independently of the code under test."""
+import math
+
+import numpy as np
+import pytest
+
+from sea_environment.bathymetry import BathymetryError, DepthGrid
+from sea_environment.environment import Environment
+from sea_environment.shallow_water import squat
+from sea_environment.wind import KNOT
+from sea_environment.wind_loads import BLENDERMANN_TABLE, Windage, blendermann_coefficients, wind_wrench_body
+from tug_dynamics.environment_loads import GROUND_FRICTION, VesselInEnvironment
+from tug_dynamics.ship_file import ShipFileError, load_ship
+from tug_dynamics.vessel import Command, VesselState
+
+RHO_AIR = 1.225
+
+
+# ---- Blendermann (1994) ---------------------------------------------------------------------
+# His Table 2 as printed (CD_t, CD_l,AF bow, CD_l,AF stern, delta, kappa) for three types, typed
+# here from the paper, not from the module.
+PUBLISHED = {"container_ship_loaded": (0.90, 0.55, 0.55, 0.40, 1.4),
+             "tanker_loaded": (0.70, 0.90, 0.55, 0.40, 3.1),
+             "offshore_supply_vessel": (0.90, 0.55, 0.80, 0.55, 1.2)}
+
+
+@pytest.mark.parametrize("ship_type", sorted(PUBLISHED))
+def test_blendermann_table_matches_the_paper(ship_type):
+    assert BLENDERMANN_TABLE[ship_type] == pytest.approx(PUBLISHED[ship_type], abs=1e-12)
+
+
+@pytest.mark.parametrize("deg", [0.0, 30.0, 60.0, 90.0, 120.0, 150.0, 180.0])
+def test_blendermann_curves_at_tabulated_angles(deg):
+    """C_X, C_Y, C_K, C_N of a container ship against Blendermann's formulas worked by hand."""
+    w = Windage("container_ship_loaded", frontal_area=420.0, lateral_area=2250.0, centroid_x=-4.0,
+                centroid_height=7.0, length_overall=183.0)
+    cdt, bow, stern, delta, kappa = PUBLISHED["container_ship_loaded"]
+    g = math.radians(deg)
+    cdlaf = bow if deg <= 90.0 else stern
+    cdl = cdlaf * 420.0 / 2250.0
+    den = 1.0 - 0.5 * delta * (1.0 - cdl / cdt) * math.sin(2.0 * g) ** 2
+    cy = cdt * math.sin(g) / den
+    expect = (-cdlaf * math.cos(g) / den, cy, kappa * 7.0 / (2250.0 / 183.0) * cy,
+              (-4.0 / 183.0 - 0.18 * (g - math.pi / 2.0)) * cy)
+    assert blendermann_coefficients(g, w) == pytest.approx(expect, abs=1e-12)
+    # the published limits: head wind C_X = -CD_l,AF(bow), beam wind C_Y = CD_t, stern wind +CD_l,AF(stern)
+    if deg == 0.0:
+        assert blendermann_coefficients(g, w)[0] == pytest.approx(-bow)
+    if deg == 90.0:
+        assert blendermann_coefficients(g, w)[1] == pytest.approx(cdt)
+    if deg == 180.0:
+        assert blendermann_coefficients(g, w)[0] == pytest.approx(stern)
+
+
+def test_wind_from_port_pushes_to_starboard_and_turns_the_bow_downwind():
+    """REP-103 signs: a port beam wind gives -Y; a centroid forward of midship makes the bow fall
+    off to starboard (N < 0); mirrored for a starboard wind."""
+    w = Windage("offshore_supply_vessel", 42.0, 105.0, 2.0, 2.8, 26.0)
+    fx, fy, xp, zp, n = wind_wrench_body(20.0, math.pi / 2, w)
+    q = 0.5 * RHO_AIR * 400.0
+    assert fx == pytest.approx(0.0, abs=1e-9)
+    assert fy == pytest.approx(-q * 105.0 * 0.90, rel=1e-12)
+    assert xp == pytest.approx(2.0) and n < 0.0 and zp == pytest.approx(1.2 * 2.8)
+    fx2, fy2, xp2, zp2, n2 = wind_wrench_body(20.0, -math.pi / 2, w)
+    assert (fy2, n2) == pytest.approx((-fy, -n))
+
+
+def test_beam_wind_free_drift_reaches_the_hand_calculated_speed():
+    """Box barge free in a steady 20 m/s beam wind: the drift speed v where
+    1/2 rho_a (V - v)^2 A_L CD_t = 1/2 rho L T |Y'vv| v^2 (Y'vv the file's cross-flow term; at
+    u = r = 0 the hull's other sway terms vanish), i.e. v = k V / (1 + k),
+    k = sqrt(rho_a A_L CD_t / (rho L T |Y'vv|))."""
+    barge = load_ship("box_barge_000.yaml")
+    env = Environment.from_mapping({"wind": {"speed_kn": 20.0 / KNOT, "from_deg": 0.0, "gusts": False}})
+    coupling = VesselInEnvironment(barge, env)
+    dt = 0.05
+    for i in range(8000):            # 400 s: the drift's time constant is about 30 s
+        barge.step(dt, coupling.prepare(i * dt))
+    k = math.sqrt(RHO_AIR * 25.0 * 0.70 / (1025.0 * 50.0 * 0.5 * 1.0))
+    v_hand = k * 20.0 / (1.0 + k)
+    vel = barge.state.linear_velocity_body
+    # a north wind drives the barge (heading east) south: to starboard, -y body
+    assert -vel[1] == pytest.approx(v_hand, rel=1e-3)
+    assert abs(vel[0]) < 1e-6 and abs(barge.state.rpy[2]) < 1e-6
+    assert coupling.status.apparent_wind_speed == pytest.approx(20.0 - v_hand, rel=1e-3)
+    assert coupling.status.apparent_wind_angle == pytest.approx(math.pi / 2, abs=1e-9)
+
+
+@pytest.mark.parametrize("ship", ["harbour_tug.yaml", "box_barge_000.yaml", "s175_003.yaml",
+                                  "barge_002_full.yaml", "planing_40ft.yaml"])
+def test_unpowered_vessel_drifting_with_the_current_stays_with_it(ship):
+    """Galilean invariance: a vessel whose velocity over ground is the current's has no velocity
+    through the water, so no hydrodynamic force; it keeps drifting with the stream, heading kept."""
+    vessel = load_ship(ship)
+    env = Environment.from_mapping({"current": {"speed_kn": 2.0, "towards_deg": 45.0}})
+    coupling = VesselInEnvironment(vessel, env)
+    c = 2.0 * KNOT * np.array([math.sin(math.radians(45.0)), math.cos(math.radians(45.0))])
+    yaw = 0.3
+    body = np.array([math.cos(yaw) * c[0] + math.sin(yaw) * c[1], -math.sin(yaw) * c[0] + math.cos(yaw) * c[1], 0.0])
+    state = vessel.state
+    vessel.set_state(VesselState(np.array([0.0, 0.0, state.position[2]]), np.array([0.0, state.rpy[1], yaw]),
+                                 body, np.zeros(3)))
+    dt = 0.05
+    for i in range(2000):
+        vessel.step(dt, coupling.prepare(i * dt))
+    s = vessel.state
+    assert s.rpy[2] == pytest.approx(yaw, abs=1e-3)
+    cy, sy = math.cos(s.rpy[2]), math.sin(s.rpy[2])
+    v = s.linear_velocity_body
+    assert [cy * v[0] - sy * v[1], sy * v[0] + cy * v[1]] == pytest.approx(c, abs=2e-3 * 2.0 * KNOT)
+    assert s.position[:2] == pytest.approx(c * 100.0, abs=0.5)
+
+
+def test_vessel_released_in_a_current_is_taken_up_by_it():
+    """From rest in a 2 kn stream the box barge's speed through the water decays (the hull's drag
+    is quadratic: like 1/t) below 5 % of the stream within 20 minutes."""
+    barge = load_ship("box_barge_000.yaml")
+    env = Environment.from_mapping({"current": {"speed_kn": 2.0, "towards_deg": 45.0}})
+    coupling = VesselInEnvironment(barge, env)
+    dt, through = 0.1, []
+    for i in range(12000):
+        barge.step(dt, coupling.prepare(i * dt))
+        through.append(barge.status().speed_through_water)
+    assert through[0] > 0.9 * 2.0 * KNOT
+    assert through[-1] < 0.05 * 2.0 * KNOT
+
+
+def test_tidal_stream_reverses_and_shear_grows_across_it():
+    env = Environment.from_mapping({"current": {"speed_kn": 2.0, "towards_deg": 90.0, "shear_per_s": 0.001,
+                                                "tidal_period_s": 1000.0}})
+    u = 2.0 * KNOT
+    assert env.current_velocity(0.0, 0.0, 0.0) == pytest.approx([u, 0.0], abs=1e-12)
+    assert env.current_velocity(500.0, 0.0, 0.0) == pytest.approx([-u, 0.0], abs=1e-12)   # half a period: ebb
+    assert env.current_velocity(250.0, 0.0, 0.0) == pytest.approx([0.0, 0.0], abs=1e-12)  # slack water
+    # a stream setting east: its left is north; 100 m north the stream is 0.1 m/s faster
+    assert env.current_velocity(0.0, 0.0, 100.0) == pytest.approx([u + 0.1, 0.0], abs=1e-12)
+    v = env.current_velocity(0.0, np.zeros(3), np.array([-100.0, 0.0, 100.0]))
+    assert v[:, 0] == pytest.approx([u - 0.1, u, u + 0.1], abs=1e-12)
+
+
+# ---- depth -------------------------------------------------------------------------------
+def _grid_file(tmp_path, rows, header=None, name="depth.asc"):
+    head = header if header is not None else ["ncols 4", "nrows 3", "xllcorner -100.0", "yllcorner -50.0",
+                                               "cellsize 50.0", "NODATA_value -9999"]
+    path = tmp_path / name
+    path.write_text("\n".join(head + [" ".join(str(v) for v in r) for r in rows]) + "\n")
+    return str(path)
+
+
+def test_bathymetry_grid_reproduces_a_plane(tmp_path):
+    """Bilinear interpolation is exact for a plane: depth = 10 + 0.02 x - 0.01 y sampled at the
+    cell centres (x = -75, -25, 25, 75; y = 75 (first row, north), 25, -25)."""
+    def plane(x, y):
+        return 10.0 + 0.02 * x - 0.01 * y
+    xs, ys = [-75.0, -25.0, 25.0, 75.0], [75.0, 25.0, -25.0]
+    path = _grid_file(tmp_path, [[plane(x, y) for x in xs] for y in ys])
+    grid = DepthGrid.load(path)
+    for x, y in [(0.0, 0.0), (-60.0, 70.0), (33.3, -20.0), (74.0, 24.0)]:
+        depth = grid.depth_at(x, y)
+        assert isinstance(depth, float) and depth == pytest.approx(plane(x, y), abs=1e-9)
+    # outside the grid: the nearest edge value
+    assert grid.depth_at(500.0, 0.0) == pytest.approx(plane(75.0, 0.0), abs=1e-9)
+    env = Environment.from_mapping({"depth": {"grid": "depth.asc"}}, base_dir=str(tmp_path))
+    assert env.depth_at(np.array([0.0, 10.0]), np.array([0.0, 0.0])) == pytest.approx([10.0, 10.2], abs=1e-9)
+
+
+def test_scalar_depth_lookup_equals_scipys_interpolation(tmp_path):
+    """The vessel's per-step lookup (hand-written bilinear) against scipy's RegularGridInterpolator
+    on a rough grid, at random points inside and outside it."""
+    rng = np.random.default_rng(5)
+    rows = rng.uniform(2.0, 40.0, size=(7, 9)).round(2).tolist()
+    header = ["ncols 9", "nrows 7", "xllcenter 100.0", "yllcenter -300.0", "cellsize 25.0"]
+    grid = DepthGrid.load(_grid_file(tmp_path, rows, header))
+    pts = rng.uniform([50.0, -350.0], [350.0, -100.0], size=(200, 2))
+    vector = grid.depth_at(pts[:, 0], pts[:, 1])
+    scalar = [grid.depth_at(float(x), float(y)) for x, y in pts]
+    assert scalar == pytest.approx(vector, abs=1e-9)
+
+
+@pytest.mark.parametrize("rows,header,expect", [
+    ([[1, 2, 3, 4], [1, 2, -3, 4], [1, 2, 3, 4]], None, "line 8, column 3: depth -3 m is negative"),
+    ([[1, 2, 3, 4], [1, 2, "x", 4], [1, 2, 3, 4]], None, "line 8, column 3: 'x' is not a number"),
+    ([[1, 2, 3, 4], [1, 2, 3], [1, 2, 3, 4]], None, "line 8: 3 values, the header says ncols 4"),
+    ([[1, 2, 3, 4]], None, "1 rows of depths, the header says nrows 3"),
+    ([[1, 2, 3, 4]] * 3, ["ncols 4", "nrows 3", "xllcorner 0", "cellsize 5"], "header key 'yllcorner' is missing"),
+])
+def test_bad_bathymetry_file_names_file_and_entry(tmp_path, rows, header, expect):
+    path = _grid_file(tmp_path, rows, header)
+    with pytest.raises(BathymetryError) as err:
+        DepthGrid.load(path)
+    assert path in str(err.value) and expect in str(err.value)
+
+
+def test_missing_bathymetry_file(tmp_path):
+    with pytest.raises(BathymetryError, match="depth grid file not found"):
+        Environment.from_mapping({"depth": {"grid": "nowhere.asc"}}, base_dir=str(tmp_path))
+
+
+@pytest.mark.parametrize("bad,key", [({"depth": -2.0}, "depth"), ({"depth": 0.0}, "depth"),
+                                     ({"wind": {"speed_kn": -1.0, "from_deg": 0.0}}, "wind.speed_kn"),
+                                     ({"wind": {"speed_kn": 10.0}}, "wind.from_deg"),
+                                     ({"current": {"speed_kn": 1.0}}, "current.towards_deg"),
+                                     ({"current": [0.1, float("nan")]}, "current"),
+                                     ({"wnd": {}}, "wnd")])
+def test_bad_environment_names_the_key(bad, key):
+    with pytest.raises(ValueError) as err:
+        Environment.from_mapping(bad, "scenario.yaml environment")
+    assert f"scenario.yaml environment: key '{key}'" in str(err.value)
+
+
+def test_icorels_squat_by_hand():
+    """S-175 (V = 21 120 m^3, L = 175 m) at 10 kn in 12 m of water: Fnh = 5.144 / sqrt(g 12)."""
+    u, h = 10.0 * KNOT, 12.0
+    fnh = u / math.sqrt(9.80665 * h)
+    expect = 2.4 * 21120.4 / 175.0 ** 2 * fnh ** 2 / math.sqrt(1.0 - fnh ** 2)
+    assert squat(u, h, 175.0, 21120.4) == pytest.approx(expect, rel=1e-4)
+    assert squat(u, math.inf, 175.0, 21120.4) == 0.0
+
+
+def test_running_aground_stops_the_vessel_within_the_friction_distance():
+    """The tug steams at 4 m/s towards a shoal (depth 10 m falling to 1 m over 100 m). Aground
+    (under-keel clearance < 0) the bottom's friction mu N at least mu rho g A_wp (T - h) decelerates
+    it: it stops, and its kinetic energy bounds how far it slides: it never reaches the dry line."""
+    tug = load_ship("harbour_tug.yaml", initial_state=VesselState(
+        np.zeros(3), np.zeros(3), np.array([4.0, 0.0, 0.0]), np.zeros(3)))
+    tug.set_command(Command(0.0, 0.0))
+
+    class Shoal:   # a stand-in depth field: the environment only calls .at and .is_deep
+        is_deep = False
+
+        @staticmethod
+        def at(x, y):
+            return float(np.clip(10.0 - 9.0 * (x - 100.0) / 100.0, 1.0, 10.0))
+
+    env = Environment.from_mapping({})
+    env.depth = Shoal()
+    coupling = VesselInEnvironment(tug, env)
+    dt, grounded_at = 0.05, None
+    for i in range(4000):
+        tug.step(dt, coupling.prepare(i * dt))
+        if coupling.status.grounded and grounded_at is None:
+            grounded_at = tug.state.position[0]
+    assert grounded_at is not None
+    # aground first where 10 - 9 (x - 100)/100 < T = 3 m (+ squat): x > 177.8 m
+    assert grounded_at > 177.0
+    assert abs(tug.state.linear_velocity_body[0]) < 0.05
+    assert coupling.status.grounded and tug.state.position[0] < 200.0
+    assert GROUND_FRICTION > 0.0
+
+
+def test_wind_needs_the_ship_files_windage(tmp_path):
+    env = Environment.from_mapping({"wind": {"speed_kn": 10.0, "from_deg": 0.0}})
+    model = load_ship("barge_002_model.yaml")
+    with pytest.raises(ValueError, match="no 'windage' section"):
+        VesselInEnvironment(model, env)
+
+
+def test_bad_windage_section_names_the_key():
+    with pytest.raises(ShipFileError, match="windage.centroid_x"):
+        load_ship("harbour_tug.yaml", overrides={"windage": {"centroid_x": 40.0}})
+    with pytest.raises(ShipFileError, match="windage"):
+        load_ship("harbour_tug.yaml", overrides={"windage": {"type": "battleship"}})
