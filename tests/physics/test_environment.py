@@ -262,3 +262,39 @@ def test_bad_windage_section_names_the_key():
         load_ship("harbour_tug.yaml", overrides={"windage": {"centroid_x": 40.0}})
     with pytest.raises(ShipFileError, match="windage"):
         load_ship("harbour_tug.yaml", overrides={"windage": {"type": "battleship"}})
+
+
+# ---- the anchor's chain against the depth -----------------------------------------------------
+def test_anchor_holding_limit_is_the_catenary_touching_down_at_the_anchor():
+    """At the limit H_max the catenary of a chain_out long chain from the hawse pipe (height h
+    above the bottom) has its lowest point exactly at the anchor: with a = H / w, the point at
+    height h lies at x = a acosh(1 + h/a) and the arc from the lowest point is a sinh(x/a)."""
+    from tug_dynamics.maneuvering import anchor_holding_factor
+    w, s, holding = 765.0, 137.5, 1e9          # a holding force never reached: the factor is H_max / it
+    for h in (10.0, 30.0, 69.0, 120.0):
+        h_max = anchor_holding_factor(holding, s, w, h) * holding
+        a = h_max / w
+        x = a * math.acosh(1.0 + h / a)
+        assert a * math.sinh(x / a) == pytest.approx(s, rel=1e-9)
+    assert anchor_holding_factor(holding, s, w, 140.0) == 0.0     # the chain does not reach the bottom
+    assert anchor_holding_factor(1.0, s, w, 10.0) == 1.0          # a short, steep chain still lifts 1 N
+
+
+@pytest.mark.parametrize("depth", [15.0, 60.0, 100.0, 150.0])
+def test_s175_anchor_dredges_with_what_its_chain_allows(depth):
+    """S-175 let go its anchor at 6 kn on 5 shackles (137.5 m) of 64 mm chain (765 N/m in
+    water), hawse 9 m up: the dredging resistance (status anchor_force) is the paper's
+    lambda_a W_a = 1.5 x 70608 N while the catenary can hold it, w (s^2 - h^2) / (2 h) beyond."""
+    chain = {"anchor": {"chain_out": 137.5, "chain_weight": 765.0, "hawse_height": 9.0}}
+    ship = load_ship("s175_003.yaml", overrides=chain, initial_state=VesselState(
+        np.zeros(3), np.zeros(3), np.array([6.0 * KNOT, 0.0, 0.0]), np.zeros(3)))
+    env = Environment.from_mapping({"depth": depth})
+    coupling = VesselInEnvironment(ship, env)
+    from tug_dynamics.vessel import ANCHOR_LET_GO
+    ship.set_command(Command(0.0, 0.0, ANCHOR_LET_GO))
+    for i in range(400):                 # 20 s: let go (15 s) and dredging
+        ship.step(0.05, coupling.prepare(i * 0.05))
+    h = depth + 9.0
+    lam_w = 1.5 * 70608.0
+    expect = 0.0 if h >= 137.5 else min(lam_w, 765.0 * (137.5 ** 2 - h ** 2) / (2.0 * h))
+    assert ship.status().anchor_force == pytest.approx(expect, rel=1e-6, abs=1e-6)

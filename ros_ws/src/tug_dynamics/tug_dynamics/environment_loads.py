@@ -6,7 +6,8 @@ exchange step, whatever its model. ROS-free; the vessel node calls `prepare` bef
 - wind: the apparent wind (the air's velocity relative to the vessel's reference point, wind at
   10 m, the height Blendermann's coefficients refer to) -> Blendermann (1994) force and centre
   of pressure (sea_environment.wind_loads), handed to the model as one more external wrench.
-- depth: sampled at the reference point; squat (ICORELS) and the under-keel clearance
+- depth: sampled at the reference point and given to the model (model.set_depth: the anchor's
+  chain holds according to it); squat (ICORELS) and the under-keel clearance
   h - T - squat are reported; below zero the vessel is aground: the lost buoyancy rho g A_wp (T + squat - h) presses
   it on the bottom and Coulomb friction (GROUND_FRICTION) resists its horizontal motion at the
   reference point (regularised linearly below GROUND_SLIP speed so it stops without chatter).
@@ -51,6 +52,7 @@ class VesselInEnvironment:
         self.rho_air = rho_air
         self.status = EnvironmentStatus()
         self._current = (math.nan, math.nan)
+        self._depth = math.nan
         src = getattr(vessel, "source", "") or vessel.name
         if env.wind is not None and vessel.windage is None:
             raise ValueError(f"{src}: the scenario has wind but the ship file has no 'windage' section "
@@ -85,6 +87,9 @@ class VesselInEnvironment:
                                            point_body=np.array([xp, 0.0, zp])))
         if not env.depth.is_deep:
             h = env.depth.at(x, y)
+            if h != self._depth:
+                v.set_depth(max(h, 1e-3))   # 0 (dry land in a grid) -> aground, not an error
+                self._depth = h
             sq = squat(math.hypot(vx - cx, vy - cy), max(h, v.draft), v.length, v.volume)
             ukc = h - v.draft - sq
             st.water_depth, st.squat, st.under_keel_clearance = h, sq, ukc

@@ -487,6 +487,22 @@ class DisplacementStatus(StatusRecord):
     towline_angle: float     # rad, Yun & Kim Eq 3 gamma
 
 
+def anchor_holding_factor(holding_force: float, chain_out: float, chain_weight: float, height: float) -> float:
+    """Share (0..1) of an anchor's holding force its chain lets it use at this depth.
+
+    The anchor holds only while the chain pulls on it horizontally, i.e. while the chain's
+    catenary from the hawse pipe (height = depth + hawse height above the bottom) still has its
+    lowest point at the anchor. For a catenary with horizontal tension H and submerged weight w
+    per metre, the suspended length from that point to a height h is s = sqrt(h^2 + 2 h H / w)
+    (e.g. Faltinsen 1990, Sea Loads on Ships and Offshore Structures, ch. 8), so with chain_out
+    metres out the largest such H is w (chain_out^2 - h^2) / (2 h). A chain shorter than the
+    height does not reach the bottom: no holding."""
+    if chain_out <= height:
+        return 0.0
+    h_max = chain_weight * (chain_out * chain_out - height * height) / (2.0 * height)
+    return min(1.0, h_max / holding_force)
+
+
 class ManeuveringVessel(Vessel):
     """A displacement ship built from a parsed ship file (see ship_file.load_ship).
 
@@ -523,6 +539,7 @@ class ManeuveringVessel(Vessel):
         self._anchor_timer = 0.0
         self._anchor_frac = 0.0
         self._anchor_side = 0.0
+        self._anchor_hold = 1.0   # share of the holding force the chain allows (set_depth)
         self._no_wrench = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
         self.set_state(initial_state or VesselState.at_rest())
 
@@ -554,6 +571,20 @@ class ManeuveringVessel(Vessel):
             raise ValueError(f"{self.name}: a displacement ship has no heave; vertical current {float(up)!r} m/s "
                              "must be 0")
         self.ctrl[C_CUR_X], self.ctrl[C_CUR_Y] = float(east), float(north)
+
+    def set_depth(self, depth: float) -> None:
+        """Water depth under the vessel (m; math.inf = not given). It limits the anchor's holding
+        when the ship file gives the chain (anchor_holding_factor); the hull's manoeuvring
+        derivatives keep their deep-water values."""
+        depth = float(depth)
+        if not depth > 0.0:
+            raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
+        a = self.anchor_cfg
+        if a is None or a.get("chain_out") is None or math.isinf(depth):
+            self._anchor_hold = 1.0
+        else:
+            self._anchor_hold = anchor_holding_factor(a["holding_force"], a["chain_out"], a["chain_weight"],
+                                                      depth + a["hawse_height"])
 
     @property
     def towline_angle(self) -> float:
@@ -626,7 +657,7 @@ class ManeuveringVessel(Vessel):
             rp = s[S_R] * self.hp[H_L] / V
             if abs(rp) >= self.hp[H_ANC_RON]:
                 self._anchor_side = math.copysign(1.0, rp)
-        self.ctrl[C_ANC_F] = self._anchor_frac
+        self.ctrl[C_ANC_F] = self._anchor_frac * self._anchor_hold
         self.ctrl[C_ANC_SIDE] = self._anchor_side
 
     # ---- stepping --------------------------------------------------------------

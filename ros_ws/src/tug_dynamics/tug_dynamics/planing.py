@@ -246,6 +246,12 @@ class PlaningHull(Vessel):
         """Uniform current (east, north, up) m/s, world ENU; all three components act (6 DOF)."""
         self._current = check_current(current_world)
 
+    def set_depth(self, depth: float) -> None:
+        """Without effect: Savitsky's planing forces are deep-water ones and the boat has no
+        anchor model (the vessel node still reports its under-keel clearance and grounding)."""
+        if not float(depth) > 0.0:
+            raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
+
     def set_state(self, state: VesselState) -> None:
         """Put the boat in this state as given (set_steady_run finds a planing equilibrium)."""
         self.state = _copied(state)

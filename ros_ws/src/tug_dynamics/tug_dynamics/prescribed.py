@@ -127,6 +127,9 @@ class PrescribedMotion(Vessel):
         speed_through_water, as the track defines no speed through the water)."""
         check_current(current_world)
 
+    def set_depth(self, depth: float) -> None:
+        """Without effect: the track is prescribed."""
+
     # ---- stepping ---------------------------------------------------------------------------
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         """Advance along the track; wrenches have no effect on a prescribed motion."""

@@ -362,7 +362,9 @@ def _anchor_section(hp: np.ndarray, ship: schema.DisplacementShip) -> Optional[d
     hp[mv.H_ANC_VUCAP] = a.max_drift_ratio
     hp[mv.H_ANC_UREF] = a.turning_fade_speed
     sides = {"auto": 0.0, "port": 1.0, "starboard": -1.0}
-    return {"let_go_time": a.let_go_time, "heave_up_time": a.heave_up_time, "side": sides[a.side]}
+    return {"let_go_time": a.let_go_time, "heave_up_time": a.heave_up_time, "side": sides[a.side],
+            "holding_force": a.holding_coefficient * a.weight_in_water, "chain_out": a.chain_out,
+            "chain_weight": a.chain_weight, "hawse_height": a.hawse_height}
 
 
 def _towline_section(hp: np.ndarray, ship: schema.DisplacementShip, table_v: np.ndarray,

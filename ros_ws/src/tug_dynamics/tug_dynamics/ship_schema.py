@@ -182,6 +182,12 @@ class Anchor(_S):
     turning_threshold: float = _num(1e-3, 1.0, default=0.05)      # r'
     max_drift_ratio: float = _num(1e-3, 10.0, default=1.0)
     turning_fade_speed: float = _num(1e-3, 10.0, default=0.5)     # m/s
+    # The chain (optional; both or neither): with them and a scenario depth the anchor holds at most
+    # what the chain's catenary can take with its lowest point still at the anchor (maneuvering.py,
+    # anchor_holding_factor); without them, or without a depth, it holds as the paper's model.
+    chain_out: Optional[float] = Field(None, gt=0.0, le=2000.0)     # m of chain out when let go
+    chain_weight: Optional[float] = Field(None, gt=0.0, le=1e5)     # N/m, submerged weight per metre
+    hawse_height: float = _num(0.0, 50.0, default=0.0)              # m, hawse pipe above the waterline
 
 
 class TowlineSimple(_S):
@@ -267,6 +273,10 @@ def cross_checks(s: DisplacementShip) -> List[tuple]:
         if sec is not None and sec.time_constant < 0.5 * hmax:
             out.append((key, f"{sec.time_constant:g} s is shorter than half the integration sub-step "
                              f"({hmax:g} s, integration.max_substep): the lag would be unstable"))
+    a = s.anchor
+    if a is not None and (a.chain_out is None) != (a.chain_weight is None):
+        out.append((f"anchor.{'chain_weight' if a.chain_weight is None else 'chain_out'}",
+                    "chain_out and chain_weight go together (or neither)"))
     props = s.propellers or []
     if props and s.engine is None:
         out.append(("engine", "propellers need an 'engine' section (rated_rpm, time_constant)"))

@@ -182,6 +182,11 @@ class Vessel(ABC):
         Raises ValueError for anything but 3 finite numbers (check_current). A model on which
         the current has no effect says so in its implementation."""
 
+    @abstractmethod
+    def set_depth(self, depth: float) -> None:
+        """Water depth (m, > 0; math.inf = not given) under the vessel. A model on which the depth
+        has no effect says so in its implementation."""
+
     # ---- time stepping and outputs -------------------------------------------------------
     @abstractmethod
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
