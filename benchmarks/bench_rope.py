@@ -21,7 +21,8 @@ step, the peak end tension, and the warm-start time to the first step
 (fresh interpreter, numba cache present). Rates use the process CPU time (best of
 --repeat runs), which equals wall time on an idle core and is robust on a shared machine.
 Prints a markdown table per rope_model sub-step (the MoorDyn runs are shared).
---stability prints rope_model's stability map instead.
+--stability prints rope_model's stability map instead; --environment the cost of the
+per-element current, wind and seabed (issue 18) against the calm rope (rope_model only).
 
 Usage: PYTHONPATH=ros_ws/src/rope_model python benchmarks/bench_rope.py [--seconds 60]
 """
@@ -206,6 +207,87 @@ def rope_run(n, seconds, max_substep=0.01):
     return sag, seconds / wall, np.array(tens), np.array(mids)
 
 
+# ------------------------------------------------------------------ environment overhead
+ENV_MODES = ("calm", "field once", "field each step", "line pulled, no seabed", "seabed contact")
+
+
+def env_run(n, seconds, max_substep, mode):
+    """Sim-s per CPU-s of the benchmark loop with the environment of issue 18:
+    calm: as rope_run (uniform zero current, no wind, no seabed);
+    field once: a sheared current (N, 3), a wind (N, 3) and a seabed 500 m down (N,) given
+        once by set_environment (the kernel's per-element cost: the current and wind columns
+        and the seabed reach check, no contact);
+    field each step: the same arrays given by set_environment every exchange step (what the
+        rope node does; the arrays are precomputed, sampling the fields is the caller's);
+    seabed contact: every element on the seabed: a sinking line (12 kg/m) lying on it, end a
+        pulled along at 0.05 m/s (the friction test's case), set_environment every step;
+    line pulled, no seabed: the same line and loop without seabed and weight (it stays where
+        it lies): the baseline of the contact cost."""
+    if mode in ("seabed contact", "line pulled, no seabed"):
+        contact = mode == "seabed contact"
+        # without the seabed: the same line and loop, weightless (it stays where it lies)
+        p = P.replace(mass_per_length=12.0, gravity=P.gravity if contact else 0.0)
+        z0 = -20.0 + p.radius
+        rope = RopeChain.straight(p, (0, 0, z0), (100, 0, z0), n_elements=n, end_b="free",
+                                  max_substep=max_substep)
+        depth = np.full(n, 20.0 if contact else math.inf)
+        zero = np.zeros((n, 3))
+        rope.set_environment(seabed_depth=depth)
+        t = 0.0
+        wall0 = time.process_time()
+        for _ in range(int(round(seconds / DT_X))):
+            v = -0.05 * min(1.0, t / 2.0)
+            rope.set_end_kinematics("a", rope.attachment_position("a"), (v, 0.0, 0.0))
+            rope.set_environment(zero, zero, depth)
+            rope.step(DT_X)
+            t += DT_X
+            math.hypot(*rope.end_force("a").tolist())
+        return seconds / (time.process_time() - wall0)
+    rope = rope_static(n)
+    rope.max_substep = max_substep
+    c = rope.element_centres()
+    cur = np.zeros((n, 3))
+    cur[:, 1] = 0.005 * c[:, 0]  # 0 .. 0.5 m/s across the line
+    wind = np.zeros((n, 3))
+    wind[:, 0] = 10.0
+    depth = np.full(n, 500.0)
+    if mode != "calm":
+        rope.set_environment(current=cur, wind=wind, seabed_depth=depth)
+    each = mode == "field each step"
+    X = rope.X
+    t = 0.0
+    wall0 = time.process_time()
+    for _ in range(int(round(seconds / DT_X))):
+        x, v = tug(t)
+        rope.set_end_kinematics("b", x, v)
+        if each:
+            rope.set_environment(current=cur, wind=wind, seabed_depth=depth)
+        rope.step(DT_X)
+        t += DT_X
+        math.hypot(*rope.end_force("b").tolist())
+        X[n // 2, 2]
+    return seconds / (time.process_time() - wall0)
+
+
+def environment_table(ns, substeps, seconds, repeat):
+    print("| N | sub-step (s) | calm: sim-s/CPU-s (us per step) | " +
+          "field once | field each step (sim-s/CPU-s (us per step, cost vs calm)) | line pulled, "
+          "no seabed | seabed contact (sim-s/CPU-s (us per step, cost vs the line without "
+          "seabed)) |")
+    print("|---|---|" + "---|" * len(ENV_MODES))
+    for n in ns:
+        for h in substeps:
+            best = {m: max(env_run(n, seconds, h, m) for _ in range(repeat)) for m in ENV_MODES}
+            us = {m: 1e6 * DT_X / best[m] for m in ENV_MODES}
+            ref = {m: "calm" for m in ENV_MODES}
+            ref["seabed contact"] = "line pulled, no seabed"
+            cells = [f"{best[m]:.0f} ({us[m]:.1f} us, {100 * (us[m] / us[ref[m]] - 1):+.1f} %)"
+                     if m != "line pulled, no seabed" else f"{best[m]:.0f} ({us[m]:.1f} us)"
+                     for m in ENV_MODES[1:]]
+            print(f"| {n} | {h:g} | {best['calm']:.0f} ({us['calm']:.1f} us) | " + " | ".join(cells)
+                  + " |", flush=True)
+
+
 def stability_map(seconds):
     """Runs the benchmark motion with rope_model for a grid of element counts, stiffness
     multipliers and sub-steps; prints the largest sub-step that stays bounded and its error."""
@@ -274,9 +356,15 @@ def main():
                     help="rope_model max sub-step(s) (s), one table each")
     ap.add_argument("--repeat", type=int, default=3, help="timing repeats (best is kept)")
     ap.add_argument("--stability", action="store_true", help="print the rope_model stability map")
+    ap.add_argument("--environment", action="store_true",
+                    help="print the cost of the environment (per-element current, wind, seabed; "
+                         "issue 18) against the calm rope, rope_model only")
     a = ap.parse_args()
     if a.stability:
         stability_map(a.seconds)
+        return
+    if a.environment:
+        environment_table(a.n, a.substep, a.seconds, a.repeat)
         return
     rows = {h: [] for h in a.substep}
     with tempfile.TemporaryDirectory() as folder:

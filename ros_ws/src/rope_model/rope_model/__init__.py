@@ -20,6 +20,12 @@ API (what the rope node uses)::
     notes = rope.set_payout_rate(rate_m_per_s)  # winch at end a: + pays out, - heaves in;
                                                # clamped to params.winch_max_payout_speed /
                                                # winch_max_heave_speed, notes: list of str
+    rope.set_environment(current=None, wind=None, seabed_depth=None)
+                                               # each step, sampled at rope.element_centres()
+                                               # (N,3): current / wind (3,) or (N,3) m/s,
+                                               # seabed depth m positive down (number or (N,),
+                                               # inf = none); replaces all three, None = calm;
+                                               # ValueError naming argument and element
     rope.step(dt)                              # exchange period; internal sub-steps;
                                                # RopeDivergedError(step, time, element,
                                                # connection): also a "parting" without strain

@@ -95,6 +95,8 @@ class RopeChain:
     tensions = _state_array("tensions", "connection tensions (N + 1,), N")
     conn_ok = _state_array("conn_ok", "connection intact (N + 1,), 0 / 1")
     armed = _state_array("armed", "parting armed (N + 1,), 0 / 1 (re-armed once unloaded)")
+    env = _state_array("env", "environment per element (N, 7): current (3, added to the uniform "
+                       "current), wind (3), seabed depth (inf: none); see set_environment")
 
     def __init__(self, params: RopeParams, X, E, lengths, *, end_a="pinned", end_b="pinned",
                  p_a=None, p_b=None, winch=False, max_substep=0.01, theta=0.55,
@@ -136,11 +138,16 @@ class RopeChain:
                        (K.P_G, p.gravity), (K.P_Z_AX, p.damping_ratio_axial),
                        (K.P_Z_TR, p.damping_ratio_transverse),
                        (K.P_Z_ROT, p.damping_ratio_rotational), (K.P_P_ROT, p.breaking_load),
-                       (K.P_VMAX, self.VMAX), (K.P_WMAX, self.WMAX), (K.P_PMAX, self.PMAX)):
+                       (K.P_VMAX, self.VMAX), (K.P_WMAX, self.WMAX), (K.P_PMAX, self.PMAX),
+                       (K.P_KBOT, p.seabed.stiffness), (K.P_CBOT, p.seabed.damping),
+                       (K.P_MU_AX, p.seabed.friction_axial),
+                       (K.P_MU_TR, p.seabed.friction_transverse),
+                       (K.P_VSLIP, p.seabed.slip_speed)):
             io[key] = v
         self.X, self.E, self.L = X, E, L
         self.V = np.zeros((n, 3))
         self.W = np.zeros((n, 3))
+        self.env = self._calm_env(n)
         self.end_modes = [end_a, end_b]
         self._bind_io()
         self.att_on[:] = [m != "free" for m in self.end_modes]
@@ -233,12 +240,122 @@ class RopeChain:
 
     @property
     def current(self):
-        """Uniform current (3,), m/s, world (a view: writing into it changes the current)."""
+        """Uniform current (3,), m/s, world (a view: writing into it changes the current).
+        A per-element current given to set_environment as an (N, 3) array is added to it
+        (set_environment then sets this uniform part to zero)."""
         return self._io[K.IO_CUR]
 
     @current.setter
     def current(self, value):
         self._io[K.IO_CUR] = _vec3(value, "current")
+
+    # ------------------------------------------------------------------ environment
+    ENV_CUR, ENV_WIND, ENV_DEPTH = 0, 3, 6  # columns of env
+
+    @staticmethod
+    def _calm_env(n):
+        env = np.zeros((n, 7))
+        env[:, 6] = math.inf
+        return env
+
+    def element_centres(self):
+        """(N, 3) element centres, m, world: where the caller samples the current, wind and
+        seabed depth for set_environment (N changes when the winch turns)."""
+        return self.X.copy()
+
+    def set_environment(self, current=None, wind=None, seabed_depth=None):
+        """The environment for the following steps, sampled by the caller at the element
+        centres (element_centres()); each call replaces all three:
+
+        current: water velocity (m/s, world ENU), (3,) uniform (the same as the property
+            ``current``) or (N, 3) per element; None: still water. Water drag, fluid inertia
+            and water entry of each element use its velocity relative to its own current.
+        wind: air velocity (m/s, world; the velocity the air moves with, not the direction it
+            comes from), (3,) or (N, 3); None: still air. The emerged part of each element
+            feels air drag on its velocity relative to it.
+        seabed_depth: depth of the seabed below the water surface z = 0 (m, positive down),
+            a number or (N,) per element, inf for none; None: no seabed. An element end whose
+            underside is below z = -depth gets the seabed contact of the rope file's
+            ``seabed:`` parameters (params.SeabedParams).
+
+        Bad input (wrong shape, NaN / inf velocities, a zero, negative or NaN depth) raises
+        ValueError naming the argument and the element, and changes nothing. The winch's
+        link changes between calls carry the values along (a new link takes its parent's).
+        Fastest (about 1 us, checked in the compiled kernel): all three as float64 arrays of
+        shapes (N, 3), (N, 3) and (N,)."""
+        n = self.n_elements
+        if (type(current) is np.ndarray and type(wind) is np.ndarray
+                and type(seabed_depth) is np.ndarray and current.dtype == np.float64
+                and wind.dtype == np.float64 and seabed_depth.dtype == np.float64
+                and current.shape == (n, 3) and wind.shape == (n, 3)
+                and seabed_depth.shape == (n,)):
+            if not self._packed:
+                self._pack()
+            if K.set_environment(self._S, self._io, current, wind, seabed_depth) < 0:
+                return
+            # a bad value: the general path below names it
+        cur = self._env_vectors(current, "current", n)
+        wnd = self._env_vectors(wind, "wind", n)
+        dep = self._env_depths(seabed_depth, n)
+        env = self.env
+        io = self._io
+        if cur is None:
+            io[K.IO_CUR] = 0.0
+            env[:, 0:3] = 0.0
+        elif cur.ndim == 1:
+            io[K.IO_CUR] = cur
+            env[:, 0:3] = 0.0
+        else:
+            io[K.IO_CUR] = 0.0
+            env[:, 0:3] = cur
+        env[:, 3:6] = 0.0 if wnd is None else wnd
+        env[:, 6] = math.inf if dep is None else dep
+
+    @staticmethod
+    def _env_vectors(v, what, n):
+        if v is None:
+            return None
+        a = v if (type(v) is np.ndarray and v.dtype == np.float64) else np.asarray(v, dtype=float)
+        if a.shape != (3,) and a.shape != (n, 3):
+            raise ValueError(f"set_environment: {what}: expected shape (3,) or (N, 3) = ({n}, 3) "
+                             f"(one vector per element), got shape {a.shape}")
+        if not np.isfinite(a).all():
+            bad = np.argwhere(~np.isfinite(a))[0]
+            where = f" at element {bad[0]}" if a.ndim == 2 else ""
+            raise ValueError(f"set_environment: {what}: must be finite, got "
+                             f"{float(a[tuple(bad)])!r}{where}")
+        return a
+
+    @staticmethod
+    def _env_depths(d, n):
+        if d is None:
+            return None
+        a = d if (type(d) is np.ndarray and d.dtype == np.float64) else np.asarray(d, dtype=float)
+        if a.shape != () and a.shape != (n,):
+            raise ValueError(f"set_environment: seabed_depth: expected a number or shape (N,) = "
+                             f"({n},) (one depth per element), got shape {a.shape}")
+        ok = a > 0.0  # NaN fails; inf passes (no seabed there)
+        if not ok.all():
+            bad = np.argwhere(~ok)[0] if a.ndim else ()
+            where = f" at element {bad[0]}" if a.ndim else ""
+            raise ValueError(f"set_environment: seabed_depth: expected a positive depth below "
+                             f"the water surface (m, positive down) or inf for no seabed, got "
+                             f"{float(a[tuple(bad)])!r}{where}")
+        return a
+
+    @property
+    def wind(self):
+        """(N, 3) wind at the elements, m/s (a copy)."""
+        return self.env[:, 3:6].copy()
+
+    @property
+    def seabed_depth(self):
+        """(N,) seabed depth at the elements, m (inf: none; a copy)."""
+        return self.env[:, 6].copy()
+
+    def element_currents(self):
+        """(N, 3) current at each element, m/s: the uniform part plus the per-element one."""
+        return self.env[:, 0:3] + self._io[K.IO_CUR]
 
     # ------------------------------------------------------------------ factories
     @classmethod
@@ -475,6 +592,8 @@ class RopeChain:
             d[key] = S[:n, col:col + 3]
         S[:n, K.SL] = L
         d["_L"] = S[:n, K.SL]
+        S[:n, K.SCUR:K.SDEPTH + 1] = d["_env"]
+        d["_env"] = S[:n, K.SCUR:K.SDEPTH + 1]
         for key, col in (("_breaking_load", K.SB), ("_tensions", K.ST)):
             S[:, col] = d[key]
             d[key] = S[:, col]
@@ -517,11 +636,11 @@ class RopeChain:
         return (self.X.copy(), self.E.copy(), self.V.copy(), self.W.copy(), self.L.copy(),
                 self.conn_ok.copy(), self.armed.copy(), self.breaking_load.copy(),
                 self.att_pos.copy(),
-                self.tensions.copy(), self._end_force.copy(), len(self.events))
+                self.tensions.copy(), self._end_force.copy(), len(self.events), self.env.copy())
 
     def _restore(self, s):
         (self.X, self.E, self.V, self.W, self.L, self.conn_ok, self.armed,
-         self.breaking_load, att_pos, self.tensions, end_force, nev) = s
+         self.breaking_load, att_pos, self.tensions, end_force, nev, self.env) = s
         self.att_pos[:] = att_pos  # views into the kernel's io array
         self._end_force[:] = end_force
         del self.events[nev:]
@@ -693,6 +812,7 @@ class RopeChain:
         self.V = np.vstack([self.V[:j], v + np.cross(w, q), v - np.cross(w, q), self.V[j + 1:]])
         self.W = np.vstack([self.W[:j], w, w, self.W[j + 1:]])
         self.L = np.concatenate([self.L[:j], [0.5 * l, 0.5 * l], self.L[j + 1:]])
+        self.env = np.insert(self.env, j + 1, self.env[j], axis=0)
         self.conn_ok = np.insert(self.conn_ok, j + 1, 1)
         self.armed = np.insert(self.armed, j + 1, 1)
         self.breaking_load = np.insert(self.breaking_load, j + 1, self.params.breaking_load)
@@ -703,6 +823,7 @@ class RopeChain:
         self.L = self.L[1:].copy()
         self.X, self.E = self.X.copy(), self.E.copy()
         self.V, self.W = self.V.copy(), self.W.copy()
+        self.env = self.env[1:].copy()
         self.conn_ok = np.delete(self.conn_ok, 1)
         self.armed = np.delete(self.armed, 1)
         self.breaking_load = np.delete(self.breaking_load, 1)
@@ -721,6 +842,7 @@ class RopeChain:
         self.V = np.vstack([v_near, v_far, self.V[1:]])
         self.W = np.vstack([w0, w0, self.W[1:]])
         self.L = np.concatenate([[l0 - ln, ln], self.L[1:]])
+        self.env = np.insert(self.env, 1, self.env[0], axis=0)
         self.conn_ok = np.insert(self.conn_ok, 1, 1)
         self.armed = np.insert(self.armed, 1, 1)
         self.breaking_load = np.insert(self.breaking_load, 1, self.params.breaking_load)
@@ -751,6 +873,9 @@ class RopeChain:
         self.V = np.vstack([v, self.V[2:]])
         self.W = np.vstack([w, self.W[2:]])
         self.L = np.concatenate([[ln], self.L[2:]])
+        env = self.env
+        merged = (L0 * env[0] + L1 * env[1]) / ln if np.isfinite(env[:2, 6]).all() else env[1]
+        self.env = np.vstack([merged, env[2:]])
         self.conn_ok = np.delete(self.conn_ok, 1)
         self.armed = np.delete(self.armed, 1)
         self.breaking_load = np.delete(self.breaking_load, 1)

@@ -69,7 +69,12 @@ FMA = {"contract"}
 # connection c (rows 0..N) breaking load (SB) and tension (ST). RopeChain's X, E, ... are
 # views into it. F: int64 (N + 1, 2): connection intact (column 0), parting armed (1).
 SX, SE, SV, SW, SL, SB, ST = 0, 3, 6, 9, 12, 13, 14
-S_COLS = 16
+# environment per element j (rows 0..N-1), sampled at the element centres by the caller
+# (RopeChain.set_environment): water current (3 columns from SCUR, added to the uniform
+# current of io[IO_CUR]), wind (3 from SWIND) and seabed depth below the water surface
+# (SDEPTH, m, positive down; inf = no seabed)
+SCUR, SWIND, SDEPTH = 15, 18, 21
+S_COLS = 22
 # io: float64 (IO_ROWS, 3), RopeChain._io; the attributes att_pos, att_vel etc. are views
 IO_POS, IO_VEL, IO_FORCE, IO_IMPULSE, IO_MEAN = 0, 2, 4, 6, 8  # rows (end a, end b):
 # attachment position and velocity, force on the attachment, impulse over the call,
@@ -86,7 +91,12 @@ IO_ATT = 17  # columns 1, 2: attachment a, b on (1.0) or not (0.0)
 IO_INFO = 18  # columns 0, 1: divergence (sub-step, element); column 2: events recorded
 IO_NEV = (18, 2)
 IO_DIAG = 19  # a parting refused as a blow-up (PART_MIN_ELASTIC): (connection or -1, T, EA strain)
-IO_EVENTS = 20  # rows: parting events (t, c, T)
+# seabed contact (MoorDyn's model): stiffness kbot (Pa/m) and damping cbot (Pa s/m) per
+# unit contact area (diameter x length), Coulomb friction coefficients along and across the
+# element axis, regularised linearly below the slip speed (m/s)
+P_KBOT, P_CBOT, P_MU_AX = (20, 0), (20, 1), (20, 2)
+P_MU_TR, P_VSLIP = (21, 0), (21, 1)
+IO_EVENTS = 22  # rows: parting events (t, c, T)
 N_EVENTS_MAX = 64
 IO_ROWS = IO_EVENTS + N_EVENTS_MAX
 # ws: float64 (6, cap, 5, 5), cap >= N + 1: 0 Ad, 1 Ao, 2 Wm (= D^-1 Ao), 3 per-element
@@ -106,7 +116,7 @@ def new_workspace(n):
 KernelParams = namedtuple("KernelParams", (
     "mu", "radius", "EA", "Cd", "Cf", "tfac", "Ca", "rho_w", "rho_a", "g", "z_ax", "z_tr",
     "z_rot", "P_rot", "cur0", "cur1", "cur2", "relax", "theta", "vmax2", "wmax2", "pmax2",
-    "D", "r2", "h", "hth", "h2t", "h2t2"))
+    "D", "r2", "h", "hth", "h2t", "h2t2", "kbot", "cbot", "mu_ax", "mu_tr", "vslip"))
 
 
 @njit(cache=True, inline="always", fastmath=FMA)
@@ -119,7 +129,8 @@ def _read_params(io, h):
                         io[P_RHO_W], io[P_RHO_A], io[P_G], io[P_Z_AX], io[P_Z_TR], io[P_Z_ROT],
                         io[P_P_ROT], io[IO_CUR, 0], io[IO_CUR, 1], io[IO_CUR, 2], io[P_RELAX],
                         theta, io[P_VMAX] ** 2, io[P_WMAX] ** 2, io[P_PMAX] ** 2, 2.0 * radius,
-                        radius * radius, h, hth, h * h * theta, hth * hth)
+                        radius * radius, h, hth, h * h * theta, hth * hth, io[P_KBOT],
+                        io[P_CBOT], io[P_MU_AX], io[P_MU_TR], io[P_VSLIP])
 
 
 # ------------------------------------------------------------------ geometry
@@ -335,9 +346,11 @@ def _relaxation_forces(relax, m00, m11, m22, m01, m02, m12, Ip, vx, vy, vz, wx, 
 
 @njit(cache=True, inline="always")
 def _element_state(S, j):
-    """Length, centre height, axis e, velocity V and angular velocity W of element j."""
+    """Length, centre height, axis e, velocity V and angular velocity W of element j, and
+    the current and wind at its centre (the per-element part of the current)."""
     return (S[j, SL], S[j, SX + 2], S[j, SE], S[j, SE + 1], S[j, SE + 2], S[j, SV], S[j, SV + 1],
-            S[j, SV + 2], S[j, SW], S[j, SW + 1], S[j, SW + 2])
+            S[j, SV + 2], S[j, SW], S[j, SW + 1], S[j, SW + 2], S[j, SCUR], S[j, SCUR + 1],
+            S[j, SCUR + 2], S[j, SWIND], S[j, SWIND + 1], S[j, SWIND + 2])
 
 
 @njit(cache=True, inline="always", fastmath=FMA)
@@ -347,7 +360,11 @@ def _element_terms(state, p):
     water entry, relaxation) and their velocity Jacobian C. Returns its basis b1, b2, the
     right-hand side h f (5) and the upper triangle of M - h theta C: entries 00, 11, 22,
     01, 02, 12 and 33 = 44 (no translation-rotation coupling, 34 = 0)."""
-    l, z, ex, ey, ez, vx, vy, vz, wx, wy, wz = state
+    l, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, uc0, uc1, uc2, ua0, ua1, ua2 = state
+    # current at the element: the uniform part plus the element's own (a sampled field)
+    uc0 += p.cur0
+    uc1 += p.cur1
+    uc2 += p.cur2
     p0, p1, p2, q0, q1, q2 = _basis(ex, ey, ez)
     fr, dfr, m1 = immersion(z, ez, 0.5 * l, p.radius)
     m, vol, ma, rot_fac, Ip = _element_inertia(p, l, fr)
@@ -358,17 +375,17 @@ def _element_terms(state, p):
     F1 = 0.0
     F2, t0, t1 = _gravity_and_buoyancy(p, m, vol, fr, m1, ex, ey)
     t2 = 0.0
-    for part in range(2):  # water part on the velocity relative to the current, air on V
-        if part == 0:
+    for part in range(2):  # water part on the velocity relative to the current, air part
+        if part == 0:  # relative to the wind
             rho = p.rho_w * fr
-            r0 = vx - p.cur0
-            r1 = vy - p.cur1
-            r2 = vz - p.cur2
+            r0 = vx - uc0
+            r1 = vy - uc1
+            r2 = vz - uc2
         else:
             rho = p.rho_a * (1.0 - fr)
-            r0 = vx
-            r1 = vy
-            r2 = vz
+            r0 = vx - ua0
+            r1 = vy - ua1
+            r2 = vz - ua2
         if rho <= 0.0:
             continue
         d0, d1, d2, e00, e11, e22, e01, e02, e12 = _morison_drag(p, rho, l, r0, r1, r2, ex, ey, ez)
@@ -381,9 +398,9 @@ def _element_terms(state, p):
         c01 += e01
         c02 += e02
         c12 += e12
-    r0 = vx - p.cur0
-    r1 = vy - p.cur1
-    r2 = vz - p.cur2
+    r0 = vx - uc0
+    r1 = vy - uc1
+    r2 = vz - uc2
     ue = r0 * ex + r1 * ey + r2 * ez
     d0, d1, d2, u0, u1, u2 = _fluid_inertia_forces(ma, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz)
     F0 += d0
@@ -447,6 +464,153 @@ def _store_element(Ad, rhs, B1, B2, j, terms):
     Ad[j, 3, 4] = 0.0
     Ad[j, 0, 3] = Ad[j, 1, 3] = Ad[j, 2, 3] = 0.0
     Ad[j, 0, 4] = Ad[j, 1, 4] = Ad[j, 2, 4] = 0.0
+
+
+# ------------------------------------------------------------------ seabed contact
+@njit(cache=True, inline="always")
+def _contact_state(S, j):
+    """Element j for the seabed contact: length, centre, axis, V, W and the seabed depth."""
+    return (S[j, SL], S[j, SX], S[j, SX + 1], S[j, SX + 2], S[j, SE], S[j, SE + 1],
+            S[j, SE + 2], S[j, SV], S[j, SV + 1], S[j, SV + 2], S[j, SW], S[j, SW + 1],
+            S[j, SW + 2], S[j, SDEPTH])
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _seabed_in_reach(p, l, z, ez, depth):
+    """True if the underside of either end of the element is below the seabed (z < -depth;
+    depth inf: no seabed, never)."""
+    return z - 0.5 * l * abs(ez) - p.radius < -depth
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _seabed_point(p, s, lc, depth, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, b10, b11, b12, b20,
+                  b21, b22):
+    """Seabed contact at the point at lever s on the element axis (an end, s = +-l/2), which
+    stands for the contact length lc; MoorDyn's seabed model. Normal force on the underside
+    penetration pen (the point's height minus the radius below z = -depth): D lc (kbot pen -
+    cbot v_z) while pen > 0. Coulomb friction on the slip velocity of the point along the
+    seabed, separately along (a: the horizontal part of the axis) and across (t) the
+    element: -mu N u / max(|u|, v_slip), i.e. min(mu N, mu N |u| / v_slip) against u.
+
+    Returns its terms of the element's system (right-hand side 5, upper triangle of the 5x5
+    block 15): rhs += J^T (h F + h^2 K v_p), Ad += J^T (-h C - h^2 theta K) J with
+    J = [I | -s b2 | s b1] the point's Jacobian (the force at the end of the sub-step, see
+    below). K is the normal spring (vertical);
+    C the normal damper and, for the friction, its secant mu N / max(|u|, v_slip) along a
+    and t (the exact tangent is zero while sliding, which lets a sliding element overshoot
+    to the opposite slip and chatter by mu g h per sub-step; the secant makes it converge
+    monotonically). The friction's dependence on N (position, vertical velocity) and the
+    geometric stiffness of the contact moment are explicit."""
+    zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0)
+    pz = z + s * ez
+    pen = -depth - (pz - p.radius)
+    if not pen > 0.0:
+        return zero
+    # velocity of the point: V + W x (s e)
+    a0 = s * ex
+    a1 = s * ey
+    a2 = s * ez
+    u0 = vx + (wy * a2 - wz * a1)
+    u1 = vy + (wz * a0 - wx * a2)
+    u2 = vz + (wx * a1 - wy * a0)
+    kn = p.kbot * p.D * lc
+    cn = p.cbot * p.D * lc
+    fn = kn * pen - cn * u2  # as MoorDyn: the damper may pull while the point penetrates
+    nf = max(fn, 0.0)  # the normal load of the friction
+    # horizontal axis a and across t = z x a
+    eh = math.sqrt(ex * ex + ey * ey)
+    if eh > 1e-9:
+        ax = ex / eh
+        ay = ey / eh
+    else:  # a vertical element standing on its end: no axis along the seabed
+        ax = 1.0
+        ay = 0.0
+    tx = -ay
+    ty = ax
+    ua = u0 * ax + u1 * ay
+    ut = u0 * tx + u1 * ty
+    mu_a = p.mu_ax if eh > 1e-9 else p.mu_tr
+    ca = mu_a * nf / max(abs(ua), p.vslip)  # secant: friction = -ca ua along a
+    ct = p.mu_tr * nf / max(abs(ut), p.vslip)
+    F0 = -(ca * ua) * ax - (ct * ut) * tx
+    F1 = -(ca * ua) * ay - (ct * ut) * ty
+    F2 = fn
+    # The contact force is taken at the end of the sub-step (backward Euler), not at the
+    # theta point: f(q_n + h (nu + theta dnu), nu + dnu) ~ f + h K nu + (C + h theta K) dnu,
+    # i.e. Q = h F + h^2 K v_p (K = -kn z z^T) and the matrix Sm = -h C - h^2 theta K.
+    # The contact modes are stiff (kbot: omega h ~ 1-10) and heavily damped; at theta = 0.55
+    # their amplification tends to -(1 - theta) / theta = -0.82 per sub-step, and the
+    # velocity flipping sign every sub-step made the friction and the lift-off chatter.
+    # Backward Euler damps them monotonically; the static state is the same.
+    h = p.h
+    h2t = h * p.hth
+    Q0 = h * F0
+    Q1 = h * F1
+    Q2 = h * F2 - h * h * kn * u2
+    s00 = h * (ca * ax * ax + ct * tx * tx)
+    s01 = h * (ca * ax * ay + ct * tx * ty)
+    s11 = h * (ca * ay * ay + ct * ty * ty)
+    s22 = h * cn + h2t * kn
+    # J^T Q and J^T Sm J, J = [I | -s b2 | s b1]
+    m0b1 = s00 * b10 + s01 * b11  # Sm b1
+    m1b1 = s01 * b10 + s11 * b11
+    m2b1 = s22 * b12
+    m0b2 = s00 * b20 + s01 * b21  # Sm b2
+    m1b2 = s01 * b20 + s11 * b21
+    m2b2 = s22 * b22
+    ss = s * s
+    return (Q0, Q1, Q2, -s * (b20 * Q0 + b21 * Q1 + b22 * Q2), s * (b10 * Q0 + b11 * Q1 + b12 * Q2),
+            s00, s01, 0.0, -s * m0b2, s * m0b1,
+            s11, 0.0, -s * m1b2, s * m1b1,
+            s22, -s * m2b2, s * m2b1,
+            ss * (b20 * m0b2 + b21 * m1b2 + b22 * m2b2),
+            -ss * (b20 * m0b1 + b21 * m1b1 + b22 * m2b1),
+            ss * (b10 * m0b1 + b11 * m1b1 + b12 * m2b1))
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
+def _seabed_terms(state, b, p):
+    """Seabed contact of one element (state from _contact_state, b its basis b1, b2): the
+    two ends, each standing for half the element (MoorDyn's nodes). Returns the sum of the
+    _seabed_point terms (rhs 5, upper triangle 15)."""
+    l, x, y, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, depth = state
+    b10, b11, b12, b20, b21, b22 = b
+    t = _seabed_point(p, 0.5 * l, 0.5 * l, depth, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, b10,
+                      b11, b12, b20, b21, b22)
+    u = _seabed_point(p, -0.5 * l, 0.5 * l, depth, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, b10,
+                      b11, b12, b20, b21, b22)
+    return (t[0] + u[0], t[1] + u[1], t[2] + u[2], t[3] + u[3], t[4] + u[4], t[5] + u[5],
+            t[6] + u[6], t[7] + u[7], t[8] + u[8], t[9] + u[9], t[10] + u[10], t[11] + u[11],
+            t[12] + u[12], t[13] + u[13], t[14] + u[14], t[15] + u[15], t[16] + u[16],
+            t[17] + u[17], t[18] + u[18], t[19] + u[19])
+
+
+@njit(cache=True, inline="always")
+def _add_seabed(Ad, rhs, j, terms):
+    """Adds _seabed_terms to rhs[j] and the upper triangle of Ad[j]."""
+    (r0, r1, r2, r3, r4, a00, a01, a02, a03, a04, a11, a12, a13, a14, a22, a23, a24, a33, a34,
+     a44) = terms
+    rhs[j, 0] += r0
+    rhs[j, 1] += r1
+    rhs[j, 2] += r2
+    rhs[j, 3] += r3
+    rhs[j, 4] += r4
+    Ad[j, 0, 0] += a00
+    Ad[j, 0, 1] += a01
+    Ad[j, 0, 2] += a02
+    Ad[j, 0, 3] += a03
+    Ad[j, 0, 4] += a04
+    Ad[j, 1, 1] += a11
+    Ad[j, 1, 2] += a12
+    Ad[j, 1, 3] += a13
+    Ad[j, 1, 4] += a14
+    Ad[j, 2, 2] += a22
+    Ad[j, 2, 3] += a23
+    Ad[j, 2, 4] += a24
+    Ad[j, 3, 3] += a33
+    Ad[j, 3, 4] += a34
+    Ad[j, 4, 4] += a44
 
 
 # ------------------------------------------------------------------ connections, Eq (15)-(26)
@@ -1083,6 +1247,32 @@ def _finish_exchange_step(io, dt):
             io[IO_POS + s, a] = io[IO_POS + s, a] + io[IO_VEL + s, a] * dt
 
 
+# ------------------------------------------------------------------ environment input
+@njit(cache=True)
+def set_environment(S, io, cur, wind, depth):
+    """RopeChain.set_environment's fast path: current (N, 3), wind (N, 3) and seabed depth
+    (N,) per element into S (the uniform current io[IO_CUR] set to 0). Checked first (every
+    velocity finite, every depth > 0 or inf), nothing written on error. Returns -1 if taken,
+    else what * N + j for the first bad value (what: 0 current, 1 wind, 2 depth; j element)."""
+    N = S.shape[0] - 1
+    for j in range(N):
+        for a in range(3):
+            if not math.isfinite(cur[j, a]):
+                return j
+            if not math.isfinite(wind[j, a]):
+                return N + j
+        if not depth[j] > 0.0:  # NaN fails too
+            return 2 * N + j
+    for j in range(N):
+        for a in range(3):
+            S[j, SCUR + a] = cur[j, a]
+            S[j, SWIND + a] = wind[j, a]
+        S[j, SDEPTH] = depth[j]
+    for a in range(3):
+        io[IO_CUR, a] = 0.0
+    return -1
+
+
 # ------------------------------------------------------------------ entry point
 @njit(cache=True, fastmath=FMA)
 def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
@@ -1146,6 +1336,10 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
             for jc in range(N + 1):
                 if full and jc < N:  # element jc
                     _store_element(Ad, rhs, B1, B2, jc, _element_terms(_element_state(S, jc), p))
+                    if _seabed_in_reach(p, S[jc, SL], S[jc, SX + 2], S[jc, SE + 2],
+                                        S[jc, SDEPTH]):
+                        _add_seabed(Ad, rhs, jc, _seabed_terms(_contact_state(S, jc),
+                                                               _stored_basis(B1, B2, jc), p))
                 # connection c = jc: aft point of element i = c - 1 (prev) to the front point
                 # of element c (next); its terms of rhs and Ad, and the coupling block Ao[i]
                 c = jc

@@ -62,6 +62,16 @@ class ChainAdapter:
     def set_end(self, label: str, position, velocity) -> None:
         self.rope.set_end_kinematics(label, position, velocity)
 
+    def element_centres(self) -> np.ndarray:
+        """(N, 3) element centres (world, m): where to sample current, wind and depth."""
+        return self.rope.element_centres()
+
+    def set_environment(self, current=None, wind=None, seabed_depth=None) -> None:
+        """RopeChain.set_environment: current and wind (3,) or (N, 3) m/s, seabed depth (m,
+        positive down; number or (N,), inf = none); each call replaces all three, None = calm.
+        ValueError naming the argument and element for bad values."""
+        self.rope.set_environment(current, wind, seabed_depth)
+
     def set_payout_rate(self, rate: float) -> List[str]:
         """Winch order, m/s (+ pays out); clamped to the rope file's winch limits. Returns
         the notes of any clamp (empty list: taken as given); ValueError for NaN / inf."""
@@ -114,6 +124,16 @@ class CableAdapter:
 
     def set_payout_rate(self, rate: float) -> None:
         raise ValueError("an fd_cable rope has no winch")
+
+    def element_centres(self) -> np.ndarray:
+        return self.cable.positions
+
+    def set_environment(self, current=None, wind=None, seabed_depth=None) -> None:
+        """Not available for the fd cable yet (issue 18: the per-node current and the seabed
+        contact are implemented for the element chain only)."""
+        raise NotImplementedError("fd_cable: a per-node current, wind and seabed contact are not "
+                                  "implemented (element_chain only); the cable keeps its uniform "
+                                  "current")
 
     def step(self, dt: float) -> None:
         self.cable.step(dt)

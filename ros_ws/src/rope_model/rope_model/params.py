@@ -21,8 +21,32 @@ G0 = 9.80665  # m/s^2, standard gravity: kgf -> N and tf -> N (Table 1)
 TONNE_FORCE = 1000.0 * G0  # N per tf (Table 1 "16 ton" breaking strength)
 KNOT = 1852.0 / 3600.0  # m/s per knot (section 4.4-4.6 speeds)
 
-__all__ = ["G0", "KNOT", "TONNE_FORCE", "RopeParams", "RopeParamsError", "load_rope_params",
-           "default_rope_path", "shipped_rope_file", "finite_vec3"]
+__all__ = ["G0", "KNOT", "TONNE_FORCE", "RopeParams", "RopeParamsError", "SeabedParams",
+           "load_rope_params", "default_rope_path", "shipped_rope_file", "finite_vec3"]
+
+
+@dataclass(frozen=True)
+class SeabedParams:
+    """Seabed contact of the rope (the rope file's optional ``seabed:`` mapping; the seabed
+    itself, its depth per element, comes from RopeChain.set_environment).
+
+    MoorDyn's seabed model: a normal spring-damper per unit contact area (diameter x
+    length), kBot = 3.0e6 Pa/m and cBot = 3.0e5 Pa s/m are MoorDyn's defaults (MoorDyn
+    documentation, input file options kBot, cBot). Coulomb friction along and across the
+    rope axis as MoorDyn-F's mu_kA / mu_kT (whose defaults are 0, friction off): here the
+    dynamic friction coefficient of wire rope on the seabed, 0.25, of DNV-OS-E301 (Position
+    mooring, the friction coefficient table of Ch.2: wire rope static 0.6 / dynamic 0.25,
+    chain 1.0 / 0.7), both ways. Friction is regularised linearly below ``slip_speed``
+    (MoorDyn's saturated damping min(mu N, c |v|) with c = mu N / slip_speed): a rope held by
+    friction creeps at most at that speed.
+    """
+
+    stiffness: float = 3.0e6  # Pa/m (kBot)
+    damping: float = 3.0e5  # Pa s/m (cBot)
+    friction_axial: float = 0.25  # - (DNV-OS-E301 wire rope, dynamic)
+    friction_transverse: float = 0.25  # -
+    slip_speed: float = 0.01  # m/s
+
 
 
 @dataclass(frozen=True)
@@ -59,6 +83,7 @@ class RopeParams:
     # winch at end a: pay-out / heave-in orders are clamped to these (schema.RopeFile)
     winch_max_payout_speed: float = 3.0  # m/s
     winch_max_heave_speed: float = 3.0  # m/s
+    seabed: SeabedParams = field(default_factory=SeabedParams)  # seabed contact
     name: str = "rope"
     source: str = field(default="<defaults>", compare=False)
 
@@ -135,6 +160,22 @@ def _validate(p: RopeParams, src: str) -> None:
         bad("min_length", f"at most length ({p.length})", p.min_length)
     if not isinstance(p.name, str):
         bad("name", "a string", p.name)
+    check_seabed(p.seabed, bad)
+
+
+_SEABED_POSITIVE = ("stiffness", "slip_speed")
+_SEABED_NONNEG = ("damping", "friction_axial", "friction_transverse")
+
+
+def check_seabed(sb, bad) -> None:
+    """bad(key, expected, got) for a SeabedParams attribute out of range (signs, finite)."""
+    if not isinstance(sb, SeabedParams):
+        bad("seabed", "a SeabedParams", sb)
+
+    def bad_sb(key, what, got):
+        bad("seabed." + key, what, got)
+
+    check_numbers(sb, bad_sb, _SEABED_POSITIVE, _SEABED_NONNEG)
 
 
 _FIELDS = {f.name for f in dataclasses.fields(RopeParams)} - {"source"}
@@ -161,9 +202,17 @@ def load_rope_params(path: str | os.PathLike) -> RopeParams:
         raise RopeParamsError(f"{src}: key 'min_length': expected at most length ({f.length:g} m), "
                               f"got {f.min_length!r}")
     kw = {k: getattr(f, k) for k in _FIELDS if k in RopeFile.model_fields}
+    kw["seabed"] = seabed_params(f.seabed)
     p = RopeParams(**kw, source=src)
     _validate(p, src)
     return p
+
+
+def seabed_params(sb) -> SeabedParams:
+    """SeabedParams of a file's ``seabed:`` mapping (schema.SeabedFile or None: defaults)."""
+    if sb is None:
+        return SeabedParams()
+    return SeabedParams(**{f.name: getattr(sb, f.name) for f in dataclasses.fields(SeabedParams)})
 
 
 def shipped_rope_file(name: str) -> str:

@@ -61,7 +61,22 @@ def num(default, lo, hi, unit="", *, lo_open=False):
     return Field(default, le=hi, json_schema_extra={"unit": unit}, **low)
 
 
+def _sub_schema(schema, key):
+    """(schema, last key) of a dotted key into nested mappings ("seabed.stiffness")."""
+    *path, last = key.split(".")
+    for k in path:
+        f = schema.model_fields.get(k)
+        ann = f.annotation if f is not None else None
+        if typing.get_origin(ann) is typing.Union:
+            ann = [a for a in typing.get_args(ann) if a is not type(None)][0]
+        if not (isinstance(ann, type) and issubclass(ann, BaseModel)):
+            return schema, key
+        schema = ann
+    return schema, last
+
+
 def _expected(schema, key) -> str:
+    schema, key = _sub_schema(schema, key)
     f = schema.model_fields.get(key)
     if f is None:
         return "a known key"
@@ -70,7 +85,9 @@ def _expected(schema, key) -> str:
     if typing.get_origin(ann) is typing.Union:
         args = [a for a in typing.get_args(ann) if a is not type(None)]
         optional, ann = True, args[0]
-    if typing.get_origin(ann) is Literal:
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        text = "a mapping of " + ", ".join(ann.model_fields)
+    elif typing.get_origin(ann) is Literal:
         text = "one of " + ", ".join(repr(a) for a in typing.get_args(ann))
     elif ann is bool:
         text = "true or false"
@@ -103,7 +120,7 @@ def validate_file(schema, data: dict, src: str, error=RopeParamsError):
         for e in exc.errors():
             key = ".".join(str(p) for p in e["loc"] if isinstance(p, str)) or "(top)"
             if e["type"] == "extra_forbidden":
-                known = ", ".join(sorted(schema.model_fields))
+                known = ", ".join(sorted(_sub_schema(schema, key)[0].model_fields))
                 lines.append((1, f"{src}: key '{key}': unknown key (misspelt? known: {known})"))
             elif e["type"] == "missing":
                 lines.append((2, f"{src}: key '{key}': required key is missing (expected "
@@ -154,6 +171,19 @@ RHO_W = (900.0, 1100.0, "kg/m^3")
 GRAV = (9.0, 10.5, "m/s^2")
 
 
+class SeabedFile(_Strict):
+    """The optional ``seabed:`` mapping of a rope or cable file (params.SeabedParams: the
+    defaults and their sources). Bounds: kBot from a soft mud (1e3 Pa/m) to rock (1e9; MoorDyn's
+    default 3e6), cBot up to 1e8 Pa s/m, friction coefficients 0 (none) to 2 (chain dug into
+    clay: lateral about 1-1.5), the regularising slip speed 0.1 mm/s to 1 m/s."""
+
+    stiffness: float = num(3.0e6, 1.0e3, 1.0e9, "Pa/m")
+    damping: float = num(3.0e5, 0.0, 1.0e8, "Pa s/m")
+    friction_axial: float = num(0.25, 0.0, 2.0)
+    friction_transverse: float = num(0.25, 0.0, 2.0)
+    slip_speed: float = num(0.01, 1.0e-4, 1.0, "m/s")
+
+
 class RopeFile(_Strict):
     """Element chain rope file (Yoon, Lee, Park, Kim 2012; ropes/table1.yaml)."""
 
@@ -185,6 +215,7 @@ class RopeFile(_Strict):
     # shipped scenarios (section 4.6 pays out at 5 kn = 2.5722 m/s). 10 m/s: no winch is faster.
     winch_max_payout_speed: float = num(3.0, 0.0, 10.0, "m/s", lo_open=True)
     winch_max_heave_speed: float = num(3.0, 0.0, 10.0, "m/s", lo_open=True)
+    seabed: Optional[SeabedFile] = None  # null / absent: the defaults
 
 
 class CableFile(_Strict):
