@@ -40,11 +40,21 @@ class ChainAdapter:
 
     def __init__(self, path: str, layout: str, p_a, p_b, *, end_a: str, end_b: str, current,
                  n_elements: Optional[int], deployed_length: Optional[float], max_substep: float,
-                 equilibrium: bool = False, velocity_a=(0.0, 0.0, 0.0), velocity_b=(0.0, 0.0, 0.0)):
+                 equilibrium: bool = False, velocity_a=(0.0, 0.0, 0.0), velocity_b=(0.0, 0.0, 0.0),
+                 seabed=None):
+        """seabed: None, or a function of the element centres (N, 3) giving the depth below each
+        (m, positive down): the rope is laid, and settled, on that seabed."""
         self.params = load_rope_params(path)
         kw = dict(end_a=end_a, end_b=end_b, current=current)
         if max_substep > 0:
             kw["max_substep"] = max_substep
+        if seabed is not None and layout != "straight":
+            # over a seabed a hanging bight would start below it: lay the slack in a horizontal
+            # bight to the chord's left instead; it sinks onto the bottom while settling / at the start
+            chord = np.asarray(p_b, float) - np.asarray(p_a, float)
+            side = np.array([-chord[1], chord[0], 0.0])
+            if np.linalg.norm(side) > 1e-9:
+                kw["sag_direction"] = side / np.linalg.norm(side)
         if layout == "straight":
             self.rope = RopeChain.straight(self.params, p_a, p_b, n_elements=n_elements, **kw)
         elif layout == "slack":
@@ -52,6 +62,9 @@ class ChainAdapter:
         else:
             self.rope = RopeChain.wound_on_winch(self.params, p_a, p_b, deployed_length=deployed_length,
                                                  n_elements=n_elements, **kw)
+        if seabed is not None:
+            self.rope.set_environment(current=np.array(self.rope.current, float), wind=None,
+                                      seabed_depth=np.asarray(seabed(self.rope.element_centres()), float))
         # equilibrium: settled for the ends' step-0 positions and velocities before step 0
         # (RopeChain.settle); settle_time is how long that took, None when laid as is
         self.settle_time = self.rope.settle(velocity_a, velocity_b) if equilibrium else None
@@ -159,6 +172,8 @@ def make_model(path: str, layout: str, p_a, p_b, **kw):
     if model == "fd_cable":
         kw.pop("velocity_b", None)
         kw.pop("equilibrium", None)  # the cable always starts in its steady tow
+        if kw.pop("seabed", None) is not None:
+            raise ValueError("fd_cable: no seabed contact (element_chain only)")
         return CableAdapter(path, layout, p_a, p_b, **kw)
     kw.pop("heading", None)
     return ChainAdapter(path, layout, p_a, p_b, **kw)

@@ -28,6 +28,7 @@ from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
 from visualization_msgs.msg import MarkerArray
 
 from rope_model.models import ModelFailure, make_model, rope_file_model
+from sea_environment.environment import Environment
 from rope_model.state_cdr import rope_state_cdr
 from sim_plumbing import cdr
 from sim_math.rotations import matrix_from_quaternion
@@ -85,6 +86,10 @@ class RopeNode(SteppedNode):
             "Rate of the visualization markers (at most the exchange rate)", 0.1, 1000.0, "Hz"))
         p("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
         p("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
+        p("environment", "", rc.text_param(
+            "The run's environment as YAML (a scenario's environment section: wind, current, depth; "
+            "sea_environment.environment), sampled at every element each step; '' = current_east / "
+            "current_north, still air, no seabed"))
         gp = self.get_parameter
 
         rope_file = gp("rope_file").value
@@ -105,6 +110,17 @@ class RopeNode(SteppedNode):
         self.n_elements = gp("n_elements").value or None
         self.max_substep = gp("max_substep").value
         self.current = (gp("current_east").value, gp("current_north").value, 0.0)
+        self.env = None
+        self._uniform_set = False
+        if gp("environment").value:
+            if any(self.current):
+                raise ValueError("parameters current_east / current_north and environment both give a current: "
+                                 "use environment.current")
+            self.env, _ = Environment.from_parameter(gp("environment").value)
+            if rope_file_model(path) == "fd_cable" and (self.env.wind is not None or not self.env.depth.is_deep
+                                                        or self.env.current.uniform is None):
+                raise ValueError(f"rope file {path}: an fd_cable takes only a uniform current (no wind, depth or "
+                                 "current field yet)")
         self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
         self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
         self.rejected = 0  # winch orders refused (NaN, inf)
@@ -190,11 +206,18 @@ class RopeNode(SteppedNode):
         if a.orientation is not None:
             x, y, z, w = a.orientation
             heading = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        current = self.current
+        if self.env is not None:   # laid out and settled in the current at its middle at t = 0
+            mid = 0.5 * (np.asarray(a.position, float) + np.asarray(self.ends[1].position, float))
+            cx, cy = self.env.current.velocity_xy(0.0, float(mid[0]), float(mid[1]))
+            current = (cx, cy, 0.0)
         self.rope = make_model(self.rope_path, self.layout, a.position, self.ends[1].position,
-                               end_a=a.mode, end_b=self.ends[1].mode, current=self.current,
+                               end_a=a.mode, end_b=self.ends[1].mode, current=current,
                                n_elements=self.n_elements, deployed_length=self.deployed_length,
                                max_substep=self.max_substep, velocity_a=a.velocity, heading=heading,
-                               equilibrium=self.equilibrium, velocity_b=self.ends[1].velocity)
+                               equilibrium=self.equilibrium, velocity_b=self.ends[1].velocity,
+                               **({"seabed": lambda c: self.env.depth_at(c[:, 0], c[:, 1])}
+                                  if self.env is not None and not self.env.depth.is_deep else {}))
         for end in self.ends:
             if end.mode == "pinned":
                 self.rope.set_end(end.label, end.position, end.velocity)
@@ -207,6 +230,24 @@ class RopeNode(SteppedNode):
                    + " kN)")
         self.get_logger().info(f"rope laid out ({self.rope.name}): {len(out['positions'])} elements/nodes, "
                                f"{out['unstretched_length']:.2f} m deployed{settled}")
+
+    def _sample_environment(self) -> None:
+        """Current, wind and seabed depth at every element's centre for the coming step."""
+        env, t = self.env, self.step_index * self.dt
+        if env.current.uniform is not None and env.wind is None and env.depth.is_deep:
+            if self._uniform_set:
+                return
+            self._uniform_set = True
+        c = self.rope.element_centres()
+        n = c.shape[0]
+        current = np.zeros((n, 3))
+        current[:, :2] = env.current_velocity(t, c[:, 0], c[:, 1])
+        wind = None
+        if env.wind is not None:
+            wind = np.zeros((n, 3))
+            wind[:, :2] = env.wind_velocity(t, c[:, 2])
+        depth = None if env.depth.is_deep else np.asarray(env.depth_at(c[:, 0], c[:, 1]), float)
+        self.rope.set_environment(current=current, wind=wind, seabed_depth=depth)
 
     # -- stepping -------------------------------------------------------------------------
     def compute_step(self, inputs) -> None:
@@ -224,6 +265,8 @@ class RopeNode(SteppedNode):
                 self.clamped += 1
                 if self.complaints("winch clamped", f"winch command clamped: {note}", "warning"):
                     self.emit_event("command_clamped", note)
+        if self.env is not None:
+            self._sample_environment()
         try:
             self.rope.step(self.dt)
         except ModelFailure as exc:

@@ -201,6 +201,26 @@ class Environment:
             raise ValueError("\n".join(lines)) from None
         return Environment(spec, base_dir)
 
+    @staticmethod
+    def from_parameter(text: str, source: str = "parameter environment"):
+        """(Environment, water density) from a node's `environment` parameter: a scenario's
+        environment section as YAML / JSON text (water_density and gravity included)."""
+        import yaml
+        try:
+            data = yaml.safe_load(text) if text else {}
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{source}: not YAML: {exc}") from None
+        if data is None:
+            data = {}
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: expected a YAML mapping, got {text!r}")
+        data = dict(data)
+        rho = data.pop("water_density", 1025.0)
+        data.pop("gravity", None)
+        if isinstance(rho, bool) or not isinstance(rho, (int, float)) or not 900.0 < rho < 1100.0:
+            raise ValueError(f"{source}: key 'water_density': expected a number in (900, 1100), got {rho!r}")
+        return Environment.from_mapping(data, source), float(rho)
+
     def wind_velocity(self, t: float, z=10.0):
         if self.wind is None:
             return np.zeros(2) if np.ndim(z) == 0 else np.zeros((np.size(z), 2))

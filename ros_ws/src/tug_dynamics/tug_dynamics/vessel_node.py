@@ -179,16 +179,10 @@ class VesselNode(SteppedNode):
         current_east / current_north or the ship file then applies, as before)."""
         if not text:
             return None
-        data = yaml.safe_load(text)
-        if data is not None and not isinstance(data, dict):
-            raise ValueError(f"parameter environment:={text!r}: expected a YAML mapping")
-        data = dict(data or {})
         if np.any(current):
             raise ValueError("parameters current_east / current_north and environment both give a current: "
                              "use environment.current")
-        rho = float(data.pop("water_density", 1025.0))
-        data.pop("gravity", None)
-        env = Environment.from_mapping(data, "parameter environment")
+        env, rho = Environment.from_parameter(text)
         return VesselInEnvironment(self.model, env, rho_water=rho)
 
     # -- inputs --------------------------------------------------------------------------
