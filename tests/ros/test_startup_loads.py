@@ -76,7 +76,8 @@ def _run(path, out, duration=None):
 
 
 _RECORDED = {}   # (scenario, duration) -> recording: each run once per test session
-WHOLE_RUN = ("default_demo", "tow_snatch_load")  # run whole for their own tests anyway
+WHOLE_RUN = ("default_demo", "tow_snatch_load",  # run whole for their own tests anyway
+             "env_beam_wind_tow", "env_tidal_stream_tow", "env_slack_towline_seabed")
 
 
 def _recorded(path, tmp_path, duration=None):

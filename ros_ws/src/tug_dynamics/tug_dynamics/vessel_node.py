@@ -141,6 +141,7 @@ class VesselNode(SteppedNode):
         if np.any(current):   # 0, 0 keeps the ship file's own current
             self.model.set_current(current)
         self.surroundings = self._environment(self.get_parameter("environment").value, current)
+        self._environment_wrenches = []
         self._was_grounded = False
 
         self.rejected = 0
@@ -248,17 +249,7 @@ class VesselNode(SteppedNode):
                                            moment_world=rot @ np.array(msg.torque)))
             self._rope_forces[topic] = (point, msg.force)
         if self.surroundings is not None:
-            wrenches += self.surroundings.prepare(self.step_index * self.dt)
-            grounded = self.surroundings.status.grounded
-            if grounded != self._was_grounded:
-                st = self.surroundings.status
-                self._was_grounded = grounded
-                self.emit_event("grounded" if grounded else "refloated",
-                                f"under-keel clearance {st.under_keel_clearance:.2f} m (depth {st.water_depth:.2f} m, "
-                                f"draft {self.model.draft:.2f} m, squat {st.squat:.2f} m)", st.under_keel_clearance)
-                log = self.get_logger().warning if grounded else self.get_logger().info
-                log(f"vessel '{self.vessel_name}' {'ran aground' if grounded else 'is afloat again'} at step "
-                    f"{self.step_index}: under-keel clearance {st.under_keel_clearance:.2f} m")
+            wrenches += self._environment_wrenches   # of this state, taken when it was published
         self.model.step(self.dt, wrenches)
         self._check_finite()
 
@@ -314,13 +305,28 @@ class VesselNode(SteppedNode):
                                 stamp_ns)
 
         st = self.model.status()
-        env = self.surroundings.status if self.surroundings is not None else _STILL_DEEP
+        env = _STILL_DEEP
+        if self.surroundings is not None:
+            # the environment of the state being published: its wrenches act over the next step
+            self._environment_wrenches = self.surroundings.prepare(self.step_index * self.dt)
+            env = self.surroundings.status
+            if env.grounded != self._was_grounded:
+                self._was_grounded = env.grounded
+                self._report_grounding(env)
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
             st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded), stamp_ns)
         if self.step_index % self.marker_every == 0:
             self.marker_pub.publish(self.scene.markers(stamp_ns, st.thrust, list(self._rope_forces.values()),
                                                        self.force_scale), stamp_ns)
+
+    def _report_grounding(self, st) -> None:
+        what = "grounded" if st.grounded else "refloated"
+        self.emit_event(what, f"under-keel clearance {st.under_keel_clearance:.2f} m (depth {st.water_depth:.2f} m, "
+                              f"draft {self.model.draft:.2f} m, squat {st.squat:.2f} m)", st.under_keel_clearance)
+        log = self.get_logger().warning if st.grounded else self.get_logger().info
+        log(f"vessel '{self.vessel_name}' {'ran aground' if st.grounded else 'is afloat again'} at step "
+            f"{self.step_index}: under-keel clearance {st.under_keel_clearance:.2f} m")
 
     def emit_event(self, kind: str, detail: str, value: float = float("nan")) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
