@@ -298,3 +298,59 @@ def test_s175_anchor_dredges_with_what_its_chain_allows(depth):
     lam_w = 1.5 * 70608.0
     expect = 0.0 if h >= 137.5 else min(lam_w, 765.0 * (137.5 ** 2 - h ** 2) / (2.0 * h))
     assert ship.status().anchor_force == pytest.approx(expect, rel=1e-6, abs=1e-6)
+
+
+# ---- shallow water: Ankudinov's factors on the manoeuvring model --------------------------------
+def _ankudinov_by_hand(L, B, T, cb, h):
+    """The MARAD factors typed from their restatement (Taimuri et al. 2020; DMI's Y'v form)."""
+    F = h / T - 1.0
+    K0 = 1 + 0.0775 / F ** 2 - 0.011 / F ** 3 + 0.000068 / F ** 5
+    K1 = -0.0643 / F + 0.0724 / F ** 2 - 0.0113 / F ** 3 + 0.0000767 / F ** 5
+    K2 = 0.0342 / F
+    b = cb * B * (1 + B / L) ** 2 / T
+    fnv = K0 + K1 * b + K2 * b ** 2
+    fnr = K0 + K1 * b / 2 + K2 * b ** 2 / 3
+    fyr = K0 + 2 * K1 * b / 5 + 24 * K2 * b ** 2 / 105
+    return 1.5 * fnv - 0.5, fyr, fnv, fnr
+
+
+def test_ankudinov_factors_by_hand_and_their_deep_water_limit():
+    from sea_environment.shallow_water import ankudinov_factors
+    L, B, T, cb = 175.0, 25.4, 8.5, 0.559
+    for ratio in (1.2, 1.5, 2.0, 3.0, 4.0, 6.0):
+        got = ankudinov_factors(L, B, T, cb, ratio * T)[:4]
+        assert got == pytest.approx(_ankudinov_by_hand(L, B, T, cb, ratio * T), rel=1e-12)
+        if ratio >= 4.0:
+            assert max(abs(f - 1.0) for f in got) < 0.05
+    # the values the research notes list for the S-175 at h/T = 1.5 (f_nv, f_nr, f_yr)
+    assert ankudinov_factors(L, B, T, cb, 1.5 * T)[1:4] == pytest.approx((1.363, 1.712, 1.414), abs=1e-3)
+    assert ankudinov_factors(L, B, T, cb, math.inf) == (1.0, 1.0, 1.0, 1.0, 1.0)
+
+
+def _steady_turn_diameter(depth_ratio, rudder_deg):
+    ship = load_ship("s175_003.yaml")
+    if depth_ratio is not None:
+        ship.set_depth(depth_ratio * ship.draft)
+    ship.set_state(VesselState(np.zeros(3), np.zeros(3), np.array([9.0 * KNOT, 0.0, 0.0]), np.zeros(3)))
+    ship.settle_command(Command(0.5, 0.0))
+    ship.set_command(Command(0.5, math.radians(rudder_deg)))
+    for _ in range(12000):                      # 1200 s: the turn settles within about 600 s
+        ship.step(0.1)
+    s = ship.state
+    return 2.0 * math.hypot(*s.linear_velocity_body[:2]) / abs(s.angular_velocity_body[2])
+
+
+def test_s175_turns_wider_in_shallow_water_and_as_in_deep_water_beyond_h_over_t_4():
+    """10 deg of rudder, 9 kn: the steady turning diameter is the deep-water one (1 %) for
+    h/T >= 4 and grows steadily as the water shoals below h/T = 3 (Ankudinov's factors make the
+    hull much more course-stable), to more than twice the deep value at h/T = 1.2. 35 deg: the
+    deep value (2 %) for h/T >= 4, wider at h/T 1.2 than at 1.5 by 1.15-1.6 times (full-scale
+    Esso Osaka trials, Crane 1979, as reported: 1.31; a different ship, hence the wide band)."""
+    deep10 = _steady_turn_diameter(None, 10.0)
+    d10 = {r: _steady_turn_diameter(r, 10.0) for r in (6.0, 4.0, 3.0, 2.0, 1.5, 1.2)}
+    assert abs(d10[6.0] / deep10 - 1.0) < 0.01 and abs(d10[4.0] / deep10 - 1.0) < 0.01
+    assert d10[3.0] < d10[2.0] < d10[1.5] < d10[1.2]
+    assert d10[1.2] > 2.0 * deep10
+    deep35 = _steady_turn_diameter(None, 35.0)
+    assert abs(_steady_turn_diameter(4.0, 35.0) / deep35 - 1.0) < 0.02
+    assert 1.15 < _steady_turn_diameter(1.2, 35.0) / _steady_turn_diameter(1.5, 35.0) < 1.6

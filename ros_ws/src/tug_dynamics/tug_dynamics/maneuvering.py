@@ -12,6 +12,10 @@ z up) by _deriv:
              deduction; shaft-speed lag Eq 9 (_engine_rate)
   rudder     _rudder_force, _rudder_inflow: S. D. Yoon Eq 7-8 (Fujii normal force, Kijima flow
              straightening); steering gear Eq 10 (_steering_gear_rate)
+  thruster   _thruster_forces: azimuth thrusters (ASD tug): S. D. Yoon Eq 4 along the thruster's
+             axis with the axial inflow, hull thrust deduction t(azimuth), thruster-thruster
+             interaction of the ABS DP guide (_thruster_interaction); rpm lag Eq 9 style and
+             slew-rate-limited azimuth (_azimuth_rate) per thruster
   anchor     _anchor_dredging: S. D. Yoon Eq 5-6; let-go / heave-up timing in the class
   towline    _simple_towline: Yun & Kim Eq 3 (constant magnitude, gamma ramp)
   external   _wrench_in_body: any number of vessel.ExternalWrench (world force at a body point)
@@ -27,24 +31,29 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 from numba import njit
 
 from sim_math.integration import rk4_stage, rk4_update
 
-from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, AnchorState, Command, ExternalWrench, StatusRecord,
-                     Vessel, VesselState, check_command, check_current)
+from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, AnchorState, Command, CommandRejected, ExternalWrench,
+                     StatusRecord, ThrusterOrder, ThrusterStatus, Vessel, VesselState, check_command,
+                     check_current)
 
 # ---- state vector layout -------------------------------------------------
 S_X, S_Y, S_PSI, S_U, S_V, S_R, S_PHI, S_P, S_N, S_DELTA = range(10)
 NSTATE = 10
+# azimuth thruster k (if the file has thrusters): shaft speed (rps) at S_THR0 + 2k, azimuth (rad,
+# 0 = thrust ahead, + turns the thrust to port) at S_THR0 + 2k + 1; the state vector is
+# NSTATE + 2 n_thrusters long (ships without thrusters keep NSTATE)
+S_THR0 = NSTATE
 
 # ---- hull parameter vector ------------------------------------------------
 (H_FORM, H_RHO, H_L, H_T, H_M, H_XG, H_ZG, H_MX, H_MY, H_MMG_CORIOLIS, H_ROLL, H_GMW, H_KP, H_ZH,
  H_TOW_ON, H_TOW_F, H_TOW_X, H_TOW_DRIFT, H_TOW_RATE, H_TOW_MAX, H_ANC_LW, H_ANC_LA, H_ANC_UEPS,
- H_ANC_RON, H_ANC_VUCAP, H_NPROP, H_NRUD, H_MAXRATE, H_TE, H_TN, H_ANC_UREF) = range(31)
+ H_ANC_RON, H_ANC_VUCAP, H_NPROP, H_NRUD, H_MAXRATE, H_TE, H_TN, H_ANC_UREF, H_NTHR) = range(32)
 H_C0 = 32           # hull coefficients start here (16 slots)
 NHULL = H_C0 + 16
 
@@ -57,13 +66,23 @@ NPROP = 12
 (R_X, R_Y, R_Z, R_AREA, R_FALPHA, R_ETA, R_AH, R_XH, R_TR, R_WR0, R_LR, R_PROP, R_KAPPA0) = range(13)
 NRUD = 13
 
+# ---- azimuth thruster rows ---------------------------------------------------
+(T_X, T_Y, T_Z, T_D, T_C1, T_C2, T_C3, T_AST, T_W, T_TN, T_RATE, T_TAZ, T_FULL, T_AMIN, T_AMAX,
+ T_NTD, T_INTER) = range(17)   # T_INTER: 1 = thruster-thruster interaction (ABS), 0 = none
+T_TD0 = 17          # thrust deduction table: T_NTD azimuths (rad, increasing in [-pi, pi]), then values
+MAX_TD = 12
+NTHR = T_TD0 + 2 * MAX_TD
+MAX_THRUSTERS = 4
+
 # ---- control vector ------------------------------------------------------------
 C_NCMD, C_DCMD, C_ANC_F, C_ANC_SIDE, C_CUR_X, C_CUR_Y, C_GAMMA = range(7)
 NCTRL = 7
+C_THR0 = NCTRL      # thruster k: ordered shaft speed (rps) at C_THR0 + 2k, ordered azimuth (rad) + 1
 
 # ---- output (diagnostics of the last derivative evaluation) ------------------
 O_THRUST, O_ANC_X, O_HEEL_EXT, O_UR, O_VR = range(5)
 NOUT = 5
+O_THR0 = NOUT       # thruster k: delivered force along its axis (N) at O_THR0 + 2k, open-water thrust + 1
 
 
 @njit(cache=True)
@@ -346,13 +365,169 @@ def _steering_gear_rate(hp, ctrl, delta):
     return rate if err > 0.0 else -rate
 
 
+# ---- azimuth thrusters ------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def _wrap(a):
+    """An angle in (-pi, pi]."""
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+@njit(cache=True)
+def _hull_deduction(thrs, k, azimuth):
+    """Thrust deduction t(azimuth) of thruster k: linear in the table, periodic over 360 deg
+    (one value: constant). The hull's extra resistance from the thruster's suction and jet (jet
+    along the hull astern, onto the skeg sideways), acting along the thrust."""
+    m = int(thrs[k, T_NTD])
+    if m == 1:
+        return thrs[k, T_TD0 + MAX_TD]
+    a = _wrap(azimuth)
+    a0 = thrs[k, T_TD0]
+    am = thrs[k, T_TD0 + m - 1]
+    if a < a0 or a >= am:              # the wrap-around segment, last -> first + 2 pi
+        span = a0 + 2.0 * math.pi - am
+        da = a - am if a >= am else a + 2.0 * math.pi - am
+        f = da / span if span > 0.0 else 0.0
+        return thrs[k, T_TD0 + MAX_TD + m - 1] + f * (thrs[k, T_TD0 + MAX_TD] - thrs[k, T_TD0 + MAX_TD + m - 1])
+    i = 0
+    while thrs[k, T_TD0 + i + 1] <= a:
+        i += 1
+    f = (a - thrs[k, T_TD0 + i]) / (thrs[k, T_TD0 + i + 1] - thrs[k, T_TD0 + i])
+    return thrs[k, T_TD0 + MAX_TD + i] + f * (thrs[k, T_TD0 + MAX_TD + i + 1] - thrs[k, T_TD0 + MAX_TD + i])
+
+
+@njit(cache=True, inline="always")
+def _thruster_open_water(thrs, k, rho, n, ua):
+    """S. D. Yoon Eq 4 along the thruster's axis: T = rho n^2 D^4 K_T(J), K_T = C1 + C2 J + C3 J^2,
+    J = u_A / (n D), u_A the inflow along the thrust direction; rho D^4 (C1 n^2 + C2 n u_A / D +
+    C3 u_A^2 / D^2) for n > 0, u_A >= 0. The quadratic is open-water data (J >= 0): beyond its zero
+    the propeller freewheels and its small drag is neglected (T = 0, not the quadratic's negative
+    tail); with inflow from behind (J < 0) the linear part C1 + C2 J; a stopped unit gives no
+    force. Reversed rotation (a reversible unit): the same with the inflow reversed, C1 and C2
+    scaled by the astern factor, thrust negative."""
+    D = thrs[k, T_D]
+    if n == 0.0:
+        return 0.0
+    sg = 1.0
+    a1 = thrs[k, T_C1]
+    a2 = thrs[k, T_C2]
+    if n < 0.0:
+        sg = -1.0
+        n = -n
+        ua = -ua
+        a1 *= thrs[k, T_AST]
+        a2 *= thrs[k, T_AST]
+    t = a1 * n * n + a2 * n * ua / D
+    if ua > 0.0:
+        t += thrs[k, T_C3] * ua * ua / (D * D)
+    if t < 0.0:
+        t = 0.0
+    return sg * rho * D ** 4 * t
+
+
+@njit(cache=True, inline="always")
+def _thruster_interaction(dist_over_d, phi_deg):
+    """ABS Guide for Dynamic Positioning Systems (2013), Appendix 1 (after Dang & Laheij 2004):
+    thrust ratio T / T0 of a thruster in the jet of another at distance x (x/D, D the upstream
+    thruster's diameter): t = 1 - 0.75^((x/D)^(2/3)) in line; with the jet turned phi deg off the
+    line joining them t_phi = t + (1 - t) phi^3 / (130 / t^3 + phi^3)."""
+    t = 1.0 - 0.75 ** (dist_over_d ** (2.0 / 3.0))
+    if t <= 0.0:
+        return 0.0
+    p3 = phi_deg * phi_deg * phi_deg
+    return t + (1.0 - t) * p3 / (130.0 / (t * t * t) + p3)
+
+
+@njit(cache=True, inline="always")
+def _azimuth_rate(thrs, k, ordered, azimuth):
+    """The azimuth follows its order at the slew-rate limit (shortest way round on a 360 deg
+    unit; a unit with a limited range turns within it), settling with a first-order lag
+    T_az inside rate x T_az of the order (S. D. Yoon Eq 10 form, as the steering gear)."""
+    err = ordered - azimuth
+    if thrs[k, T_FULL] > 0.0:
+        err = _wrap(err)
+    rate = thrs[k, T_RATE]
+    taz = thrs[k, T_TAZ]
+    if abs(err) <= taz * rate:
+        return err / taz
+    return rate if err > 0.0 else -rate
+
+
+@njit(cache=True)
+def _thruster_forces(s, thrs, ctrl, rho, ur, vr, r, out, ds):
+    """X, Y, N, K of every azimuth thruster; writes their shaft and azimuth rates into ds and the
+    delivered and open-water thrust into out (O_THR0 + 2k, + 1).
+
+    Thrust acts along the azimuth (0 = ahead, + to port); the inflow is the water's velocity at
+    the thruster, its component along the thruster's axis the advance speed (times 1 - w)."""
+    nthr = thrs.shape[0]
+    T0 = np.empty(nthr)
+    ca = np.empty(nthr)
+    sa = np.empty(nthr)
+    for k in range(nthr):
+        n = s[S_THR0 + 2 * k]
+        a = s[S_THR0 + 2 * k + 1]
+        ca[k] = math.cos(a)
+        sa[k] = math.sin(a)
+        ut = ur - thrs[k, T_Y] * r             # water velocity at the thruster (body, y port)
+        vt = vr + thrs[k, T_X] * r
+        ua = (ut * ca[k] + vt * sa[k]) * (1.0 - thrs[k, T_W])
+        T0[k] = _thruster_open_water(thrs, k, rho, n, ua)
+        ds[S_THR0 + 2 * k] = (ctrl[C_THR0 + 2 * k] - n) / thrs[k, T_TN]        # Eq 9 lag
+        ds[S_THR0 + 2 * k + 1] = _azimuth_rate(thrs, k, ctrl[C_THR0 + 2 * k + 1], a)
+    X = 0.0
+    Y = 0.0
+    N = 0.0
+    K = 0.0
+    for k in range(nthr):
+        f = 1.0 - _hull_deduction(thrs, k, s[S_THR0 + 2 * k + 1])
+        nk = abs(s[S_THR0 + 2 * k])
+        for i in range(nthr):
+            if i == k or T0[i] == 0.0 or thrs[k, T_INTER] == 0.0:
+                continue
+            # the jet of i leaves against its thrust; is k in it?
+            sg = 1.0 if T0[i] > 0.0 else -1.0
+            jx = -sg * ca[i]
+            jy = -sg * sa[i]
+            dx = thrs[k, T_X] - thrs[i, T_X]
+            dy = thrs[k, T_Y] - thrs[i, T_Y]
+            dist = math.sqrt(dx * dx + dy * dy)
+            if dist <= 0.0:
+                continue
+            c = (dx * jx + dy * jy) / dist
+            c = 1.0 if c > 1.0 else (-1.0 if c < -1.0 else c)
+            tr = _thruster_interaction(dist / thrs[i, T_D], math.degrees(math.acos(c)))
+            # ABS's ratio is for equally loaded units: a slower jet (rpm ratio) takes less
+            ni = abs(s[S_THR0 + 2 * i])
+            wgt = 1.0 if ni >= nk else ni / nk
+            f *= 1.0 - (1.0 - tr) * wgt
+        F = f * T0[k]
+        fx = F * ca[k]
+        fy = F * sa[k]
+        X += fx
+        Y += fy
+        N += thrs[k, T_X] * fy - thrs[k, T_Y] * fx
+        K += -thrs[k, T_Z] * fy
+        out[O_THR0 + 2 * k] = F
+        out[O_THR0 + 2 * k + 1] = T0[k]
+    return X, Y, N, K
+
+
 # ---- equations of motion ---------------------------------------------------------------------
 
 @njit(cache=True)
 def _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out):
+    """_deriv_t of a ship without azimuth thrusters (the form the tests call)."""
+    return _deriv_t(s, hp, props, ruds, np.zeros((0, NTHR)), rv, rf, minv, ctrl, wrench_force, wrench_point,
+                    wrench_moment, out)
+
+
+@njit(cache=True)
+def _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out):
     """Time derivative of the state vector s (S_* indices); writes diagnostics to out (O_*).
 
     X, Y, N, K sum the components in a fixed order (the order is part of the numbers)."""
+    ds = np.zeros(s.shape[0])
     u, v, r, p = s[S_U], s[S_V], s[S_R], s[S_P]
     n, delta = s[S_N], s[S_DELTA]
     cpsi, spsi = math.cos(s[S_PSI]), math.sin(s[S_PSI])
@@ -398,6 +573,17 @@ def _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, w
         N += NR
         K += -ruds[k, R_Z] * YR
 
+    if thrs.shape[0] > 0:
+        XT, YT, NT, KT = _thruster_forces(s, thrs, ctrl, rho, ur, vr, r, out, ds)
+        X += XT
+        Y += YT
+        N += NT
+        K += KT
+        # status thrust: along body x, propellers and thrusters
+        for k in range(thrs.shape[0]):
+            thrust_total += out[O_THR0 + 2 * k] * math.cos(s[S_THR0 + 2 * k + 1])
+        out[O_THRUST] = thrust_total
+
     out[O_ANC_X] = 0.0
     if ctrl[C_ANC_F] > 0.0:
         XA, YA, NA = _anchor_dredging(hp, ctrl, u, v, r)
@@ -434,7 +620,6 @@ def _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, w
         K += _roll_moment(hp, ur, r, sphi, p)
     du, dv, dr, dp = _solve_accelerations(minv, X, Y, N, K)
 
-    ds = np.zeros(NSTATE)
     # the current turns with the body: d(nu_c)/dt = -omega x nu_c
     ds[S_U] = du + r * vc
     ds[S_V] = dv - r * uc
@@ -452,25 +637,32 @@ def _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, w
 
 
 @njit(cache=True)
-def _integrate(s, dt, hmax, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out):
-    """RK4 over dt in equal sub-steps <= hmax; the towline angle ramps between sub-steps."""
+def _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+               out):
+    """RK4 over dt in equal sub-steps <= hmax; the towline angle ramps between sub-steps and the
+    azimuths of 360 deg thrusters are wrapped to (-pi, pi] after each."""
     nsub = int(math.ceil(dt / hmax - 1e-9))
     if nsub < 1:
         nsub = 1
     h = dt / nsub
     stage = np.empty_like(s)
     for _ in range(nsub):
-        k1 = _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out)
-        k2 = _deriv(rk4_stage(s, 0.5 * h, k1, stage), hp, props, ruds, rv, rf, minv, ctrl, wrench_force,
-                    wrench_point, wrench_moment, out)
-        k3 = _deriv(rk4_stage(s, 0.5 * h, k2, stage), hp, props, ruds, rv, rf, minv, ctrl, wrench_force,
-                    wrench_point, wrench_moment, out)
-        k4 = _deriv(rk4_stage(s, h, k3, stage), hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point,
-                    wrench_moment, out)
+        k1 = _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+                      out)
+        k2 = _deriv_t(rk4_stage(s, 0.5 * h, k1, stage), hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force,
+                      wrench_point, wrench_moment, out)
+        k3 = _deriv_t(rk4_stage(s, 0.5 * h, k2, stage), hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force,
+                      wrench_point, wrench_moment, out)
+        k4 = _deriv_t(rk4_stage(s, h, k3, stage), hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force,
+                      wrench_point, wrench_moment, out)
         rk4_update(s, h, k1, k2, k3, k4)
         if hp[H_TOW_ON] > 0.0:
             ctrl[C_GAMMA] = _towline_angle_ramp(ctrl[C_GAMMA], hp[H_TOW_MAX], hp[H_TOW_RATE] * h)
-    _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out)   # diagnostics
+        for k in range(thrs.shape[0]):
+            if thrs[k, T_FULL] > 0.0:
+                s[S_THR0 + 2 * k + 1] = _wrap(s[S_THR0 + 2 * k + 1])
+    _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+             out)   # diagnostics
     return s
 
 
@@ -482,9 +674,10 @@ _NO_ANCHOR, _STOWED, _LETTING_GO, _DREDGING, _HEAVING_UP = (
 @dataclasses.dataclass(kw_only=True, slots=True)
 class DisplacementStatus(StatusRecord):
     """StatusRecord plus the displacement model's own values."""
-    engine_rpm: float        # actual shaft speed, rev/min
+    engine_rpm: float        # actual shaft speed, rev/min (mean of the thrusters' on a thruster-only ship)
     anchor_force: float      # N, dredging resistance (S. D. Yoon Eq 5-6), >= 0
     towline_angle: float     # rad, Yun & Kim Eq 3 gamma
+    thrusters: tuple         # one vessel.ThrusterStatus per azimuth thruster (empty without)
 
 
 def anchor_holding_factor(holding_force: float, chain_out: float, chain_weight: float, height: float) -> float:
@@ -514,7 +707,8 @@ class ManeuveringVessel(Vessel):
                  limits: dict, attachments: Dict[str, np.ndarray], anchor: Optional[dict] = None,
                  roll: Optional[dict] = None, hmax: float = 0.1,
                  initial_state: Optional[VesselState] = None, current=(0.0, 0.0),
-                 source: str = ""):
+                 source: str = "", thrusters: Optional[np.ndarray] = None,
+                 thruster_cfg: Sequence[dict] = ()):
         self.name = name
         self.source = source
         self.hp = np.ascontiguousarray(hp, float)
@@ -529,10 +723,21 @@ class ManeuveringVessel(Vessel):
         self.anchor_cfg = anchor
         self.roll_cfg = roll
         self.hmax = float(hmax)
-        self.ctrl = np.zeros(NCTRL)
+        # azimuth thrusters: rows (T_*) and per thruster {name, rated_rps, full_360, azimuth_range
+        # (rad, (lo, hi)), reversible}
+        self.thrs = (np.ascontiguousarray(thrusters, float).reshape(-1, NTHR) if thrusters is not None
+                     and len(thrusters) else np.zeros((0, NTHR)))
+        self.thruster_cfg = [dict(c) for c in thruster_cfg]
+        if len(self.thruster_cfg) != self.thrs.shape[0]:
+            raise ValueError(f"{name}: {self.thrs.shape[0]} thruster rows but {len(self.thruster_cfg)} configurations")
+        self.thruster_names = tuple(c["name"] for c in self.thruster_cfg)
+        nthr = self.thrs.shape[0]
+        self.hp[H_NTHR] = nthr
+        self.ctrl = np.zeros(NCTRL + 2 * nthr)
         self.ctrl[C_CUR_X], self.ctrl[C_CUR_Y] = current
-        self.out = np.zeros(NOUT)
-        self.s = np.zeros(NSTATE)
+        self.out = np.zeros(NOUT + 2 * nthr)
+        self.s = np.zeros(NSTATE + 2 * nthr)
+        self._thruster_orders = [(0.0, 0.0)] * nthr     # held (azimuth rad, rpm fraction) per thruster
         self.time = 0.0
         self._command = Command()
         self._anchor_state = _STOWED if anchor else _NO_ANCHOR
@@ -545,9 +750,16 @@ class ManeuveringVessel(Vessel):
 
     # ---- state and environment ---------------------------------------------------------
     def set_state(self, state: VesselState, shaft_rps: Optional[float] = None,
-                  rudder: Optional[float] = None) -> None:
-        """Set the kinematic state (and optionally the actual shaft speed and rudder angle)."""
+                  rudder: Optional[float] = None, thrusters: Optional[Sequence[Tuple[float, float]]] = None) -> None:
+        """Set the kinematic state (and optionally the actual shaft speed and rudder angle, and
+        the azimuth thrusters' actual (azimuth rad, shaft speed rps), one pair per thruster)."""
         s = self.s
+        if thrusters is not None:
+            if len(thrusters) != self.thrs.shape[0]:
+                raise ValueError(f"{self.name}: {len(thrusters)} thruster states for {self.thrs.shape[0]} thrusters")
+            for k, (az, n) in enumerate(thrusters):
+                s[S_THR0 + 2 * k + 1] = float(az)
+                s[S_THR0 + 2 * k] = float(n)
         s[S_X], s[S_Y] = state.position[0], state.position[1]
         s[S_PHI], s[S_PSI] = state.rpy[0], state.rpy[2]
         s[S_U], s[S_V] = state.linear_velocity_body[0], state.linear_velocity_body[1]
@@ -572,13 +784,27 @@ class ManeuveringVessel(Vessel):
                              "must be 0")
         self.ctrl[C_CUR_X], self.ctrl[C_CUR_Y] = float(east), float(north)
 
+    # the linear derivatives Y'v, Y'r, N'v, N'r: their slots in hp[H_C0:] per hull form
+    _LINEAR_SLOTS = {FORM_POLY: (3, 5, 9, 11), FORM_LOWSPEED: (2, 3, 7, 8)}
+
     def set_depth(self, depth: float) -> None:
-        """Water depth under the vessel (m; math.inf = not given). It limits the anchor's holding
-        when the ship file gives the chain (anchor_holding_factor); the hull's manoeuvring
-        derivatives keep their deep-water values."""
+        """Water depth under the vessel (m; math.inf = deep / not given). The hull's linear
+        derivatives Y'v, Y'r, N'v, N'r become the file's (deep-water) values times Ankudinov's
+        shallow-water factors (sea_environment.shallow_water.ankudinov_factors; the added masses
+        and nonlinear terms keep theirs); with a chain in the ship file the depth also limits the
+        anchor's holding (anchor_holding_factor)."""
+        from sea_environment.shallow_water import ankudinov_factors
         depth = float(depth)
         if not depth > 0.0:
             raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
+        slots = self._LINEAR_SLOTS.get(int(self.hp[H_FORM]))
+        if slots is not None:
+            if not hasattr(self, "_deep_linear"):
+                self._deep_linear = self.hp[[H_C0 + i for i in slots]].copy()
+            block = self.volume / (self.length * self.beam * self.draft)
+            f_yv, f_yr, f_nv, f_nr, _ = ankudinov_factors(self.length, self.beam, self.draft, block, depth)
+            for i, deep, f in zip(slots, self._deep_linear, (f_yv, f_yr, f_nv, f_nr)):
+                self.hp[H_C0 + i] = deep * f
         a = self.anchor_cfg
         if a is None or a.get("chain_out") is None or math.isinf(depth):
             self._anchor_hold = 1.0
@@ -596,6 +822,11 @@ class ManeuveringVessel(Vessel):
         return self._command
 
     def set_command(self, cmd: Command) -> List[str]:
+        """Engine order and steering (and the anchor). On a ship whose only propulsion is azimuth
+        thrusters (an ASD tug) they map onto every thruster: rpm fraction |engine_order|, azimuth
+        -steering_angle ahead (engine_order >= 0) and pi + steering_angle astern, so a positive
+        steering angle pushes the stern to starboard and turns the vessel to port either way;
+        steering is clamped to +-pi there. Per-thruster orders: set_thruster_command."""
         check_command(cmd)   # raises CommandRejected; the held command is untouched
         msgs = []
         eo, st = float(cmd.engine_order), float(cmd.steering_angle)
@@ -621,13 +852,96 @@ class ManeuveringVessel(Vessel):
         self._command = Command(eo, st, 0)
         self.ctrl[C_NCMD] = eo * self.limits["rated_rps"]
         self.ctrl[C_DCMD] = st
+        if self.thrs.shape[0] and self.hp[H_NPROP] == 0:
+            az = -st if eo >= 0.0 else _wrap(math.pi + st)
+            msgs += self._apply_thruster_orders([(k, az, abs(eo)) for k in range(self.thrs.shape[0])])
         return msgs
+
+    def _thruster_label(self, k: int) -> str:
+        return f"thruster {k} ({self.thruster_names[k]})"
+
+    def set_thruster_command(self, orders: Sequence[ThrusterOrder]) -> List[str]:
+        """Per-thruster orders (vessel.ThrusterOrder: thruster index or name, azimuth rad, rpm
+        fraction). Thrusters not named keep their orders. NaN / inf, a thruster the vessel does
+        not have, or one named twice: CommandRejected naming it, and no order changes. rpm outside
+        [-1, 1] (a reversible unit) or [0, 1], an azimuth outside a limited unit's range: clamped,
+        one message each. A 360 deg unit takes any azimuth (wrapped to (-pi, pi])."""
+        nthr = self.thrs.shape[0]
+        if nthr == 0:
+            raise CommandRejected(f"{self.name}: has no azimuth thrusters; thruster orders refused")
+        resolved = []
+        seen = set()
+        for o in orders:
+            key = o.thruster
+            if isinstance(key, str):
+                if key not in self.thruster_names:
+                    raise CommandRejected(f"{self.name}: thruster {key!r} does not exist; "
+                                          f"thrusters are {list(self.thruster_names)}")
+                k = self.thruster_names.index(key)
+            elif isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+                k = int(key)
+                if not 0 <= k < nthr:
+                    raise CommandRejected(f"{self.name}: thruster {k} does not exist; thrusters are 0..{nthr - 1} "
+                                          f"{list(self.thruster_names)}")
+            else:
+                raise CommandRejected(f"{self.name}: thruster {key!r} is neither an index nor a name")
+            if k in seen:
+                raise CommandRejected(f"{self.name}: {self._thruster_label(k)} ordered twice in one command")
+            seen.add(k)
+            for field in ("azimuth", "rpm"):
+                value = getattr(o, field)
+                try:
+                    ok = math.isfinite(value)
+                except TypeError:
+                    ok = False
+                if not ok:
+                    raise CommandRejected(f"{self.name}: {self._thruster_label(k)} {field}={value!r} "
+                                          "is not a finite number")
+            resolved.append((k, float(o.azimuth), float(o.rpm)))
+        return self._apply_thruster_orders(resolved)
+
+    def _apply_thruster_orders(self, resolved) -> List[str]:
+        """Clamp and hold checked (index, azimuth, rpm fraction) orders; one message per clamp."""
+        msgs = []
+        for k, az, rpm in resolved:
+            cfg = self.thruster_cfg[k]
+            lo = -1.0 if cfg["reversible"] else 0.0
+            if not lo <= rpm <= 1.0:
+                c = min(1.0, max(lo, rpm))
+                msgs.append(f"{self.name}: {self._thruster_label(k)} rpm {rpm:g} clamped to {c:g} "
+                            f"(range {lo:g} .. 1 of rated)")
+                rpm = c
+            if cfg["full_360"]:
+                az = _wrap(az)
+            else:
+                a0, a1 = cfg["azimuth_range"]
+                if not a0 <= az <= a1:
+                    c = min(a1, max(a0, az))
+                    msgs.append(f"{self.name}: {self._thruster_label(k)} azimuth {az:g} rad clamped to {c:g} rad "
+                                f"(range {a0:g} .. {a1:g} rad)")
+                    az = c
+            self._thruster_orders[k] = (az, rpm)
+            self.ctrl[C_THR0 + 2 * k] = rpm * cfg["rated_rps"]
+            self.ctrl[C_THR0 + 2 * k + 1] = az
+        return msgs
+
+    @property
+    def thruster_orders(self) -> List[Tuple[float, float]]:
+        """The held (azimuth rad, rpm fraction) of each thruster, after clamping."""
+        return list(self._thruster_orders)
 
     def settle_command(self, cmd: Command) -> List[str]:
         msgs = self.set_command(cmd)
         self.s[S_N] = self.ctrl[C_NCMD]      # engine at its ordered rpm (Eq 9 lag already run out)
         self.s[S_DELTA] = self.ctrl[C_DCMD]  # rudder at its ordered angle (Eq 10)
+        self.settle_thrusters()
         return msgs
+
+    def settle_thrusters(self) -> None:
+        """Every thruster at its ordered rpm and azimuth (lags run out)."""
+        for k in range(self.thrs.shape[0]):
+            self.s[S_THR0 + 2 * k] = self.ctrl[C_THR0 + 2 * k]
+            self.s[S_THR0 + 2 * k + 1] = self.ctrl[C_THR0 + 2 * k + 1]
 
     def _pick_anchor_side(self, steering: float) -> None:
         side = self.anchor_cfg["side"]
@@ -677,7 +991,7 @@ class ManeuveringVessel(Vessel):
             force, point, moment = self._no_wrench
         if self.anchor_cfg is not None:
             self._update_anchor(dt)
-        _integrate(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.rv, self.rf, self.minv,
+        _integrate(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv, self.rf, self.minv,
                    self.ctrl, force, point, moment, self.out)
         self.time += dt
         self._sync_state()
@@ -691,11 +1005,29 @@ class ManeuveringVessel(Vessel):
             threshold = rc["girting_threshold"]
         else:
             ratio = threshold = 0.0     # no roll model: no heel, no girting
+        nthr = self.thrs.shape[0]
+        thr = tuple(ThrusterStatus(
+            name=self.thruster_names[k],
+            azimuth=float(_wrap(s[S_THR0 + 2 * k + 1])),
+            azimuth_ordered=float(self.ctrl[C_THR0 + 2 * k + 1]),
+            rpm=float(60.0 * s[S_THR0 + 2 * k]),
+            rpm_ordered=float(60.0 * self.ctrl[C_THR0 + 2 * k]),
+            thrust=float(self.out[O_THR0 + 2 * k]),
+            open_water_thrust=float(self.out[O_THR0 + 2 * k + 1])) for k in range(nthr))
+        shaft = float(s[S_N])
+        steering = float(s[S_DELTA])
+        if nthr and self.hp[H_NPROP] == 0:
+            # a thruster-only ship: the thrusters' mean shaft speed, and the steering angle the
+            # mean azimuth stands for (set_command's mapping inverted)
+            shaft = float(np.mean(s[S_THR0:S_THR0 + 2 * nthr:2]))
+            az = s[S_THR0 + 1:S_THR0 + 2 * nthr:2]
+            cx, cy = float(np.mean(np.cos(az))), float(np.mean(np.sin(az)))
+            steering = -math.atan2(cy, cx) if cx >= 0.0 else float(_wrap(math.atan2(cy, cx) - math.pi))
         return DisplacementStatus(
             engine_order=self._command.engine_order,
             steering_angle_ordered=self._command.steering_angle,
-            steering_angle=float(s[S_DELTA]),
-            shaft_speed=float(2.0 * math.pi * s[S_N]),
+            steering_angle=steering,
+            shaft_speed=float(2.0 * math.pi * shaft),
             thrust=float(self.out[O_THRUST]),
             anchor_state=self._anchor_state,
             speed_through_water=float(math.hypot(self.out[O_UR], self.out[O_VR])),
@@ -705,7 +1037,8 @@ class ManeuveringVessel(Vessel):
             girting_ratio=ratio,
             girting_threshold=threshold,
             girting_warning=rc is not None and bool(ratio >= threshold),
-            engine_rpm=float(60.0 * s[S_N]),
+            engine_rpm=float(60.0 * shaft),
             anchor_force=float(-self.out[O_ANC_X]),
             towline_angle=self.towline_angle,
+            thrusters=thr,
         )

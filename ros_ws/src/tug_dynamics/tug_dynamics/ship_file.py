@@ -209,16 +209,20 @@ def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[
     M, roll_cfg = _mass_matrix_and_roll(hp, ship, added)
     props, rated_rps = _engine_and_propellers(hp, ship)
     ruds, max_steer = _steering_and_rudders(hp, ship, props)
+    thrs, thr_cfg = _thrusters_section(src, ship)
     anchor_cfg = _anchor_section(hp, ship)
     _towline_section(hp, ship, table_v, table_f)
     att = {str(k): np.asarray(v, float) for k, v in (ship.attachments or {}).items()}
     hmax = ship.integration.max_substep if ship.integration is not None else schema._default_hmax(ship.hull.length)
     cur = ship.current
+    if thr_cfg and not props and ship.steering is None:
+        max_steer = math.pi      # an ASD tug: steering is the thrusters' azimuth (set_command)
     return mv.ManeuveringVessel(
         name or str(ship.name), hp, np.array(props) if props else np.zeros((0, mv.NPROP)),
         np.array(ruds) if ruds else np.zeros((0, mv.NRUD)), rv, rf, M,
         {"max_steering": max_steer, "rated_rps": rated_rps}, att, anchor=anchor_cfg, roll=roll_cfg,
-        hmax=hmax, initial_state=initial_state, current=(cur[0], cur[1]), source=src)
+        hmax=hmax, initial_state=initial_state, current=(cur[0], cur[1]), source=src,
+        thrusters=np.array(thrs) if thrs else None, thruster_cfg=thr_cfg)
 
 
 def _hull_section(hp: np.ndarray, ship: schema.DisplacementShip):
@@ -314,6 +318,61 @@ def _engine_and_propellers(hp: np.ndarray, ship: schema.DisplacementShip):
         props.append(row)
     hp[mv.H_NPROP] = len(props)
     return props, rated_rps
+
+
+def fit_open_water(J, KT):
+    """Least-squares K_T = c1 + c2 J + c3 J^2 through open-water points; (coefficients, largest
+    residual)."""
+    J = np.asarray(J, float)
+    KT = np.asarray(KT, float)
+    A = np.vstack([np.ones_like(J), J, J * J]).T
+    c, *_ = np.linalg.lstsq(A, KT, rcond=None)
+    return c, float(np.max(np.abs(A @ c - KT)))
+
+
+def _thrusters_section(src: str, ship: schema.DisplacementShip):
+    """thrusters: azimuth thruster rows (maneuvering T_*) and their configurations (name, rated
+    rps, 360 deg or range, reversible). Open-water points are fitted by a quadratic K_T(J); a fit
+    off by more than 0.02 in K_T is refused (the model's thrust is that quadratic)."""
+    rows: List[np.ndarray] = []
+    cfgs: List[dict] = []
+    interaction = ship.thruster_interaction == "abs"
+    for i, th in enumerate(ship.thrusters or []):
+        row = np.zeros(mv.NTHR)
+        row[mv.T_X], row[mv.T_Y], row[mv.T_Z] = th.position
+        row[mv.T_D] = th.diameter
+        if th.kt is not None:
+            c = th.kt
+        else:
+            c, resid = fit_open_water(th.open_water.J, th.open_water.KT)
+            if resid > 0.02:
+                raise ShipFileError(f"{src}: key 'thrusters.{i}.open_water': a quadratic K_T(J) misses a point by "
+                                    f"{resid:.3g} (> 0.02); give points of a smooth curve or kt")
+            if c[0] <= 0.0:
+                raise ShipFileError(f"{src}: key 'thrusters.{i}.open_water': fitted K_T(0) = {c[0]:.3g} <= 0")
+        row[mv.T_C1], row[mv.T_C2], row[mv.T_C3] = c
+        row[mv.T_AST] = th.astern_factor
+        row[mv.T_W] = th.wake_fraction
+        row[mv.T_TN] = th.time_constant
+        row[mv.T_RATE] = math.radians(th.slew_rate_deg_s)
+        row[mv.T_TAZ] = th.azimuth_time_constant
+        row[mv.T_FULL] = 1.0 if th.full_360 else 0.0
+        rng = (-math.pi, math.pi) if th.full_360 else tuple(math.radians(a) for a in th.azimuth_range_deg)
+        row[mv.T_AMIN], row[mv.T_AMAX] = rng
+        td = th.thrust_deduction
+        if isinstance(td, schema.DeductionTable):
+            angles, values = [math.radians(a) for a in td.azimuth_deg], list(td.value)
+        else:
+            angles, values = [0.0], [float(td)]
+        row[mv.T_NTD] = len(angles)
+        row[mv.T_TD0:mv.T_TD0 + len(angles)] = angles
+        row[mv.T_TD0 + mv.MAX_TD:mv.T_TD0 + mv.MAX_TD + len(values)] = values
+        row[mv.T_INTER] = 1.0 if interaction else 0.0
+        rows.append(row)
+        cfgs.append({"name": th.name if th.name is not None else f"thruster{i}",
+                     "rated_rps": th.rated_rpm / 60.0, "full_360": th.full_360, "azimuth_range": rng,
+                     "reversible": th.reversible})
+    return rows, cfgs
 
 
 def _steering_and_rudders(hp: np.ndarray, ship: schema.DisplacementShip, props: List[np.ndarray]):

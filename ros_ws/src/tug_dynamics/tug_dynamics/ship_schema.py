@@ -139,6 +139,39 @@ class Propeller(_S):
     astern_factor: float = _num(0.0, 1.5)
 
 
+class OpenWater(_S):
+    """Open-water data of a (ducted) propeller: K_T (total, propeller + nozzle) at advance
+    ratios J; ship_file fits K_T = c1 + c2 J + c3 J^2 by least squares."""
+    J: Annotated[List[Annotated[float, Field(ge=0.0, le=2.0)]], Field(min_length=3, max_length=40)]
+    KT: Annotated[List[Annotated[float, Field(ge=-2.0, le=2.0)]], Field(min_length=3, max_length=40)]
+
+
+class DeductionTable(_S):
+    """Thrust deduction as a function of the azimuth (deg, -180..180, increasing), linear between
+    the points and periodic over 360 deg."""
+    azimuth_deg: Annotated[List[Annotated[float, Field(ge=-180.0, le=180.0)]], Field(min_length=1, max_length=12)]
+    value: Annotated[List[Annotated[float, Field(ge=0.0, le=0.9)]], Field(min_length=1, max_length=12)]
+
+
+class Thruster(_S):
+    """An azimuth thruster (ASD tug, Z-drive, pod): thrust along its azimuth, own engine."""
+    name: Optional[str] = None                  # default "thruster<k>"
+    position: Vec3                              # m, propeller centre, body frame
+    diameter: float = _num(0.1, 10.0)           # m: harbour-tug units 1.6-3.4 m
+    kt: Optional[Vec3] = None                   # K_T(J) = c1 + c2 J + c3 J^2 (total thrust), or
+    open_water: Optional[OpenWater] = None      # open-water points (exactly one of the two)
+    wake_fraction: float = _num(0.0, 0.9, default=0.0)
+    thrust_deduction: Union[Annotated[float, Field(ge=0.0, le=0.9)], DeductionTable]
+    reversible: bool = False                    # rpm orders -1..1 (a reversing drive) instead of 0..1
+    astern_factor: float = _num(0.0, 1.5, default=0.65)   # K_T scale with reversed rotation
+    rated_rpm: float = _num(1.0, 5000.0)        # propeller rpm at rpm order 1
+    time_constant: float = _num(0.05, 600.0)    # s, rpm lag (S. D. Yoon Eq 9 form)
+    slew_rate_deg_s: float = _num(0.5, 360.0)   # deg/s; harbour-tug units 10-30
+    azimuth_time_constant: float = _num(0.05, 10.0, default=0.5)  # s, lag of the last few degrees
+    full_360: bool = True                       # turns without stops (shortest way round)
+    azimuth_range_deg: Optional[Vec2] = None    # [lo, hi] deg within -180..180 when full_360 is false
+
+
 class Steering(_S):
     max_angle_deg: float = _num(1.0, 90.0)    # rudders 35-45 deg; flap / vector rudders up to 70-90
     time_constant: float = _num(0.05, 600.0)  # s, steering-gear lag (S. D. Yoon Eq 10); see Engine
@@ -231,6 +264,9 @@ class DisplacementShip(_S):
     propellers: Optional[Annotated[List[Propeller], Field(max_length=4)]] = None
     steering: Optional[Steering] = None
     rudders: Optional[Annotated[List[Rudder], Field(max_length=4)]] = None
+    thrusters: Optional[Annotated[List[Thruster], Field(min_length=1, max_length=4)]] = None
+    # thruster-thruster interaction: "abs" = ABS DP guide (2013) Appendix 1 jet reduction; "none"
+    thruster_interaction: Literal["abs", "none"] = "abs"
     roll: Optional[Roll] = None
     anchor: Optional[Anchor] = None
     towline_simple: Optional[TowlineSimple] = None
@@ -273,6 +309,45 @@ def cross_checks(s: DisplacementShip) -> List[tuple]:
         if sec is not None and sec.time_constant < 0.5 * hmax:
             out.append((key, f"{sec.time_constant:g} s is shorter than half the integration sub-step "
                              f"({hmax:g} s, integration.max_substep): the lag would be unstable"))
+    names = set()
+    for i, th in enumerate(s.thrusters or []):
+        key = f"thrusters.{i}"
+        out += _point(f"{key}.position", th.position, L)
+        name = th.name if th.name is not None else f"thruster{i}"
+        if name in names:
+            out.append((f"{key}.name", f"{name!r} is used by another thruster"))
+        names.add(name)
+        if (th.kt is None) == (th.open_water is None):
+            out.append((f"{key}.kt", "give exactly one of kt and open_water"))
+        if th.kt is not None:
+            if th.kt[0] <= 0.0:
+                out.append((f"{key}.kt", f"K_T at J = 0 must be positive, got {th.kt[0]:g}"))
+            if any(abs(c) > 5.0 for c in th.kt):
+                out.append((f"{key}.kt", f"coefficients beyond +-5: {th.kt}"))
+        if th.open_water is not None and len(th.open_water.J) != len(th.open_water.KT):
+            out.append((f"{key}.open_water.KT", f"{len(th.open_water.KT)} values for {len(th.open_water.J)} J"))
+        td = th.thrust_deduction
+        if isinstance(td, DeductionTable):
+            if len(td.azimuth_deg) != len(td.value):
+                out.append((f"{key}.thrust_deduction.value",
+                            f"{len(td.value)} values for {len(td.azimuth_deg)} azimuths"))
+            elif any(b <= a for a, b in zip(td.azimuth_deg, td.azimuth_deg[1:])):
+                out.append((f"{key}.thrust_deduction.azimuth_deg", "azimuths must increase"))
+            elif td.azimuth_deg[-1] - td.azimuth_deg[0] >= 360.0:
+                out.append((f"{key}.thrust_deduction.azimuth_deg", "-180 and 180 are the same azimuth: give one"))
+        for sub, tc in (("time_constant", th.time_constant), ("azimuth_time_constant", th.azimuth_time_constant)):
+            if tc < 0.5 * hmax:
+                out.append((f"{key}.{sub}", f"{tc:g} s is shorter than half the integration sub-step "
+                                            f"({hmax:g} s, integration.max_substep): the lag would be unstable"))
+        if th.full_360:
+            if th.azimuth_range_deg is not None:
+                out.append((f"{key}.azimuth_range_deg", "a full_360 unit has no range (set full_360: false)"))
+        else:
+            r = th.azimuth_range_deg
+            if r is None:
+                out.append((f"{key}.azimuth_range_deg", "required key is missing (full_360: false)"))
+            elif not -180.0 <= r[0] < r[1] <= 180.0:
+                out.append((f"{key}.azimuth_range_deg", f"{r}: need -180 <= lo < hi <= 180 deg"))
     a = s.anchor
     if a is not None and (a.chain_out is None) != (a.chain_weight is None):
         out.append((f"anchor.{'chain_weight' if a.chain_weight is None else 'chain_out'}",

@@ -12,6 +12,10 @@ One vessel node runs every ship file; it only talks to this interface. Conventio
 - command: ``engine_order`` is the fraction of rated engine (or impeller) rpm, -1 full
   astern .. +1 full ahead; ``steering_angle`` (rad) is rudder or waterjet-bucket angle,
   positive turns the vessel to port (gives a positive yaw rate at forward speed).
+- thruster orders (azimuth thrusters, e.g. an ASD tug): per thruster an azimuth (rad, the
+  direction of the thrust in the body's horizontal plane: 0 = thrust ahead, positive turns the
+  thrust vector to port) and an rpm fraction of the thruster's rated rpm (0..1; -1..1 for a
+  reversible unit). ``Vessel.set_thruster_command`` takes them; ``Command`` keeps working.
 """
 from __future__ import annotations
 
@@ -19,7 +23,7 @@ import dataclasses
 import enum
 import math
 from abc import ABC, abstractmethod
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, List, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -39,6 +43,32 @@ class Command:
     engine_order: float = 0.0
     steering_angle: float = 0.0
     anchor: int = ANCHOR_NO_CHANGE
+
+
+@dataclasses.dataclass
+class ThrusterOrder:
+    """An order for one azimuth thruster.
+
+    thruster: its index in the ship file's ``thrusters:`` list, or its name.
+    azimuth: rad, direction of the thrust (0 = ahead, + to port).
+    rpm: fraction of the thruster's rated rpm, 0..1 (-1..1 for a reversible unit).
+    """
+    thruster: Union[int, str]
+    azimuth: float
+    rpm: float
+
+
+@dataclasses.dataclass(frozen=True, slots=True)
+class ThrusterStatus:
+    """One azimuth thruster's actual and ordered state, SI units."""
+    name: str
+    azimuth: float            # rad, actual, (-pi, pi], 0 = thrust ahead, + to port
+    azimuth_ordered: float    # rad, held order after clamping
+    rpm: float                # rev/min, actual (negative: reversed rotation)
+    rpm_ordered: float        # rev/min, held order
+    thrust: float             # N, force delivered to the hull along the azimuth (after the hull's
+                              # thrust deduction and thruster-thruster interaction)
+    open_water_thrust: float  # N, the unit's own thrust (K_T at the inflow's J), before those
 
 
 @dataclasses.dataclass
@@ -150,6 +180,8 @@ class Vessel(ABC):
     draft: float = math.nan
     volume: float = math.nan
     windage = None
+    # names of the azimuth thrusters, in the ship file's order (empty: none)
+    thruster_names: Tuple[str, ...] = ()
 
     # ---- commands ---------------------------------------------------------------------
     @property
@@ -163,6 +195,12 @@ class Vessel(ABC):
 
         Raises CommandRejected (and keeps the previous command) for NaN/inf/unknown values.
         """
+
+    def set_thruster_command(self, orders: Sequence[ThrusterOrder]) -> List[str]:
+        """Per-thruster orders (azimuth, rpm fraction); clamp out-of-range values and return one
+        message per clamp. Raises CommandRejected (and keeps every held order) for NaN / inf or a
+        thruster the vessel does not have. A vessel without azimuth thrusters refuses them."""
+        raise CommandRejected(f"{self.name}: has no azimuth thrusters; thruster orders refused")
 
     def settle_command(self, cmd: Command) -> List[str]:
         """Apply a command as if it had been held for long: actuators (shaft speed, rudder or
