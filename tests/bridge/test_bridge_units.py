@@ -117,3 +117,60 @@ nmea: {outputs: [{vessel: tug}], mmsi: {tug: 211000001}}
                      text.replace("outputs: [{vessel: tug}], mmsi: {tug: 211000001}", bad))
         with pytest.raises(ScenarioError):
             load_scenario(str(p), check_files=False)
+
+
+def test_ais_dimensions_honour_the_scenarios_ship_overrides(tmp_path):
+    """A scenario that lengthens and widens the barge: the AIS type 5 of the barge (pyais)
+    gives the overridden length and beam, the tug (no overrides) its ship file's."""
+    import pyais
+    import yaml
+    from bridge_instruments.ship_particulars import hull_dimensions, scenario_ships
+    from tug_dynamics.ship_file import ships_dir
+    barge_file = yaml.safe_load(open(f"{ships_dir()}/barge_002_full.yaml"))["hull"]
+    tug_file = yaml.safe_load(open(f"{ships_dir()}/harbour_tug.yaml"))["hull"]
+    assert (barge_file["length"], barge_file["beam"]) != (60.0, 18.4)  # the override changes something
+    sc = {"name": "o", "duration": 1.0,
+          "vessels": [{"name": "tug", "ship_file": "harbour_tug.yaml"},
+                      {"name": "barge", "ship_file": "barge_002_full.yaml", "initial": {"x": -100.0},
+                       "ship_overrides": {"hull": {"length": 60.0, "beam": 18.4}}}]}
+    path = tmp_path / "o.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    ships = scenario_ships(str(path))
+    assert ships["tug"][1] == {} and ships["barge"][1] == {"hull": {"length": 60.0, "beam": 18.4}}
+    barge = hull_dimensions(*ships["barge"])
+    tug = hull_dimensions(*ships["tug"])
+    assert (barge.length, barge.beam, barge.draft) == (60.0, 18.4, barge_file["draft"])  # the rest stays
+    assert (tug.length, tug.beam) == (tug_file["length"], tug_file["beam"])
+    s = pyais.decode(*S.static_report(S.Particulars(244990002, "barge", barge.length, barge.beam,
+                                                    barge.draft))).asdict()
+    assert s["to_bow"] + s["to_stern"] == 60 and s["to_port"] + s["to_starboard"] == 18
+    # bad input names the file
+    with pytest.raises(ValueError, match="no_such_ship.yaml"):
+        hull_dimensions("no_such_ship.yaml")
+    with pytest.raises(ValueError, match="ship_overrides must be a mapping"):
+        hull_dimensions("harbour_tug.yaml", ["hull"])
+    path.write_text("name: o\nvessels: 3\n")
+    with pytest.raises(ValueError, match="o.yaml"):
+        scenario_ships(str(path))
+
+
+@pytest.mark.parametrize("compass, yaw_deg", [(0.0, 90.0), (90.0, 0.0), (180.0, -90.0), (270.0, -180.0),
+                                              (360.0, 90.0), (45.0, 45.0), (359.5, 90.5)])
+def test_autopilot_heading_order_in_compass_degrees(compass, yaw_deg):
+    """The example autopilot's heading_true_deg (compass, deg true) becomes the REP-103 yaw the
+    controller keeps (rad, 0 = east, counter-clockwise; the law wraps the heading error, so any
+    equal direction will do): checked against hand values and back
+    through sim_math.trials.compass_deg (what HDT and the console show), within 1e-9 deg."""
+    from scenario_runner.autopilot import heading_from_true_deg
+    from sim_math.trials import compass_deg
+    yaw = heading_from_true_deg(compass)
+    assert abs((math.degrees(yaw) - yaw_deg + 180.0) % 360.0 - 180.0) < 1e-9  # the same direction
+    back = compass_deg(yaw)
+    assert abs((back - compass + 180.0) % 360.0 - 180.0) < 1e-9
+
+
+@pytest.mark.parametrize("bad", [-0.1, 360.5, float("nan"), float("inf"), True, "90", None])
+def test_autopilot_heading_order_refuses_what_is_no_compass_heading(bad):
+    from scenario_runner.autopilot import heading_from_true_deg
+    with pytest.raises(ValueError, match="heading_true_deg"):
+        heading_from_true_deg(bad)

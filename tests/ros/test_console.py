@@ -7,9 +7,16 @@ point, the tug driven ahead.
   actual, shaft speed);
 - the screen shows the towline tension in kN against the breaking load and the girting warning;
 - invalid keys and a flood of engine keys never produce an out-of-range order.
+
+Times (issue 17, item 4), folded into the same run: `send_command` sent while /clock runs says
+it stamps with simulation time, and its order is in the recording stamped on the step grid
+within the run; and `analyze` of a copy of the recording whose commands carry wall-clock stamps
+(as an older tool wrote them) says so and takes the orders from the commanded values in
+/tug/status: the turn starts at the console's first helm order.
 """
 import math
 import os
+import re
 import subprocess
 import time
 
@@ -43,7 +50,35 @@ def _scenario(tmp_path):
     return path
 
 
-def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain):
+def _wall_stamped_copy(src, dst, topic):
+    """A copy of a recording whose `topic` messages (std_msgs/Header first) are stamped with their
+    wall-clock log time, as a tool on wall time stamped them; everything else as it was."""
+    import struct
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+    with open(src, "rb") as f_in, open(dst, "wb") as f_out:
+        reader = make_reader(f_in)
+        w = Writer(f_out)
+        w.start(profile="ros2", library="test_console")
+        schemas, channels = {}, {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if schema.id not in schemas:
+                schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding,
+                                                          schemas[schema.id], channel.metadata)
+            data = message.data
+            if channel.topic == topic:
+                wall_ns = message.log_time if message.log_time > 10**17 else time.time_ns()
+                assert data[1] == 1  # CDR little endian: header stamp at bytes 4..12
+                data = data[:4] + struct.pack("<iI", wall_ns // 10**9, wall_ns % 10**9) + data[12:]
+            w.add_message(channels[channel.id], message.log_time, data, message.publish_time, message.sequence)
+        for record in reader.iter_metadata():
+            w.add_metadata(record.name, record.metadata)
+        w.finish()
+
+
+def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain, capsys):
     import pexpect
     path = _scenario(tmp_path)
     out = tmp_path / "girt.mcap"
@@ -57,6 +92,16 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain):
     try:
         con.expect(r"rate of turn", timeout=120)  # the vessel's state is on the screen
         con.expect(r"t +[1-9]\.\d\d s ", timeout=60)  # the run is under way (and /clock published)
+        # send_command while /clock runs: the order the tug holds (engine 0.8, midships), so the
+        # console's orders below are unchanged; the console's screen is read meanwhile
+        sender = subprocess.Popen([executable_path("scenario_runner", "send_command"), "tug", "--engine", "0.8",
+                                   "--steering-deg", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        while sender.poll() is None:
+            try:
+                con.read_nonblocking(65536, timeout=0.1)
+            except pexpect.TIMEOUT:
+                pass
+        sent_out, sent_err = sender.communicate()
         time.sleep(0.3)  # the console follows the held orders (engine 0.8)
         for key in ["z", "9", "!", "\x1b[Z", "w", "w", "d", "d"]:  # junk, then ahead x2, starboard x2
             con.send(key)
@@ -81,9 +126,17 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain):
     rec = decoded(str(out))
     cmds = rec["/tug/command"]
     t = lambda m: m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
+    ns = lambda m: m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
+    # send_command stamped its order with simulation time: it says so, and the recorded order has
+    # its stamp, on the 20 ms step grid (a /clock value), after the screen showed t >= 1 s, in the run
+    assert sender.returncode == 0, sent_err
+    assert "simulation time (/clock)" in sent_out, sent_out
+    stamp = float(re.search(r"stamped (\d+\.\d+) s", sent_out).group(1))
+    sent = [c for c in cmds if abs(t(c) - stamp) < 0.0015 and c.engine_order == 0.8 and c.steering_angle == 0.0]
+    assert len(sent) == 1 and ns(sent[0]) % 20_000_000 == 0 and 1.0 <= t(sent[0]) <= 24.0, (sent_out, sent)
     # every order in range; the console's orders stamped with simulation time (within the run)
     assert all(-1.0 <= c.engine_order <= 1.0 and abs(c.steering_angle) <= math.radians(35.0) + 1e-12 for c in cmds)
-    mine = [c for c in cmds if t(c) > 0.0]
+    mine = [c for c in cmds if t(c) > 0.0 and c is not sent[0]]
     assert mine and all(t(c) <= 24.0 for c in mine), [t(c) for c in cmds]
     assert [round(c.engine_order, 3) for c in mine][:4] == [0.9, 1.0, 1.0, 1.0]
     assert [round(math.degrees(c.steering_angle), 3) for c in mine][:4] == [0.0, 0.0, -5.0, -10.0]
@@ -98,3 +151,23 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain):
     assert min(s.steering_angle for s in after) < math.radians(-5.0)
     assert max(s.shaft_speed for s in after) > max(s.shaft_speed for s in before) * 1.05
     assert any(s.girting_warning for s in status)
+
+    # analyze of the recording with its commands stamped on wall time (as send_command stamped
+    # them before it read /clock): the orders cannot be placed, it says so and takes them from
+    # the commanded values in /tug/status. The turn starts at the console's first helm order
+    # (-5 deg, stamped t(mine[2])): the tug applies an order from the step after its stamp, or a
+    # few steps later when the console's newest /clock lags (0.1 s: the next helm key came later)
+    from scenario_runner import analysis
+    wall = tmp_path / "girt_wall_stamped.mcap"
+    _wall_stamped_copy(str(out), str(wall), "/tug/command")
+    capsys.readouterr()
+    assert analysis.main([str(wall), "-o", str(tmp_path / "an"), "--no-figures", "--quiet"]) == 0
+    said = capsys.readouterr().err
+    assert "/tug/command: " in said and "stamped outside the recording's time" in said, said
+    assert "taken from the commanded engine order and steering angle in /tug/status instead" in said, said
+    late = analysis.Recording(str(wall))
+    assert "command" not in late.vessels["tug"]
+    t0, _ = late.find_turn("tug")
+    assert t(mine[2]) < t0 <= t(mine[2]) + 0.1 + 1e-9, (t0, t(mine[2]))
+    orders_t, orders = late.steering_orders("tug")
+    assert [round(math.degrees(o), 6) for o in orders[orders_t >= t0 - 1e-9][:2]] == [-5.0, -10.0]

@@ -214,6 +214,8 @@ def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context):
     assert refused["message"] == 8  # malformed x2, NaN, inf, anchor 7, JSON NaN, unknown key, not a mapping
     assert refused["channel"] == 6  # three channels refused, one message on each
     assert refused["rate"] > FLOOD * 0.9 and int(counts.group(2)) == 1
+    # the sender (its own thread, outside the lockstep's executor) says what rate it achieved
+    assert re.search(r"sender: [\d.]+ Hz achieved while the simulation ran \(\d+ rounds", log), log[-3000:]
     msgs = decoded(out)
     assert len(msgs["/sim/step"]) == steps
     for v in vessels:

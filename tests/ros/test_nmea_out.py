@@ -10,7 +10,8 @@ paced run, read by independent parsers and compared with the recording of the sa
   body-frame velocity rotated with scipy, heading = (90 - yaw) mod 360, rate of turn, rudder,
   shaft rpm and towline tension (the recorded rope state's end force); the barge as an AIS
   target: position within 0.5 m, speed, course, heading, and its type 5 dimensions equal the
-  ship file's length and beam;
+  length and beam of its hull in the run: the ship file's with the scenario's ship_overrides
+  (a longer, wider barge);
 - bad destinations (an invalid host name, a broadcast address the socket may not send to) are
   each reported once in the node's log and the run completes with every step recorded.
 """
@@ -32,6 +33,7 @@ DURATION = 15.0
 RATE = 5.0
 ORIGIN = (53.5400, 9.9700)  # not the default: the key must be used
 UTC_START = "2026-03-04T05:06:07Z"
+BARGE_HULL = {"length": 48.0, "beam": 16.0}  # ship_overrides of the barge (its file: 45.0 x 15.003 m)
 
 
 def _scenario(tmp_path, port):
@@ -44,6 +46,8 @@ def _scenario(tmp_path, port):
     sc["events"] = [{"time": 0.0, "vessel": "tug", "engine_order": 0.6},
                     {"time": 3.0, "vessel": "tug", "steering_deg": 25.0}]
     sc["origin"] = {"latitude": ORIGIN[0], "longitude": ORIGIN[1]}
+    # AIS must report the hull of the run, not the ship file's
+    sc["vessels"][1]["ship_overrides"] = {"hull": dict(BARGE_HULL)}
     sc["nmea"] = {"rate": RATE, "utc_start": UTC_START, "static_every": 5, "mmsi": {"barge": 244123456},
                   "outputs": [{"vessel": "tug", "host": "127.0.0.1", "port": port},
                               {"vessel": "tug", "host": "bad host!", "port": 10110},
@@ -150,7 +154,8 @@ def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
     period_ns = 20_000_000
     start = dt.datetime.fromisoformat(UTC_START.replace("Z", "+00:00"))
     rope_state = {m.step: m for m in rec["/towline/state"]}
-    barge_len = yaml.safe_load(open(_ship_path("barge_002_full.yaml")))["hull"]
+    barge_file = yaml.safe_load(open(_ship_path("barge_002_full.yaml")))["hull"]
+    assert (round(barge_file["length"]), round(barge_file["beam"])) != (BARGE_HULL["length"], BARGE_HULL["beam"])
     checked = {"course": 0, "rot": 0, "tension": 0, "ais": 0, "static": 0}
     steps_seen = []
     for rmc, rest, ais in reports:
@@ -198,8 +203,8 @@ def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
         checked["ais"] += 1
         for s in (m for m in ais if m["msg_type"] == 5):
             assert s["mmsi"] == 244123456 and s["shipname"] == "BARGE"
-            assert s["to_bow"] + s["to_stern"] == round(barge_len["length"])
-            assert s["to_port"] + s["to_starboard"] == round(barge_len["beam"])
+            assert s["to_bow"] + s["to_stern"] == BARGE_HULL["length"]
+            assert s["to_port"] + s["to_starboard"] == BARGE_HULL["beam"]
             checked["static"] += 1
     assert steps_seen == sorted(steps_seen) and len(set(steps_seen)) == len(steps_seen)
     # the run turned, moved and pulled: the comparisons above were not of zeros

@@ -7,7 +7,9 @@ For every own vessel (`outputs`: "vessel@host:port") it sends, over UDP to that 
 sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one XDR per rope
 with an end on the vessel (its tension), and for every other vessel of the run an AIS VDM
 position report (type 1) and, the first time and every `static_every`-th time, its static data
-(type 5, length and beam from its ship file). Sentence formats: bridge_instruments/sentences.py.
+(type 5, length and beam from its ship file, with the `ship_overrides` of the scenario named by
+the parameter `scenario` merged over it: bridge_instruments/ship_particulars.py). Sentence
+formats: bridge_instruments/sentences.py.
 
 It reads the topic contract only (/<vessel>/odom, /<vessel>/status, /<rope>/end_<x>/wrench) and
 sends the state of one simulation step at a time: the first step of every 1/rate s of
@@ -157,6 +159,8 @@ class NmeaOut(Node):
         self.declare_parameter("outputs", [""], text)  # own vessels: "vessel@host:port"
         self.declare_parameter("ropes", [""], text)  # "rope=<end_a>,<end_b>" as in the scenario
         self.declare_parameter("ship_files", [""], text)  # "vessel=path" (AIS dimensions)
+        # the run's scenario file: its vessels' ship files (where ship_files names none) and ship_overrides
+        self.declare_parameter("scenario", "", text)
         self.declare_parameter("mmsi", [""], text)  # "vessel=244990001"
         self.declare_parameter("gear_ratios", [""], text)  # "vessel=5.2": engine rpm / shaft rpm (default 1)
         self.declare_parameter("rate", 1.0, rc.float_param("sentences per second of simulation time", 0.01, 50.0,
@@ -202,7 +206,8 @@ class NmeaOut(Node):
                     self.rope_ends[vessel].append((rope, end))
                     if end == "a":
                         towing.add(vessel)
-        self.particulars = self._particulars(_pairs(gp("ship_files").value, "ship_files"), towing)
+        self.particulars = self._particulars(_pairs(gp("ship_files").value, "ship_files"), gp("scenario").value,
+                                             towing)
         # latest serialized messages of due steps: stamp -> {topic: bytes}
         self.pending: Dict[int, Dict[str, bytes]] = {}
         self.needed = [f"/{v}/odom" for v in self.vessels] + [f"/{v}/status" for v in self.vessels]
@@ -216,20 +221,26 @@ class NmeaOut(Node):
         log.info(f"NMEA 0183 / AIS out at {gp('rate').value:g} Hz of simulation time: {dests or 'no output'}; "
                  f"origin {self.origin.latitude:.6f}, {self.origin.longitude:.6f}; MMSI {self.mmsi}")
 
-    def _particulars(self, files: Dict[str, str], towing: set) -> Dict[str, S.Particulars]:
-        import yaml
-        from sim_plumbing.scene import HullDimensions
+    def _particulars(self, files: Dict[str, str], scenario: str, towing: set) -> Dict[str, S.Particulars]:
+        from bridge_instruments.ship_particulars import hull_dimensions, scenario_ships
+        ships = {}
+        if scenario:
+            ships = scenario_ships(rc.resolve_data_file("scenario_runner", "scenarios", scenario))
+            strangers = sorted(set(self.vessels) - set(ships))
+            if strangers:
+                raise ValueError(f"parameter 'scenario': {scenario} has no vessel {', '.join(strangers)} "
+                                 f"(its vessels: {', '.join(ships)})")
         out = {}
         for v in self.vessels:
             length = beam = draft = 0.0
-            kind = ""
-            path = files.get(v)
+            path, overrides = files.get(v), {}
+            if v in ships:
+                path, overrides = path or ships[v][0], ships[v][1]
             if path:
                 if not os.path.isabs(path) and not os.path.isfile(path):
                     path = rc.resolve_data_file("tug_dynamics", "ships", path)
-                with open(path) as f:
-                    d = HullDimensions.from_ship_config(yaml.safe_load(f))
-                length, beam, draft, kind = d.length, d.beam, d.draft, d.kind
+                d = hull_dimensions(path, overrides)
+                length, beam, draft = d.length, d.beam, d.draft
             ship_type = 31 if v in towing else (52 if "tug" in v.lower() else 0)  # 31 towing, 52 tug
             out[v] = S.Particulars(self.mmsi[v], v, length, beam, draft, ship_type)
         return out

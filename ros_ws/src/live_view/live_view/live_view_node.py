@@ -10,11 +10,15 @@ so Foxglove and Lichtblick decode them as their own ROS 2 messages (3D scene fro
 
 Cost (never holds up the lockstep): messages are only stored as they arrive (the newest per
 topic; on /tf the newest per frame; every one of the rare order and event topics, bounded); a
-wall-clock timer at ``rate`` (default 20 Hz) sends what is new to subscribed clients, the
-WebSocket I/O runs in foxglove-sdk's own threads. Started by ``run_scenario --live`` the node
-lives in the runner's process and takes the bytes from the recorder as it writes them (no
-second DDS delivery of anything); started alone, it subscribes the topics it serves (raw; the
-step protocol best-effort, so a slow viewer can never make a keep-all writer wait).
+sender thread (not the ROS executor, which in the runner's process is the lockstep's) sends what
+is new at ``rate`` (default 20 Hz, wall clock) to subscribed clients: each message once into
+foxglove-sdk, which frames it for each subscribed client in Rust; the WebSocket I/O runs in
+foxglove-sdk's own threads; no Python work per client. On shutdown the node logs the sender's
+achieved rate while the simulation ran, its CPU a round and the foxglove-sdk threads' CPU.
+Started by ``run_scenario --live`` the node lives in the runner's process and takes the bytes
+from the recorder as it writes them (no second DDS delivery of anything); started alone, it
+subscribes the topics it serves (raw; the step protocol best-effort, so a slow viewer can never
+make a keep-all writer wait).
 
 Client input: only the vessels' ``command`` and the ropes' ``winch`` topics take client
 messages (client_input.py: checked, clamped, written anew, stamped with the simulation time,
@@ -31,6 +35,7 @@ WebSocket clients' (take_input()).
 from __future__ import annotations
 
 import collections
+import os
 import struct
 import sys
 import threading
@@ -92,7 +97,8 @@ class TopicSlot:
         self.received += 1
         self.last = data
         if self.policy == "latest":
-            self.latest = data
+            with self.lock:
+                self.latest = data
             return
         if self.policy == "every":
             if len(self.queue) == MAX_QUEUED:
@@ -108,9 +114,10 @@ class TopicSlot:
             self.fresh.add(key)
 
     def take(self, now: float) -> List[bytes]:
-        """The messages to send now."""
+        """The messages to send now (called in the sender thread, offer() in the executor's)."""
         if self.policy == "latest":
-            data, self.latest = self.latest, None
+            with self.lock:
+                data, self.latest = self.latest, None
             return [data] if data is not None else []
         if self.policy == "every":
             out = []
@@ -172,6 +179,88 @@ class _Listener:
         pass
 
 
+def thread_cpu_seconds(prefix: str) -> float:
+    """CPU time (user + system, s) of this process's live threads whose name starts with prefix
+    (foxglove-sdk's WebSocket I/O: 'tokio'); 0 where /proc is not there."""
+    total = 0
+    try:
+        tasks = os.listdir("/proc/self/task")
+    except OSError:
+        return 0.0
+    for tid in tasks:
+        try:
+            with open(f"/proc/self/task/{tid}/comm") as f:
+                if not f.read().startswith(prefix):
+                    continue
+            with open(f"/proc/self/task/{tid}/stat") as f:
+                fields = f.read().rpartition(")")[2].split()
+            total += int(fields[11]) + int(fields[12])  # utime, stime (fields 14, 15 of stat)
+        except (OSError, ValueError, IndexError):
+            continue
+    return total / os.sysconf("SC_CLK_TCK")
+
+
+class Sender:
+    """The thread that sends what is new at ``rate`` (wall clock), outside the ROS executor: in the
+    runner's process the executor is the lockstep's, and a timer there runs inside a step's round
+    trip and fires late whenever the steps keep the executor busy. A round missed (the process
+    starved of CPU) is skipped, not caught up. It measures what it achieved while the simulation
+    ran, from the first to the last round in which the simulation had advanced since the round
+    before: its rounds a second and the longest interval between two rounds (summary())."""
+
+    def __init__(self, send: Callable[[], bool], rate: float, on_error: Callable[[Exception], None]):
+        self.send, self.period, self.on_error = send, 1.0 / rate, on_error
+        self.rounds = 0
+        self.cpu = 0.0  # s of this thread's CPU in send() (the per-client work of channel.log included)
+        self.first_running: Optional[float] = None  # the first round after which the simulation had advanced
+        self.running: Tuple[int, float, float] = (0, 0.0, 0.0)  # rounds, span, longest gap up to the last such round
+        self._gap = 0.0
+        self._stop = threading.Event()
+        self.thread = threading.Thread(target=self._loop, name="live-view-sender", daemon=True)
+        self.thread.start()
+
+    def _loop(self) -> None:
+        next_t = time.monotonic() + self.period
+        last = None
+        while not self._stop.wait(max(0.0, next_t - time.monotonic())):
+            c0 = time.thread_time()
+            try:
+                advanced = self.send()
+            except Exception as exc:  # noqa: BLE001 - one bad round must not end the live view
+                self.on_error(exc)
+                advanced = False
+            self.cpu += time.thread_time() - c0
+            self.rounds += 1
+            now = time.monotonic()
+            if self.first_running is not None:
+                self._gap = max(self._gap, now - last)
+            if advanced:
+                if self.first_running is None:
+                    self.first_running, self._start_round = now, self.rounds
+                self.running = (self.rounds - self._start_round, now - self.first_running, self._gap)
+            last = now
+            next_t += self.period
+            if next_t < now:  # late: skip the missed rounds
+                next_t = now + self.period
+
+    def achieved_rate(self) -> Optional[float]:
+        """Rounds a second while the simulation ran (None before it ran for two rounds)."""
+        n, span, _ = self.running
+        return n / span if n >= 1 and span > 0 else None
+
+    def summary(self) -> str:
+        rate = self.achieved_rate()
+        if rate is None:
+            return f"sender: {self.rounds} rounds, the simulation did not run"
+        n, span, gap = self.running
+        return (f"sender: {rate:.1f} Hz achieved while the simulation ran ({n + 1} rounds in {span:.1f} s, "
+                f"longest gap {1000 * gap:.0f} ms, {1000 * self.cpu / max(1, self.rounds):.2f} ms CPU a round)")
+
+    def stop(self) -> None:
+        self._stop.set()
+        self.thread.join(2.0)
+
+
 class LiveViewNode(Node):
     """See the module docstring. topics: (topic, 'pkg/msg/Type', transient-local publishers?) to
     serve from the start;
@@ -204,6 +293,7 @@ class LiveViewNode(Node):
         self.slots: Dict[str, TopicSlot] = {}
         self.offered = set(offered_topics)
         self.sim_time_ns = 0
+        self._round_time = 0  # the simulation time of the sender's last round
         self.refused: collections.Counter = collections.Counter()  # why -> client messages refused
         self.accepted = 0
         self.clamped = 0
@@ -226,8 +316,8 @@ class LiveViewNode(Node):
             server_listener=_Listener(self), context=self.fg_context)
         self.add_server(self.server)
         self.port = self.server.port
-        self.timer = self.create_timer(1.0 / self.get_parameter("rate").value, self.send,
-                                       clock=rclpy.clock.Clock(clock_type=rclpy.clock.ClockType.STEADY_TIME))
+        self.sender = Sender(self.send, self.get_parameter("rate").value,
+                             lambda exc: self.complaints("send", f"sending failed: {exc!r}", "warning"))
         if self.get_parameter("discover").value:
             self._discover_timer = self.create_timer(
                 2.0, self.discover, clock=rclpy.clock.Clock(clock_type=rclpy.clock.ClockType.STEADY_TIME))
@@ -252,6 +342,9 @@ class LiveViewNode(Node):
         self.servers.append(server)
 
     def destroy_node(self) -> None:
+        self.sender.stop()
+        self.get_logger().info(f"{self.sender.summary()}; foxglove-sdk threads: "
+                               f"{thread_cpu_seconds('tokio'):.2f} s CPU")
         for server in self.servers:
             try:
                 server.stop()
@@ -310,18 +403,26 @@ class LiveViewNode(Node):
         if slot is not None:
             slot.offer(data)
 
-    def send(self) -> None:
-        """Timer: what is new goes to the subscribed clients, logged at the simulation time."""
+    def send(self) -> bool:
+        """The sender's round: what is new goes to the subscribed clients, logged at the simulation
+        time. True if the simulation ran since the last round: its time advanced (without /clock:
+        a message other than the /tf_static repeat was new)."""
         now = time.monotonic()
         t = self.sim_time_ns
-        for slot in self.slots.values():
+        advanced, self._round_time = t != self._round_time, t
+        fresh = False
+        for slot in list(self.slots.values()):
             messages = slot.take(now)
-            if not messages or not slot.channel.has_sinks():
+            if not messages:
+                continue
+            fresh = fresh or slot.policy != "static"
+            if not slot.channel.has_sinks():
                 continue
             for data in messages:
                 slot.channel.log(data, log_time=t)
             slot.sent += len(messages)
         self.server.broadcast_time(t)
+        return advanced if t else fresh
 
     # -- client input ----------------------------------------------------------------------
     def _refuse(self, kind: str, text: str) -> None:

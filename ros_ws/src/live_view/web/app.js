@@ -29,6 +29,7 @@ camera.up.set(0, 0, 1);
 camera.position.set(-80, -80, 60);
 const orbit = new OrbitControls(camera, canvas);
 orbit.enabled = false;
+orbit.addEventListener('change', () => { dirty = true; });
 orbit.maxPolarAngle = Math.PI * 0.495;
 scene3.add(new THREE.HemisphereLight(0xdfefff, 0x1c3a4a, 1.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.6);
@@ -154,8 +155,16 @@ function resize() {
     renderer.setSize(w, h, false);
     camera.aspect = w / Math.max(1, h);
     camera.updateProjectionMatrix();
+    return true;
   }
+  return false;
 }
+
+// The 3D view is drawn when something changed (a snapshot, the mouse, the camera, the window),
+// not at every animation frame: the data changes at the node's http_rate (10 Hz), and a
+// software-rendered WebGL canvas at 60 frames a second costs a whole core.
+let dirty = true;
+app.invalidate = () => { dirty = true; };
 
 // ---------------------------------------------------------------- cameras
 const followPos = new THREE.Vector3(), lastTarget = new THREE.Vector3();
@@ -177,10 +186,12 @@ function setCamera(mode) {
     orbit.update();
   }
   cameraInit = false;
+  dirty = true;
 }
 for (const b of document.querySelectorAll('#camera-bar button')) b.onclick = () => setCamera(b.dataset.camera);
 
-function placeCamera() {
+const FOLLOW_LAG = 0.12;  // s: time constant of the follow camera
+function placeCamera(dt) {
   const v = targetVessel();
   if (!v) return;
   const L = (vessels3.get(app.selected) || { length: 30 }).length;
@@ -189,7 +200,7 @@ function placeCamera() {
   if (app.camera === 'follow') {
     const back = 2.5 * L + 50, up = 1.1 * L + 26;
     followPos.set(p.x - back * Math.cos(yaw), p.y - back * Math.sin(yaw), up);
-    if (!cameraInit) camera.position.copy(followPos); else camera.position.lerp(followPos, 0.15);
+    if (!cameraInit) camera.position.copy(followPos); else camera.position.lerp(followPos, 1 - Math.exp(-dt / FOLLOW_LAG));
     orbit.target.copy(p);
     camera.lookAt(p.x + 0.3 * L * Math.cos(yaw), p.y + 0.3 * L * Math.sin(yaw), 0);
   } else if (app.camera === 'birdseye') {
@@ -214,12 +225,16 @@ function placeCamera() {
   grid.position.set(Math.round(p.x / 50) * 50, Math.round(p.y / 50) * 50, 0.02);
 }
 
-function render() {
-  resize();
-  placeCamera();
+let lastRender = 0;
+function render(now) {
+  requestAnimationFrame(render);
+  if (resize()) dirty = true;
+  if (!dirty && now - lastRender < 1000) return;  // and once a second whatever happens
+  dirty = false;
+  placeCamera(Math.min(0.5, Math.max(0, (now - lastRender) / 1000)));
+  lastRender = now;
   renderer.render(scene3, camera);
   app.frames += 1;
-  requestAnimationFrame(render);
 }
 
 // screen position (CSS pixels, in the canvas) of a vessel's origin: for tests
@@ -232,7 +247,7 @@ app.project = (name) => {
 };
 
 app.hasGeometry = (name) => !!(vessels3.get(name) || {}).hasGeometry;
-app.setVisible = (name, on) => { const v = vessels3.get(name); if (v) v.group.visible = on; };
+app.setVisible = (name, on) => { const v = vessels3.get(name); if (v) v.group.visible = on; dirty = true; };
 
 // ---------------------------------------------------------------- gauges
 function gauge(id, name) {
@@ -430,6 +445,7 @@ function selectVessel(name) {
   $('ctl-vessel').textContent = name || '-';
   app.touched = 0;  // the sliders take the new vessel's orders
   cameraInit = false;
+  dirty = true;
   const v = app.snap && app.snap.vessels[name];
   const has = !!(v && v.has_command);
   for (const id of ['engine', 'steering', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern', 'steer-port',
@@ -473,16 +489,23 @@ function apply(s) {
   drawPlot(s);
   syncSliders(s);
   askScene(s);
+  if (app.firstT === undefined && s.t !== null) app.firstT = s.t;  // the first simulation time shown
   app.updates += 1;
+  dirty = true;
 }
 
 async function poll() {
   let period = 0.1;
   try {
     const r = await fetch('/api/state', { cache: 'no-store' });
-    const s = await r.json();
+    const text = await r.text();
+    const s = JSON.parse(text);
     period = s.period || period;
-    apply(s);
+    // a snapshot like the last but for its number (the simulation paused, not started yet, or a
+    // replay at its end): nothing to update or draw
+    const key = text.replace(/"sample": \d+, /, '');
+    if (key !== app.lastKey) apply(s);
+    app.lastKey = key;
     $('conn').textContent = s.t === null ? 'waiting for the simulation' : 'live';
     $('conn').className = s.t === null ? 'bad' : 'good';
   } catch (e) {

@@ -3,6 +3,8 @@
     ros2 run scenario_runner autopilot --ros-args -r __ns:=/tug_autopilot \\
         -p vessel:=tug -p heading:=90.0 -p speed:=3.0
     ros2 run scenario_runner autopilot --ros-args -r __ns:=/tug_autopilot \\
+        -p vessel:=tug -p heading_true_deg:=0.0 -p speed:=3.0     # the same order as a compass heading
+    ros2 run scenario_runner autopilot --ros-args -r __ns:=/tug_autopilot \\
         -p vessel:=tug -p mode:=track -p track:="[0.0, 0.0, 400.0, 0.0, 700.0, 300.0]"
 
 Subscribes /<vessel>/odom (nav_msgs/Odometry: pose in map, twist in <vessel>/base_link) and,
@@ -41,15 +43,28 @@ from typing import List, Optional
 
 from nav_msgs.msg import Odometry
 from rclpy.duration import Duration
+from rclpy.parameter import Parameter
 from rcl_interfaces.msg import ParameterDescriptor
 from tug_msgs.msg import VesselCommand, VesselStatus
 
+from bridge_instruments.geo import yaw_from_compass
 from scenario_runner.autopilot_law import AutopilotConfig, AutopilotLaw, Measurement, Output, parse_waypoints
 from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
 
 SPEED_SOURCES = ("status", "odom")
+
+
+def heading_from_true_deg(heading_true_deg: float) -> float:
+    """The ordered heading as the controller takes it (REP-103 yaw, rad: 0 = east, counter-
+    clockwise) of a compass heading as a person gives it (deg true: 0 = north, clockwise, 0-360),
+    converted by bridge_instruments.geo; the inverse of sim_math.trials.compass_deg. ValueError
+    for anything else."""
+    if (isinstance(heading_true_deg, bool) or not isinstance(heading_true_deg, (int, float))
+            or not math.isfinite(heading_true_deg) or not 0.0 <= heading_true_deg <= 360.0):
+        raise ValueError(f"heading_true_deg: expected a compass heading of 0-360 deg true, got {heading_true_deg!r}")
+    return yaw_from_compass(float(heading_true_deg))
 
 
 def _odom_values(msg: Odometry):
@@ -59,7 +74,8 @@ def _odom_values(msg: Odometry):
 
 # parameter -> (AutopilotConfig field, conversion): orders, gains and limits change while running
 _LIVE_CONFIG = {
-    "heading": ("heading", math.radians), "speed": ("speed", float), "engine_order": ("engine_order", float),
+    "heading": ("heading", math.radians), "heading_true_deg": ("heading", heading_from_true_deg),
+    "speed": ("speed", float), "engine_order": ("engine_order", float),
     "lookahead": ("lookahead", float), "acceptance_radius": ("acceptance_radius", float),
     "heading_kp": ("heading_kp", float), "heading_ki": ("heading_ki", float), "heading_kd": ("heading_kd", float),
     "heading_integral_band_deg": ("heading_integral_band", math.radians),
@@ -82,6 +98,10 @@ class AutopilotNode(SteppedNode):
         p("mode", d.mode, rc.text_param("Steering: heading (keep parameter heading) or track (follow parameter track)"))
         p("heading", 0.0, rc.float_param(
             "Ordered heading (mode heading), 0 = east, positive counter-clockwise (REP-103)", -360.0, 360.0, "deg"))
+        # the same order as a person gives it: no default, so that it is used only when given
+        p("heading_true_deg", Parameter.Type.DOUBLE, rc.float_param(
+            "Ordered heading as a compass heading (mode heading), 0 = north, clockwise; instead of heading",
+            0.0, 360.0, "deg true"))
         p("speed_control", d.speed_control, rc.text_param(
             "true: PI control of the speed through the water to parameter speed; false: fixed engine_order"))
         p("speed", d.speed, rc.float_param("Ordered speed through the water", -10.0, 20.0, "m/s"))
@@ -128,9 +148,17 @@ class AutopilotNode(SteppedNode):
         if not self.vessel:
             raise ValueError("parameter vessel: give the vessel's name (its ROS namespace), e.g. vessel:=tug")
         mode = g("mode")
+        heading = math.radians(g("heading"))
+        heading_text = f"heading {g('heading'):.1f} deg"
+        if self._given("heading_true_deg"):
+            if "heading" in self._parameter_overrides:
+                raise ValueError("parameters heading (deg, REP-103: 0 = east, counter-clockwise) and "
+                                 "heading_true_deg (compass, deg true): give one of them, not both")
+            heading = heading_from_true_deg(g("heading_true_deg"))
+            heading_text = f"heading {g('heading_true_deg'):05.1f} deg true ({math.degrees(heading):.1f} deg)"
         waypoints = parse_waypoints(self._track_values(g("track"))) if mode == "track" else ()
         self.cfg = AutopilotConfig(
-            mode=mode, heading=math.radians(g("heading")), speed_control=bool(g("speed_control")),
+            mode=mode, heading=heading, speed_control=bool(g("speed_control")),
             speed=g("speed"), engine_order=g("engine_order"), waypoints=waypoints, lookahead=g("lookahead"),
             acceptance_radius=g("acceptance_radius"), heading_kp=g("heading_kp"), heading_ki=g("heading_ki"),
             heading_kd=g("heading_kd"), heading_integral_band=math.radians(g("heading_integral_band_deg")),
@@ -175,7 +203,7 @@ class AutopilotNode(SteppedNode):
         if self.use_status:
             inputs.append(StepInput(self.status_topic, VesselStatus, qos=qos))
         self.init_stepping(inputs, ready=False)
-        what = (f"heading {g('heading'):.1f} deg" if mode == "heading" else
+        what = (heading_text if mode == "heading" else
                 f"track through {len(waypoints)} waypoints (lookahead {self.cfg.lookahead:g} m)")
         speed = (f"speed {self.cfg.speed:g} m/s ({'through the water' if self.use_status else 'over ground'})"
                  if self.cfg.speed_control else f"engine order {self.cfg.engine_order:g}")
@@ -183,8 +211,15 @@ class AutopilotNode(SteppedNode):
             f"autopilot for '{self.vessel}': {what}, {speed}; {1e9 / self.period_ns:g} Hz, "
             f"{'lockstep' if self.lockstep else 'free-running'}; waiting for {self.odom_topic}")
 
+    def _given(self, name: str) -> bool:
+        """A parameter declared without a default has been given a value."""
+        return self.get_parameter_or(name, Parameter(name, Parameter.Type.NOT_SET)).type_ != Parameter.Type.NOT_SET
+
     def on_live_parameters(self, changes) -> None:
-        """A new order, gain or limit: the law keeps its integrals and its leg."""
+        """A new order, gain or limit: the law keeps its integrals and its leg. A heading order
+        comes as heading (deg, REP-103) or heading_true_deg (compass): the one set last holds."""
+        if "heading" in changes and "heading_true_deg" in changes:
+            raise ValueError("heading and heading_true_deg are the same order: set one of them, not both")
         cfg = dataclasses.replace(self.cfg, **{_LIVE_CONFIG[k][0]: _LIVE_CONFIG[k][1](v)
                                                for k, v in changes.items() if k in _LIVE_CONFIG})
         self.law.retune(cfg)  # ValueError: refused, nothing changed

@@ -184,7 +184,8 @@ def instrument_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
               "gear_ratios": [f"{k}={g!r}" for k, g in n.gear_ratios.items()] or [""],
               "rate": float(n.rate), "exchange_rate": float(sc.exchange_rate), "utc_start": n.utc_start,
               "static_every": int(n.static_every), "origin_latitude": float(sc.origin.latitude),
-              "origin_longitude": float(sc.origin.longitude), "origin_height": float(sc.origin.height)}
+              "origin_longitude": float(sc.origin.longitude), "origin_height": float(sc.origin.height),
+              "scenario": os.path.abspath(scenario_path)}   # AIS dimensions with the ship_overrides
     return [NodeSpec("/bridge", "nmea_out", "bridge_instruments", "nmea_out", params)]
 
 

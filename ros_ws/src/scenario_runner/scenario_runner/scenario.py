@@ -385,7 +385,7 @@ _NUMBER = (int, float)
 AUTOPILOT_PARAMS: Dict[str, tuple] = {
     "mode": (str, ("heading", "track")), "speed_control": (bool, None), "speed_source": (str, ("status", "odom")),
     "track": ((list, str), None),
-    "heading": (_NUMBER, (-360.0, 360.0)), "speed": (_NUMBER, (-10.0, 20.0)), "engine_order": (_NUMBER, (-1.0, 1.0)),
+    "heading": (_NUMBER, (-360.0, 360.0)), "heading_true_deg": (_NUMBER, (0.0, 360.0)), "speed": (_NUMBER, (-10.0, 20.0)), "engine_order": (_NUMBER, (-1.0, 1.0)),
     "lookahead": (_NUMBER, (1.0, 1e4)), "acceptance_radius": (_NUMBER, (0.0, 1e4)),
     "heading_kp": (_NUMBER, (0.0, 100.0)), "heading_ki": (_NUMBER, (0.0, 10.0)), "heading_kd": (_NUMBER, (0.0, 1000.0)),
     "heading_integral_band_deg": (_NUMBER, (0.0, 180.0)), "heading_integral_limit_deg": (_NUMBER, (0.0, 90.0)),

@@ -5,8 +5,10 @@
 
 Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
 exits. The order is stamped with the simulation time (the newest /clock) whenever /clock is
-published, else with wall time (sim_plumbing.sim_time); it says which. Exit status 1 if no
-vessel node listens within --wait seconds, 2 for a value that is not a finite number (the vessel would reject it anyway).
+published, else with wall time (sim_plumbing.sim_time); it says which. A /clock publisher is
+looked for for up to CLOCK_DISCOVERY s (a new process sees a running one within 0.03-2.9 s here),
+so without one the order goes out that much later. Exit status 1 if no vessel node listens
+within --wait seconds, 2 for a value that is not a finite number (the vessel would reject it anyway).
 """
 from __future__ import annotations
 
@@ -22,6 +24,12 @@ from tug_msgs.msg import VesselCommand
 
 from sim_plumbing import ros_common as rc
 from sim_plumbing.sim_time import SimClock
+
+# s to look for a /clock publisher (DDS discovery: a new process sees a running node within 0.03-2.9 s on
+# this machine, README "The step protocol"); measured: with 1 s, 1 of 2 sends in a paced run went out
+# on wall time. And s to wait for the first /clock once one is known.
+CLOCK_DISCOVERY = 3.0
+CLOCK_TIMEOUT = 4.0
 
 ANCHOR_ORDERS = {"none": VesselCommand.ANCHOR_NO_CHANGE, "let_go": VesselCommand.ANCHOR_LET_GO,
                  "heave_up": VesselCommand.ANCHOR_HEAVE_UP}
@@ -61,7 +69,8 @@ def main(argv=None) -> int:
             rclpy.spin_once(node, timeout_sec=0.05)
         msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
                             anchor=ANCHOR_ORDERS[args.anchor])
-        clock.wait(lambda timeout_sec: rclpy.spin_once(node, timeout_sec=timeout_sec), timeout=2.0)
+        clock.wait(lambda timeout_sec: rclpy.spin_once(node, timeout_sec=timeout_sec), timeout=CLOCK_TIMEOUT,
+                   discovery=CLOCK_DISCOVERY)
         msg.header.stamp = clock.now()
         pub.publish(msg)
         # Reliable delivery: wait for the subscribers' acknowledgement before the process ends.
