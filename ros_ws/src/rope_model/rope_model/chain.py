@@ -163,8 +163,16 @@ class RopeChain:
         if self.winch and self.end_modes[0] == "free":
             raise ValueError("a winch needs end a attached ('pinned' or 'fixed')")
         self.l_nom = float(nominal_element_length or params.nominal_element_length)
-        self.payout_rate = 0.0
+        self.payout_rate = 0.0  # the drum's pay-out rate now, m/s (+ out): the order in 'speed'
         self._paying = False  # pay-out active in the current sub-step (not at a limit)
+        # winch mode and its settings (set_winch; defaults from the rope file's winch: section)
+        w = params.winch.resolved(params.breaking_load, params.winch_max_payout_speed)
+        self.winch_mode = w["mode"]
+        self.set_tension = w["set_tension"]
+        self.recover_tension = w["recover_tension"]
+        self.brake_load = w["brake_load"]
+        self.winch_gain = w["gain"]
+        self.speed_order = 0.0  # the last 'speed' order, m/s
         self.max_substep = float(max_substep)
         self.theta = float(theta)
         self.relaxation = float(relaxation)
@@ -469,8 +477,16 @@ class RopeChain:
         before; nothing of the settling remains but the state. ValueError if the rope parts or
         does not settle within SETTLE_MAX_TIME (the ends too far apart, or a blow-up)."""
         va, vb = _vec3(velocity_a, "velocity_a"), _vec3(velocity_b, "velocity_b")
-        if self.winch and self.payout_rate != 0.0:
+        if self.winch and self.winch_mode == "speed" and self.payout_rate != 0.0:
             raise ValueError("settle: the winch must be stopped while settling")
+        mode = self.winch_mode  # 'hold' and 'constant_tension' settle with the drum locked
+        self.winch_mode, self.payout_rate = "speed", 0.0
+        try:
+            return self._settle(va, vb)
+        finally:
+            self.winch_mode = mode
+
+    def _settle(self, va, vb):
         ends = [v if m == "pinned" else np.zeros(3) for v, m in zip((va, vb), self.end_modes)]
         attached = [v for v, m in zip(ends, self.end_modes) if m != "free"]
         v_ref = np.mean(attached, axis=0) if attached else np.zeros(3)
@@ -574,8 +590,128 @@ class RopeChain:
             notes.append(f"payout_rate {r:g} m/s clamped to {-p.winch_max_heave_speed:g} m/s "
                          f"(winch_max_heave_speed)")
             r = -float(p.winch_max_heave_speed)
-        self.payout_rate = r
+        self.speed_order = r
+        if self.winch_mode == "speed":
+            self.payout_rate = r
         return notes
+
+    # winch modes (README "Winch"): what the drum does in each
+    WINCH_MODES = ("speed", "hold", "constant_tension")
+
+    def set_winch(self, mode=None, *, payout_rate=None, set_tension=None, recover_tension=None,
+                  brake_load=None):
+        """Winch order at end a. None keeps a setting as it is (the rope file's winch: section
+        at the start). mode: 'speed' (the drum turns at payout_rate, m/s, + pays out; 0 locks
+        it), 'hold' (brake: drum held while the drum tension T <= brake_load; above, it slips
+        and pays out at min(gain (T - brake_load), winch_max_payout_speed)) or
+        'constant_tension' (render above set_tension at min(gain (T - set_tension),
+        winch_max_payout_speed), recover below recover_tension at min(gain (recover_tension -
+        T), winch_max_heave_speed), hold in between). Tensions in N. Bad values (NaN, inf, a
+        negative or zero set tension or brake load, a negative recover tension, recover above
+        set tension, an unknown mode) raise ValueError naming the value, and nothing is
+        changed. A set or recover tension above the breaking load, a brake load above twice
+        it, and pay-out rates beyond the winch's speeds are clamped; returns the notes (one
+        per clamp)."""
+        if not self.winch:
+            raise ValueError("this rope has no winch (use RopeChain.wound_on_winch)")
+        if mode is not None and mode not in self.WINCH_MODES:
+            raise ValueError(f"winch mode: expected one of {', '.join(self.WINCH_MODES)}, got {mode!r}")
+
+        def value(name, v, allow_zero):
+            if v is None:
+                return None
+            try:
+                x = float(v)
+            except (TypeError, ValueError):
+                raise ValueError(f"winch {name}: expected a number (N), got {v!r}") from None
+            if not math.isfinite(x) or x < 0.0 or (x == 0.0 and not allow_zero):
+                raise ValueError(f"winch {name}: expected a finite {'non-negative' if allow_zero else 'positive'} "
+                                 f"tension (N), got {v!r}")
+            return x
+
+        ts = value("set_tension", set_tension, False)
+        tr = value("recover_tension", recover_tension, True)
+        tb = value("brake_load", brake_load, False)
+        if payout_rate is not None:
+            r = float(payout_rate)
+            if not math.isfinite(r):
+                raise ValueError(f"payout rate must be finite, got {payout_rate!r}")
+        notes = []
+        bl = float(self.params.breaking_load)
+        if ts is not None and ts > bl:
+            notes.append(f"set_tension {ts:g} N clamped to {bl:g} N (breaking_load)")
+            ts = bl
+        if tr is not None and tr > bl:
+            notes.append(f"recover_tension {tr:g} N clamped to {bl:g} N (breaking_load)")
+            tr = bl
+        if tb is not None and tb > 2.0 * bl:
+            notes.append(f"brake_load {tb:g} N clamped to {2.0 * bl:g} N (2 x breaking_load)")
+            tb = 2.0 * bl
+        new_ts = self.set_tension if ts is None else ts
+        new_tr = self.recover_tension if tr is None else tr
+        if new_tr > new_ts:
+            raise ValueError(f"winch recover_tension {new_tr:g} N is above set_tension {new_ts:g} N: "
+                             f"the lower (recover) tension must not exceed the set (render) tension")
+        if payout_rate is not None:
+            notes += self.set_payout_rate(payout_rate)
+        self.set_tension, self.recover_tension = new_ts, new_tr
+        if tb is not None:
+            self.brake_load = tb
+        if mode is not None and mode != self.winch_mode:
+            self.winch_mode = mode
+            self.payout_rate = self.speed_order if mode == "speed" else 0.0
+        return notes
+
+    def drum_rate(self, tension=None):
+        """Pay-out rate (m/s, + out) the winch mode gives for the drum tension (N; default
+        the present tension at end a, connection 0): the laws of set_winch."""
+        mode = self.winch_mode
+        if mode == "speed":
+            return self.speed_order
+        if not self.conn_ok[0]:
+            return 0.0
+        T = float(self.tensions[0]) if tension is None else float(tension)
+        p, g = self.params, self.winch_gain
+        if mode == "hold":
+            return min(g * (T - self.brake_load), p.winch_max_payout_speed) if T > self.brake_load else 0.0
+        if T > self.set_tension:
+            return min(g * (T - self.set_tension), p.winch_max_payout_speed)
+        if T < self.recover_tension:
+            return -min(g * (self.recover_tension - T), p.winch_max_heave_speed)
+        return 0.0
+
+    def _auto_rate(self, h):
+        """The drum rate for the next sub-step h in 'hold' / 'constant_tension': drum_rate()
+        taken implicitly for the drum connection's own response. Paying out dv faster lowers
+        the drum tension within the sub-step by about K dv, K = theta h k0 + c0 (the drum
+        connection's spring k0 = EA / (L0 / 2) over the theta point and its damper c0 =
+        2 zeta_x sqrt(k0 mu L0), kernels._connection_constants); solving v = law(T - K (v -
+        v_last)) instead of v = law(T) keeps the loop stable however short the drum link
+        (the explicit law gives G k0 h > 2 from about N = 50 up and chatters) and changes no
+        steady state: v_n = (law(T_n) + G K v_last) / (1 + G K), a lag of G K h per step."""
+        v = self.drum_rate()
+        if not self.conn_ok[0]:
+            return v
+        p = self.params
+        l0 = float(self.L[0])
+        k0 = p.ea / (0.5 * l0)
+        c0 = 2.0 * p.damping_ratio_axial * math.sqrt(k0 * p.mass_per_length * l0)
+        a = self.winch_gain * (self.theta * h * k0 + c0)
+        return (v + a * self.payout_rate) / (1.0 + a)
+
+    @property
+    def winch_state(self):
+        """What the drum does now: 'locked' (speed 0), 'paying out', 'heaving in' (speed
+        order), 'held', 'slipping' (hold), 'rendering', 'recovering' (constant tension)."""
+        r = self.payout_rate if self._winch_running() else 0.0
+        mode = self.winch_mode
+        if mode == "speed":
+            return "locked" if r == 0 else ("paying out" if r > 0 else "heaving in")
+        if r == 0:
+            return "held"
+        if mode == "hold":
+            return "slipping"
+        return "rendering" if r > 0 else "recovering"
 
     # ------------------------------------------------------------------ stepping
     def _pack(self):
@@ -659,7 +795,7 @@ class RopeChain:
             n_sub = max(1, int(math.ceil(dt / self.max_substep - 1e-9)))
             h = dt / n_sub
             self._split = (dt, self.max_substep, n_sub, h)
-        if self.winch and self.payout_rate != 0.0:
+        if self.winch and (self.payout_rate != 0.0 or self.winch_mode != "speed"):
             st = self._step_winch(dt, n_sub, h)
         else:  # the kernel restores the last good state itself on divergence, moves the
             # attachments on and writes the mean end force (impulse / dt)
@@ -699,17 +835,22 @@ class RopeChain:
         the arrays in between."""
         info = self._info
         snap = self._snapshot()
+        rate0 = self.payout_rate
         imp_total = np.zeros((2, 3))
         pos0 = self.att_pos.copy()
         st = K.OK
+        auto = self.winch_mode != "speed"
         for k in range(n_sub):
             self.att_pos[:] = pos0 + self.att_vel * (k * h)
+            if auto:  # hold / constant tension: the rate from the drum tension of the last evaluation
+                self.payout_rate = self._auto_rate(h)
             self._paying = self._winch_running()
             st = self._kernel(h, 1, self.payout_rate if self._paying else 0.0, 0.0) & ~K.PARTED
             self._collect_events(self.time + k * h)
             if st != K.OK:
                 info[0] = k
                 self._restore(snap)
+                self.payout_rate = rate0
                 break
             imp_total += self._imp
             self._winch(self.payout_rate * h, h)
@@ -722,6 +863,7 @@ class RopeChain:
             if st != K.OK:
                 info[0] = n_sub - 1
                 self._restore(snap)
+                self.payout_rate = rate0
                 self.att_pos[:] = pos0
             else:
                 self._mean_end_force[:] = imp_total * (1.0 / dt)
@@ -835,6 +977,21 @@ class RopeChain:
         front = x0 + 0.5 * l0 * e
         c_near = front - 0.5 * (l0 - ln) * e
         c_far = front - (l0 - ln) * e - 0.5 * ln * e
+        # under tension (paying out a taut line: render, brake slip) the connections' gaps
+        # hold the stretch of the half elements beside them (compliance l_rep / EA, l_rep the
+        # two half lengths): redistribute them along e so that every tension is kept, the new
+        # inner connection taking the drum tension; splitting with the gaps unchanged would
+        # triple the drum connection's tension (its l_rep drops from l0/2 to (l0 - ln)/2)
+        T0 = float(self.tensions[0]) if self.conn_ok[0] else 0.0
+        T1 = float(self.tensions[1]) if self.conn_ok[1] else 0.0
+        if T0 > 0.0 or T1 > 0.0:
+            ea = self.params.ea
+            back = T1 * 0.5 * (l0 - ln) / ea  # old connection 1: l_rep l0/2 + .. -> ln/2 + ..
+            fwd = T0 * 0.5 * l0 / ea - back  # the new inner connection's gap, minus that shift
+            if self.att_on[0] and self.conn_ok[0]:  # never past the drum
+                fwd = min(fwd, max(0.0, float((self.att_pos[0] - front) @ e)))
+            c_far = c_far - back * e
+            c_near = c_near + max(fwd, -back) * e
         v_near = v0 + np.cross(w0, c_near - x0)
         v_far = v0 + np.cross(w0, c_far - x0)
         self.X = np.vstack([c_near, c_far, self.X[1:]])

@@ -90,6 +90,12 @@ class ChainAdapter:
         the notes of any clamp (empty list: taken as given); ValueError for NaN / inf."""
         return self.rope.set_payout_rate(rate)
 
+    def set_winch(self, mode: Optional[str] = None, **kw) -> List[str]:
+        """RopeChain.set_winch: mode 'speed' / 'hold' / 'constant_tension', payout_rate (m/s),
+        set_tension, recover_tension, brake_load (N; None keeps). Returns the clamp notes;
+        ValueError naming the value for a bad order (nothing changed)."""
+        return self.rope.set_winch(mode, **kw)
+
     def step(self, dt: float) -> None:
         self.rope.step(dt)
 
@@ -136,6 +142,9 @@ class CableAdapter:
             self.cable.set_top_kinematics(position, velocity)
 
     def set_payout_rate(self, rate: float) -> None:
+        raise ValueError("an fd_cable rope has no winch")
+
+    def set_winch(self, mode=None, **kw) -> None:
         raise ValueError("an fd_cable rope has no winch")
 
     def element_centres(self) -> np.ndarray:

@@ -21,7 +21,7 @@ G0 = 9.80665  # m/s^2, standard gravity: kgf -> N and tf -> N (Table 1)
 TONNE_FORCE = 1000.0 * G0  # N per tf (Table 1 "16 ton" breaking strength)
 KNOT = 1852.0 / 3600.0  # m/s per knot (section 4.4-4.6 speeds)
 
-__all__ = ["G0", "KNOT", "TONNE_FORCE", "RopeParams", "RopeParamsError", "SeabedParams",
+__all__ = ["G0", "KNOT", "TONNE_FORCE", "RopeParams", "RopeParamsError", "SeabedParams", "WinchParams",
            "load_rope_params", "default_rope_path", "shipped_rope_file", "finite_vec3"]
 
 
@@ -47,6 +47,41 @@ class SeabedParams:
     friction_transverse: float = 0.25  # -
     slip_speed: float = 0.01  # m/s
 
+
+WINCH_MODES = ("speed", "hold", "constant_tension")
+
+
+@dataclass(frozen=True)
+class WinchParams:
+    """The winch at end a (the rope file's optional ``winch:`` mapping; README "Winch").
+
+    mode: the mode at the start, ``speed`` (the pay-out rate order, 0 = drum locked),
+    ``hold`` (brake on: the drum is held while the drum tension T <= brake_load; above it
+    the brake slips and pays out at v = min(gain (T - brake_load), winch_max_payout_speed),
+    i.e. it resists with brake_load + v / gain: a Coulomb brake regularised by a steep
+    viscous slope) or ``constant_tension`` (render / recover: pays out at
+    min(gain (T - set_tension), winch_max_payout_speed) above set_tension, heaves in at
+    min(gain (recover_tension - T), winch_max_heave_speed) below recover_tension, holds in
+    between). None = the default: set_tension 0.5 breaking_load, recover_tension 0.2
+    set_tension, brake_load 0.8 breaking_load (the brake slips before the line parts), gain
+    winch_max_payout_speed / (0.1 breaking_load) (full speed at an error of a tenth of the
+    breaking load). These are choices, not a source's figures."""
+
+    mode: str = "speed"
+    set_tension: float | None = None  # N
+    recover_tension: float | None = None  # N
+    brake_load: float | None = None  # N
+    gain: float | None = None  # m/s per N
+
+    def resolved(self, breaking_load: float, max_payout_speed: float) -> dict:
+        """The settings with the defaults filled in: mode, set_tension, recover_tension,
+        brake_load (N) and gain (m/s per N)."""
+        ts = self.set_tension if self.set_tension is not None else 0.5 * breaking_load
+        tr = self.recover_tension if self.recover_tension is not None else 0.2 * ts
+        tb = self.brake_load if self.brake_load is not None else 0.8 * breaking_load
+        g = self.gain if self.gain is not None else max_payout_speed / (0.1 * breaking_load)
+        return dict(mode=self.mode, set_tension=float(ts), recover_tension=float(tr),
+                    brake_load=float(tb), gain=float(g))
 
 
 @dataclass(frozen=True)
@@ -84,6 +119,7 @@ class RopeParams:
     winch_max_payout_speed: float = 3.0  # m/s
     winch_max_heave_speed: float = 3.0  # m/s
     seabed: SeabedParams = field(default_factory=SeabedParams)  # seabed contact
+    winch: WinchParams = field(default_factory=WinchParams)  # winch modes (end a)
     name: str = "rope"
     source: str = field(default="<defaults>", compare=False)
 
@@ -161,6 +197,28 @@ def _validate(p: RopeParams, src: str) -> None:
     if not isinstance(p.name, str):
         bad("name", "a string", p.name)
     check_seabed(p.seabed, bad)
+    check_winch(p, bad)
+
+
+def check_winch(p, bad) -> None:
+    """bad(key, expected, got) for a WinchParams out of range (mode, signs, finite, recover <=
+    set tension)."""
+    w = p.winch
+    if not isinstance(w, WinchParams):
+        bad("winch", "a WinchParams", w)
+    if w.mode not in WINCH_MODES:
+        bad("winch.mode", "one of " + ", ".join(repr(m) for m in WINCH_MODES), w.mode)
+    for k, lo in (("set_tension", 0.0), ("recover_tension", None), ("brake_load", 0.0), ("gain", 0.0)):
+        v = getattr(w, k)
+        if v is None:
+            continue
+        if not _is_number(v) or v < 0 or (lo is not None and v <= lo):
+            bad("winch." + k, "a positive number or null" if lo is not None else
+                "a non-negative number or null", v)
+    r = w.resolved(p.breaking_load, p.winch_max_payout_speed)
+    if r["recover_tension"] > r["set_tension"]:
+        bad("winch.recover_tension", f"at most winch.set_tension ({r['set_tension']:g} N)",
+            r["recover_tension"])
 
 
 _SEABED_POSITIVE = ("stiffness", "slip_speed")
@@ -203,6 +261,8 @@ def load_rope_params(path: str | os.PathLike) -> RopeParams:
                               f"got {f.min_length!r}")
     kw = {k: getattr(f, k) for k in _FIELDS if k in RopeFile.model_fields}
     kw["seabed"] = seabed_params(f.seabed)
+    kw["winch"] = WinchParams() if f.winch is None else WinchParams(
+        **{fl.name: getattr(f.winch, fl.name) for fl in dataclasses.fields(WinchParams)})
     p = RopeParams(**kw, source=src)
     _validate(p, src)
     return p

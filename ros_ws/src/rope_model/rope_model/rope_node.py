@@ -156,6 +156,34 @@ class RopeNode(SteppedNode):
     def on_live_parameters(self, changes) -> None:
         self.marker_every = max(1, round(1e9 / self.period_ns / changes["marker_rate"]))
 
+    WINCH_MODES = ("speed", "hold", "constant_tension")  # WinchCommand.SPEED, HOLD, CONSTANT_TENSION
+
+    @staticmethod
+    def _winch_tensions(msg) -> dict:
+        """The order's tensions as set_winch keywords: 0 (or absent) = keep the current (None)."""
+        return {k: (getattr(msg, k, 0.0) or None) for k in ("set_tension", "recover_tension", "brake_load")}
+
+    def _winch_order_fault(self, msg):
+        """Why a WinchCommand is refused (None: acceptable): a non-finite rate, an unknown mode,
+        a non-finite or negative tension, a recover tension above the set tension."""
+        if not math.isfinite(msg.payout_rate):
+            return f"payout_rate={msg.payout_rate!r}"
+        mode = getattr(msg, "mode", 0)
+        if not 0 <= mode < len(self.WINCH_MODES):
+            return f"mode={mode!r} (expected 0 SPEED, 1 HOLD or 2 CONSTANT_TENSION)"
+        for k in ("set_tension", "recover_tension", "brake_load"):
+            v = getattr(msg, k, 0.0)
+            if not (math.isfinite(v) and v >= 0.0):
+                return f"{k}={v!r} (expected a finite tension >= 0 N, 0 = keep)"
+        rope = getattr(self.rope, "rope", None)  # the element chain: check against its present settings
+        if rope is not None and getattr(rope, "winch", False):
+            t = self._winch_tensions(msg)
+            ts = t["set_tension"] if t["set_tension"] is not None else rope.set_tension
+            tr = t["recover_tension"] if t["recover_tension"] is not None else rope.recover_tension
+            if tr > ts:
+                return f"recover_tension {tr:g} N above set_tension {ts:g} N"
+        return None
+
     def step_of(self, spec, msg) -> int:
         if spec.msg_type is AttachmentArray:
             return msg.step
@@ -163,9 +191,10 @@ class RopeNode(SteppedNode):
 
     def accept_input(self, spec: StepInput, msg) -> bool:
         if spec.msg_type is WinchCommand:
-            if not math.isfinite(msg.payout_rate):
+            why = self._winch_order_fault(msg)
+            if why is not None:
                 self.rejected += 1
-                detail = f"winch command rejected, keeping the last valid one: payout_rate={msg.payout_rate!r}"
+                detail = f"winch command rejected, keeping the last valid one: {why}"
                 if self.complaints("winch rejected", detail):
                     self.emit_event("command_rejected", detail)
                 return False
@@ -261,7 +290,16 @@ class RopeNode(SteppedNode):
         order = inputs.get("winch")
         if order is not None:
             # clamped to the winch's limits like any order; the notes say how
-            for note in self.rope.set_payout_rate(order.payout_rate) or ():
+            try:
+                notes = self.rope.set_winch(self.WINCH_MODES[getattr(order, "mode", 0)],
+                                            payout_rate=order.payout_rate, **self._winch_tensions(order))
+            except ValueError as exc:  # a fault accept_input could not see (refused whole)
+                self.rejected += 1
+                detail = f"winch command rejected, keeping the last valid one: {exc}"
+                if self.complaints("winch rejected", detail):
+                    self.emit_event("command_rejected", detail)
+                notes = ()
+            for note in notes or ():
                 self.clamped += 1
                 if self.complaints("winch clamped", f"winch command clamped: {note}", "warning"):
                     self.emit_event("command_clamped", note)

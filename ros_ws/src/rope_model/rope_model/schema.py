@@ -184,6 +184,22 @@ class SeabedFile(_Strict):
     slip_speed: float = num(0.01, 1.0e-4, 1.0, "m/s")
 
 
+WINCH_MODES = ("speed", "hold", "constant_tension")
+
+
+class WinchFile(_Strict):
+    """The optional ``winch:`` mapping of a rope file: the winch at end a (params.WinchParams:
+    the defaults, the brake slip law and the render / recover controller). Tensions in N
+    (null: a fraction of the breaking load, see params.WinchParams); the gain in m/s per N
+    (null: winch_max_payout_speed at an error of a tenth of the breaking load)."""
+
+    mode: Literal["speed", "hold", "constant_tension"] = "speed"
+    set_tension: Optional[float] = num(None, 0.0, 1.0e8, "N", lo_open=True)
+    recover_tension: Optional[float] = num(None, 0.0, 1.0e8, "N")  # 0: never heaves in
+    brake_load: Optional[float] = num(None, 0.0, 2.0e8, "N", lo_open=True)
+    gain: Optional[float] = num(None, 0.0, 1.0, "m/s per N", lo_open=True)
+
+
 class RopeFile(_Strict):
     """Element chain rope file (Yoon, Lee, Park, Kim 2012; ropes/table1.yaml)."""
 
@@ -216,6 +232,7 @@ class RopeFile(_Strict):
     winch_max_payout_speed: float = num(3.0, 0.0, 10.0, "m/s", lo_open=True)
     winch_max_heave_speed: float = num(3.0, 0.0, 10.0, "m/s", lo_open=True)
     seabed: Optional[SeabedFile] = None  # null / absent: the defaults
+    winch: Optional[WinchFile] = None  # null / absent: the defaults (params.WinchParams)
 
 
 class CableFile(_Strict):
