@@ -168,3 +168,78 @@ def test_undecodable_bytes_are_reported_and_dropped():
     assert "not UTF-8" in reasons[0] and "ends at byte" in reasons[1]
     good = cdr.clock_cdr(5)
     assert cdr.decode_or_report(lambda d: cdr.CdrReader(d).stamp_ns(), good, reasons.append) == 5
+
+
+# -- ASD tug: thruster orders and per-thruster status (issue 19 item 1) --------------------------
+@pytest.mark.parametrize("n", [0, 1, 2, 3])
+@pytest.mark.parametrize("named", [True, False])
+def test_thruster_command_decoded(n, named):
+    from tug_msgs.msg import ThrusterCommand
+    rng = np.random.default_rng(n)
+    names = [NAMES[(2 * i + n) % len(NAMES)] for i in range(n)] if named else []
+    ref = ThrusterCommand(thrusters=names, azimuth=rng.normal(size=n).tolist(), rpm=rng.normal(size=n).tolist())
+    ref.header.frame_id = NAMES[n]
+    _stamp(ref.header)
+    got = cdr.decode_thruster_command(serialize_message(ref))
+    assert got == (STAMP_NS, tuple(names), tuple(ref.azimuth), tuple(ref.rpm))
+    # lengths as sent (the vessel node checks them), NaN as sent (refused there)
+    ref.azimuth, ref.rpm = [float("nan")], [0.5, 0.5]
+    got = cdr.decode_thruster_command(serialize_message(ref))
+    assert math.isnan(got.azimuth[0]) and got.rpm == (0.5, 0.5) and got.thrusters == tuple(names)
+
+
+def test_thruster_command_garbage_is_refused_with_a_reason():
+    from tug_msgs.msg import ThrusterCommand
+    data = serialize_message(ThrusterCommand(thrusters=["port", "starboard"], azimuth=[0.1, 0.2], rpm=[0.3, 0.4]))
+    for end in range(len(data)):
+        with pytest.raises(cdr.CdrError):
+            cdr.decode_thruster_command(data[:end])
+    huge = bytearray(data)
+    huge[20:24] = (2 ** 32 - 1).to_bytes(4, "little")  # thrusters' count (after the stamp and frame_id "")
+    with pytest.raises(cdr.CdrError, match="does not fit"):
+        cdr.decode_thruster_command(bytes(huge))
+    rng = np.random.default_rng(5)
+    for _ in range(2000):  # random bytes: decoded or refused, never another exception
+        try:
+            cdr.decode_thruster_command(b"\x00\x01\x00\x00" + rng.bytes(int(rng.integers(0, 80))))
+        except cdr.CdrError:
+            pass
+
+
+@pytest.mark.parametrize("vessel", ["tug", "", "abcdefg"])
+@pytest.mark.parametrize("n", [0, 1, 2, 3])
+def test_thruster_status(vessel, n):
+    from tug_msgs.msg import ThrusterStatus
+    rng = np.random.default_rng(n + len(vessel))
+    names = [NAMES[(3 * i + n) % len(NAMES)] for i in range(n)]
+    columns = rng.normal(size=(len(cdr.ThrusterStatusEncoder.FIELDS), n))
+    ref = ThrusterStatus(step=2 ** 40 + 3, vessel=vessel, names=names)
+    ref.header.frame_id = vessel + "/base_link"
+    _stamp(ref.header)
+    for field, column in zip(cdr.ThrusterStatusEncoder.FIELDS, columns):
+        setattr(ref, field, column.tolist())
+    data = cdr.ThrusterStatusEncoder(ref.header.frame_id, vessel, names).encode(STAMP_NS, ref.step, columns.tolist())
+    assert deserialize_message(data, ThrusterStatus) == ref
+
+
+@pytest.mark.parametrize("mode, rate, ts, tr, tb", [(0, 1.5, 0.0, 0.0, 0.0), (1, 0.0, 0.0, 0.0, 9.0e4),
+                                                    (2, -0.5, 8.0e4, 1.5e4, 0.0)])
+def test_winch_command_reads_back(mode, rate, ts, tr, tb):
+    from tug_msgs.msg import WinchCommand
+    ref = WinchCommand(payout_rate=rate, mode=mode, set_tension=ts, recover_tension=tr, brake_load=tb)
+    ref.header.frame_id = "abc"
+    _stamp(ref.header)
+    got = cdr.decode_winch_command(serialize_message(ref))
+    assert got == (STAMP_NS, rate, mode, ts, tr, tb)
+    assert WinchCommand.SPEED == 0 and WinchCommand.HOLD == 1 and WinchCommand.CONSTANT_TENSION == 2
+
+
+def test_winch_command_of_the_old_layout_is_a_speed_order():
+    # the message before the winch modes ended after payout_rate: SPEED, every tension 0 (keep)
+    from tug_msgs.msg import WinchCommand
+    ref = WinchCommand(payout_rate=-2.0)
+    _stamp(ref.header)
+    data = serialize_message(ref)
+    old = data[:4 + 8 + 4 + 4 + 8]  # encapsulation, stamp, frame_id "" (4 + 1, padded), payout_rate
+    got = cdr.decode_winch_command(old)
+    assert (got.payout_rate, got.mode, got.set_tension, got.recover_tension, got.brake_load) == (-2.0, 0, 0.0, 0.0, 0.0)

@@ -30,7 +30,8 @@ from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
 from sim_math.rotations import yaw_from_quaternion
-from scenario_runner.scenario import Scenario, environment_parameter, heading_rad, installed_executable, resolve
+from scenario_runner.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
+                                     resolve)
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import shm_hygiene
@@ -534,7 +535,7 @@ def contract_topics(sc: Scenario) -> List[tuple]:
     from nav_msgs.msg import Odometry
     from rosgraph_msgs.msg import Clock as ClockMsg
     from tf2_msgs.msg import TFMessage
-    from tug_msgs.msg import AttachmentArray, RopeState, VesselStatus
+    from tug_msgs.msg import AttachmentArray, RopeState, ThrusterCommand, ThrusterStatus, VesselStatus
     from visualization_msgs.msg import MarkerArray
     topics = [("/clock", ClockMsg, CLOCK_QOS), (rc.SIM_STEP_TOPIC, SimStep, rc.PROTOCOL_QOS),
               (rc.STEP_DONE_TOPIC, StepDone, rc.PROTOCOL_QOS), (rc.EVENTS_TOPIC, ScenarioEvent, rc.EVENTS_QOS)]
@@ -546,6 +547,9 @@ def contract_topics(sc: Scenario) -> List[tuple]:
                    (f"/{v.name}/status", VesselStatus, rc.LATCHED_STATE_QOS),
                    (f"/{v.name}/markers", MarkerArray, rc.LATCHED_STATE_QOS),
                    (f"/{v.name}/command", VesselCommand, rc.COMMAND_QOS)]
+        if has_thrusters(sc, v):   # azimuth thrusters: their orders and status (tug_dynamics README, ASD tug)
+            topics += [(f"/{v.name}/thrusters", ThrusterStatus, rc.LATCHED_STATE_QOS),
+                       (f"/{v.name}/thruster_command", ThrusterCommand, rc.COMMAND_QOS)]
     for r in sc.ropes:
         topics += [(f"/{r.name}/state", RopeState, rc.LATCHED_STATE_QOS),
                    (f"/{r.name}/markers", MarkerArray, rc.LATCHED_STATE_QOS)]

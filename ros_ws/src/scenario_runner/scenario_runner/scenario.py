@@ -35,7 +35,7 @@ import os
 import re
 from typing import Any, Dict, List, Literal, Optional
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
 from bridge_instruments.geo import DEFAULT_ORIGIN, KNOT
@@ -290,6 +290,7 @@ class Scenario(_Strict):
     recording: Recording = Recording()
     origin: GeoOrigin = GeoOrigin()
     nmea: Optional[NmeaSpec] = None
+    _path: str = PrivateAttr("")   # the file it was read from (load_scenario), for relative paths
 
     @model_validator(mode="before")
     @classmethod
@@ -372,6 +373,7 @@ def load_scenario(path: str, check_files: bool = True) -> Scenario:
     except ValidationError as exc:
         lines = [f"{path}: key '{_key_path(e['loc']) or '(top)'}': {_explain(e)}" for e in exc.errors()]
         raise ScenarioError("\n".join(lines)) from None
+    sc._path = os.path.abspath(path)
     _check_references(path, sc)
     if check_files:
         _check_files(path, sc)
@@ -649,6 +651,17 @@ def _check_files(path: str, sc: Scenario) -> None:
         if installed_executable(a.package, a.executable) is None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
+
+
+def has_thrusters(sc: Scenario, v: VesselSpec) -> bool:
+    """Whether the vessel's ship file (with its ship_overrides) has azimuth thrusters."""
+    path = resolve("tug_dynamics", "ships", v.ship_file, sc._path or "scenario.yaml")
+    try:
+        data = load_yaml(path)
+    except (OSError, YamlInputError):
+        return False
+    over = v.ship_overrides or {}
+    return bool((over.get("thrusters") if "thrusters" in over else (data or {}).get("thrusters")))
 
 
 def depth_grid_path(depth: DepthGridSpec, scenario_path: str) -> str:

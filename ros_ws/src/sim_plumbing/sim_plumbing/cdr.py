@@ -199,6 +199,35 @@ class VesselStatusEncoder:
                            (*floats_b, girting_warning), (rejected, clamped), (*floats_env, grounded))
 
 
+class ThrusterStatusEncoder:
+    """tug_msgs/ThrusterStatus of a fixed list of thrusters: one float64 sequence per field, each
+    as long as the names."""
+
+    FIELDS = ("azimuth", "azimuth_ordered", "rpm", "rpm_ordered", "thrust", "open_water_thrust")
+
+    def __init__(self, frame_id: str, vessel: str, names: Sequence[str]):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.slot(_U64, 8)  # step
+        t.string(vessel)
+        t.const(_U32, 4, len(names))
+        for name in names:
+            t.string(name)
+        self.n = len(names)
+        values = struct.Struct(f"<{self.n}d")
+        for _ in self.FIELDS:
+            t.const(_U32, 4, self.n)
+            if self.n:  # an empty sequence has no elements to align
+                t.slot(values, 8)
+        t.seal()
+
+    def encode(self, stamp_ns: int, step: int, columns: Sequence[Sequence[float]]) -> bytes:
+        """columns: one sequence of n values per field of FIELDS, in that order."""
+        if not self.n:
+            return self.t.pack(stamp_parts(stamp_ns), (step,))
+        return self.t.pack(stamp_parts(stamp_ns), (step,), *columns)
+
+
 class WrenchStampedEncoder:
     def __init__(self, frame_id: str):
         t = self.t = Template()
@@ -516,14 +545,59 @@ def decode_vessel_command(data: bytes) -> VesselCommandIn:
     return VesselCommandIn(stamp, engine, steering, anchor)
 
 
-class WinchCommandIn(NamedTuple):
-    """A tug_msgs/WinchCommand as taken."""
+class ThrusterCommandIn(NamedTuple):
+    """A tug_msgs/ThrusterCommand as taken (lengths as sent: the vessel node checks them)."""
     stamp_ns: int
-    payout_rate: float
+    thrusters: Tuple[str, ...]
+    azimuth: Tuple[float, ...]
+    rpm: Tuple[float, ...]
 
 
-def decode_winch_command(data: bytes) -> WinchCommandIn:
+def _sequence_count(r: CdrReader, item_size: int) -> int:
+    """A sequence's element count, refused when its elements cannot fit in the rest of the message."""
+    n = r.uint32()
+    if n * item_size > len(r.data) - r.pos:
+        raise CdrError(f"sequence of {n} elements at byte {r.pos} does not fit in a {len(r.data)}-byte message")
+    return n
+
+
+def _float64_sequence(r: CdrReader) -> Tuple[float, ...]:
+    n = _sequence_count(r, 8)
+    return r.unpack(struct.Struct(f"<{n}d"), 8) if n else ()
+
+
+def decode_thruster_command(data: bytes) -> ThrusterCommandIn:
     r = CdrReader(data)
     stamp = r.stamp_ns()
     r.string()  # frame_id
-    return WinchCommandIn(stamp, r.unpack(_F64, 8)[0])
+    names = tuple(r.string() for _ in range(_sequence_count(r, 5)))  # a string takes >= 5 bytes
+    azimuth = _float64_sequence(r)
+    rpm = _float64_sequence(r)
+    return ThrusterCommandIn(stamp, names, azimuth, rpm)
+
+
+class WinchCommandIn(NamedTuple):
+    """A tug_msgs/WinchCommand as taken (mode 0 = SPEED; tensions 0 = keep the current)."""
+    stamp_ns: int
+    payout_rate: float
+    mode: int = 0
+    set_tension: float = 0.0
+    recover_tension: float = 0.0
+    brake_load: float = 0.0
+
+
+_WINCH_MODE = struct.Struct("<B")
+_WINCH_TENSIONS = struct.Struct("<3d")
+
+
+def decode_winch_command(data: bytes) -> WinchCommandIn:
+    """A WinchCommand; one that ends after payout_rate (the message before the winch modes)
+    reads as mode SPEED with every tension 0 (keep)."""
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    rate = r.unpack(_F64, 8)[0]
+    if r.pos >= len(data):
+        return WinchCommandIn(stamp, rate)
+    mode = r.unpack(_WINCH_MODE, 1)[0]
+    return WinchCommandIn(stamp, rate, mode, *r.unpack(_WINCH_TENSIONS, 8))

@@ -2,10 +2,12 @@
 
     ros2 run tug_dynamics vessel_node --ros-args -r __ns:=/tug -p ship_file:=harbour_tug.yaml
 
-Subscribes ``command`` (tug_msgs/VesselCommand) and every topic named in ``wrench_topics``
+Subscribes ``command`` (tug_msgs/VesselCommand), ``thruster_command`` (tug_msgs/ThrusterCommand:
+per-thruster orders, for ships with azimuth thrusters) and every topic named in ``wrench_topics``
 (geometry_msgs/WrenchStamped; frame_id "<vessel>/<attachment>" or "<vessel>/base_link").
 Publishes ``odom`` (nav_msgs/Odometry), ``attachments`` (tug_msgs/AttachmentArray) and
-``status`` (tug_msgs/VesselStatus) once per exchange step; the frames on ``/tf``
+``status`` (tug_msgs/VesselStatus) once per exchange step, and ``thrusters``
+(tug_msgs/ThrusterStatus) with them on a ship with azimuth thrusters; the frames on ``/tf``
 (tf2_msgs/TFMessage, map -> <vessel>/base_link, every step, the odometry's pose) and
 ``/tf_static`` (<vessel>/base_link -> <vessel>/<attachment>, once, latched); and its scene on
 ``markers`` (visualization_msgs/MarkerArray: hull, deck, attachment points, thrust and rope end
@@ -27,7 +29,8 @@ from geometry_msgs.msg import WrenchStamped
 from visualization_msgs.msg import MarkerArray
 from nav_msgs.msg import Odometry
 from tf2_msgs.msg import TFMessage
-from tug_msgs.msg import AttachmentArray, ScenarioEvent, VesselCommand, VesselStatus
+from tug_msgs.msg import (AttachmentArray, ScenarioEvent, ThrusterCommand, ThrusterStatus, VesselCommand,
+                           VesselStatus)
 
 from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
@@ -36,15 +39,16 @@ from sim_plumbing.scene import HullDimensions, VesselScene
 from sea_environment.environment import Environment
 from tug_dynamics.environment_loads import EnvironmentStatus, VesselInEnvironment
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
-from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
-from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Vessel, VesselState, check_command,
-                                 rotation_body_to_world)
+from sim_plumbing.stepping import REJECTED_ORDER, ModelDiverged, SteppedNode, StepInput
+from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, ThrusterOrder, Vessel, VesselState,
+                                 check_command, rotation_body_to_world)
 
 # the status record's float fields in message order (every model's StatusRecord has them all)
 _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
 _STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
 _STATUS_FLOATS_ENV = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_ENV)
 _STILL_DEEP = EnvironmentStatus()   # what status reports without an environment
+THRUSTER_COMMAND = "thruster_command"   # the per-thruster order input (tug_msgs/ThrusterCommand)
 
 
 def _merged(base: dict, over: Optional[dict]) -> dict:
@@ -159,10 +163,17 @@ class VesselNode(SteppedNode):
         self._rope_forces = {}  # wrench topic -> (attachment point, force in body axes) of the last step
         self.attach_pub = self.create_fed_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
         self.status_pub = self.create_fed_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
+        # per-thruster state, on ships with azimuth thrusters only (a prescribed motion's base
+        # ship reports its thrusters too, though it takes no orders)
+        self._thruster_names = tuple(t.name for t in getattr(self.model.status(), "thrusters", ()))
+        self.thrusters_pub = (self.create_fed_publisher(ThrusterStatus, "thrusters", rc.LATCHED_STATE_QOS)
+                              if self._thruster_names else None)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self._wrench_points = {}  # frame_id -> attachment point (body), for accepted frames
         # commands raw: bytes that are not a VesselCommand are refused and counted, never crash the node
-        self.init_stepping([StepInput("command", VesselCommand, kind="order", decode=cdr.decode_vessel_command)] +
+        self.init_stepping([StepInput("command", VesselCommand, kind="order", decode=cdr.decode_vessel_command),
+                            StepInput(THRUSTER_COMMAND, ThrusterCommand, kind="order",
+                                      decode=cdr.decode_thruster_command)] +
                            [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics])
         self.on_live_parameters({n: self.get_parameter(n).value for n in self.LIVE_PARAMETERS})
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
@@ -192,13 +203,73 @@ class VesselNode(SteppedNode):
             try:
                 check_command(Command(msg.engine_order, msg.steering_angle, msg.anchor))
             except CommandRejected as exc:
-                self.rejected += 1
-                # rate-limited: a flood of bad orders must not cost a log line and an event each
-                if self.complaints("command rejected", f"command rejected, keeping the last valid one: {exc}"):
-                    self.emit_event("command_rejected", str(exc))
+                self._reject_command(exc)
+                return False
+            return True
+        if spec.msg_type is ThrusterCommand:
+            try:
+                self._thruster_orders(msg)
+            except CommandRejected as exc:
+                self._reject_thruster_command(exc)
                 return False
             return True
         return self._wrench_point(spec.topic, msg) is not None
+
+    def _reject_command(self, exc: CommandRejected) -> None:
+        self.rejected += 1
+        # rate-limited: a flood of bad orders must not cost a log line and an event each
+        if self.complaints("command rejected", f"command rejected, keeping the last valid one: {exc}"):
+            self.emit_event("command_rejected", str(exc))
+
+    def _reject_thruster_command(self, exc: CommandRejected) -> None:
+        self.rejected += 1
+        if self.complaints("thruster command rejected",
+                           f"thruster command rejected, keeping the last valid orders: {exc}"):
+            self.emit_event("command_rejected", f"{THRUSTER_COMMAND}: {exc}")
+
+    def _thruster_orders(self, msg: cdr.ThrusterCommandIn) -> List[ThrusterOrder]:
+        """The orders of a ThrusterCommand, checked as far as the message goes (lengths, names,
+        finite values); CommandRejected naming what is wrong. The model checks them again as it
+        takes them (and clamps)."""
+        names = self._thruster_names
+        if not names or type(self.model).set_thruster_command is Vessel.set_thruster_command:
+            raise CommandRejected(f"vessel '{self.vessel_name}' ({type(self.model).__name__}) has no azimuth "
+                                  "thrusters that take orders; thruster orders refused")
+        n = len(msg.azimuth)
+        if len(msg.rpm) != n or (msg.thrusters and len(msg.thrusters) != n):
+            raise CommandRejected(f"lengths differ: {len(msg.thrusters)} thrusters, {n} azimuth, "
+                                  f"{len(msg.rpm)} rpm (thrusters may be empty: by index)")
+        if n == 0:
+            raise CommandRejected("no orders in it (azimuth and rpm are empty)")
+        if msg.thrusters:
+            unknown = [t for t in msg.thrusters if t not in names]
+            if unknown:
+                raise CommandRejected(f"thruster(s) {unknown} do not exist; vessel '{self.vessel_name}' "
+                                      f"has {list(names)}")
+            twice = sorted({t for t in msg.thrusters if msg.thrusters.count(t) > 1})
+            if twice:
+                raise CommandRejected(f"thruster(s) {twice} ordered twice in one command")
+            keys = list(msg.thrusters)
+        else:
+            if n > len(names):
+                raise CommandRejected(f"{n} orders by index, vessel '{self.vessel_name}' has {len(names)} "
+                                      f"thrusters {list(names)}")
+            keys = list(range(n))
+        for key, azimuth, rpm in zip(keys, msg.azimuth, msg.rpm):
+            if not (math.isfinite(azimuth) and math.isfinite(rpm)):
+                label = key if isinstance(key, str) else f"{key} ({names[key]})"
+                raise CommandRejected(f"thruster {label}: azimuth={azimuth!r}, rpm={rpm!r}: not finite")
+        return [ThrusterOrder(key, azimuth, rpm) for key, azimuth, rpm in zip(keys, msg.azimuth, msg.rpm)]
+
+    def _on_trigger(self, msg: cdr.TriggerIn) -> None:
+        # SimStep.ordered announces the scenario runner's orders, which are VesselCommands on
+        # `command`: a step waits for those only. A thruster order (from a console, a test, a
+        # driver outside the runner's timeline) is never awaited: its slot of an announced step
+        # starts empty (an order stamped for the step still fills it), as stepping.py does for
+        # a rejected order.
+        if self.namespace_name in msg.ordered:
+            self._buffer[THRUSTER_COMMAND].setdefault(msg.step, REJECTED_ORDER)
+        super()._on_trigger(msg)
 
     def _wrench_point(self, topic: str, msg: cdr.WrenchIn) -> Optional[np.ndarray]:
         if not msg.is_finite():
@@ -231,12 +302,20 @@ class VesselNode(SteppedNode):
                 notes = self.model.set_command(cmd)   # the model holds the (clamped) command
             except CommandRejected as exc:
                 notes = []
-                self.rejected += 1
-                if self.complaints("command rejected", f"command rejected, keeping the last valid one: {exc}"):
-                    self.emit_event("command_rejected", str(exc))
+                self._reject_command(exc)
             for note in notes:
                 self.clamped += 1
                 self.complaints("command clamped", f"command clamped: {note}", "warning")
+        thruster_order = inputs.get(THRUSTER_COMMAND)
+        if thruster_order is not None:   # after `command`: of two orders for one step, this one holds
+            try:
+                notes = self.model.set_thruster_command(self._thruster_orders(thruster_order))
+            except CommandRejected as exc:
+                notes = []
+                self._reject_thruster_command(exc)
+            for note in notes:
+                self.clamped += 1
+                self.complaints("thruster command clamped", f"thruster command clamped: {note}", "warning")
         # Wrench frames have body-parallel axes: rotate to world with the state of this step.
         rot = rotation_body_to_world(self.model.state.rpy)
         wrenches = []
@@ -275,6 +354,7 @@ class VesselNode(SteppedNode):
         self._odom_cdr = cdr.OdometryEncoder(rc.WORLD_FRAME, self.body_frame)
         self._attach_cdr = cdr.AttachmentArrayEncoder(rc.WORLD_FRAME, self.vessel_name, self._names)
         self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name)
+        self._thrusters_cdr = cdr.ThrusterStatusEncoder(self.body_frame, self.vessel_name, self._thruster_names)
         self._tf_cdr = cdr.TFMessageEncoder([(rc.WORLD_FRAME, self.body_frame)])
         # the attachment frames: fixed in the body, axes of the body; published once, latched
         frames = [(self.body_frame, f"{self.vessel_name}/{n}") for n in self._names]
@@ -316,6 +396,10 @@ class VesselNode(SteppedNode):
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
             st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded), stamp_ns)
+        if self.thrusters_pub is not None:
+            units = st.thrusters
+            self.thrusters_pub.publish(self._thrusters_cdr.encode(stamp_ns, self.step_index, [
+                [getattr(u, field) for u in units] for field in cdr.ThrusterStatusEncoder.FIELDS]), stamp_ns)
         if self.step_index % self.marker_every == 0:
             self.marker_pub.publish(self.scene.markers(stamp_ns, st.thrust, list(self._rope_forces.values()),
                                                        self.force_scale), stamp_ns)
