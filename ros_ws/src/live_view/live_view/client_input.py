@@ -92,19 +92,36 @@ def vessel_command(data: bytes, encoding: str, stamp_ns: int) -> Order:
 
 
 def winch_command(data: bytes, encoding: str, stamp_ns: int) -> Order:
+    """A WinchCommand: payout_rate (clamped), and the winch mode (0 speed, 1 hold, 2 constant
+    tension) with its set / recover tension and brake load (N, >= 0; 0 keeps the current)."""
     if encoding == "cdr":
         try:
-            rate = cdr.decode_winch_command(data).payout_rate
+            order = cdr.decode_winch_command(data)
         except cdr.CdrError as exc:
             raise InputRefused(f"not a WinchCommand: {exc}") from None
+        rate, mode = order.payout_rate, order.mode
+        tensions = (order.set_tension, order.recover_tension, order.brake_load)
     else:
-        rate = _json_fields(data, ("payout_rate",)).get("payout_rate", 0.0)
+        names = ("payout_rate", "mode", "set_tension", "recover_tension", "brake_load")
+        fields = _json_fields(data, names)
+        rate, mode = fields.get("payout_rate", 0.0), fields.get("mode", 0)
+        tensions = tuple(fields.get(n, 0.0) for n in names[2:])
     notes: List[str] = []
     rate = _clamp("payout_rate", _finite("payout_rate", rate), PAYOUT_LIMIT, notes)
+    if isinstance(mode, bool) or mode not in (0, 1, 2):
+        raise InputRefused(f"mode={mode!r}: expected 0 (speed), 1 (hold) or 2 (constant tension)")
+    checked = []
+    for name, value in zip(("set_tension", "recover_tension", "brake_load"), tensions):
+        value = _finite(name, value)
+        if value < 0.0:
+            raise InputRefused(f"{name}={value!r} N: a tension is >= 0 (0 keeps the current one)")
+        checked.append(value)
     w = cdr.CdrWriter()
     w.stamp(stamp_ns)
     w.string("")
     w.raw(struct.pack("<d", rate), 8)
+    w.raw(struct.pack("<B", int(mode)), 1)
+    w.raw(struct.pack("<3d", *checked), 8)
     return Order(w.getvalue(), tuple(notes))
 
 
