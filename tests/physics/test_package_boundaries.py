@@ -10,7 +10,7 @@ SRC = os.path.join(os.path.dirname(__file__), "..", "..", "ros_ws", "src")
 ROS_MODULES = {"rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "geometry_msgs", "nav_msgs",
                "visualization_msgs", "rosgraph_msgs", "tug_msgs", "tf2_msgs", "sim_plumbing"}  # ament_index_python (a file lookup) is allowed
 # modules of a physics package that are allowed to be ROS shells (the nodes and their codecs)
-NODE_MODULES = {"vessel_node.py", "rope_node.py", "state_cdr.py"}
+NODE_MODULES = {"vessel_node.py", "rope_node.py", "state_cdr.py", "contact_node.py"}
 
 
 def _imports(path):
@@ -40,7 +40,7 @@ def test_plumbing_imports_no_model_package():
     assert offenders == []
 
 
-@pytest.mark.parametrize("package", ["tug_dynamics", "rope_model", "sea_environment", "sim_math"])
+@pytest.mark.parametrize("package", ["tug_dynamics", "rope_model", "sea_environment", "sim_math", "hull_contact"])
 def test_physics_modules_import_no_ros(package):
     offenders = [(os.path.basename(p), m) for p in _modules(package) if os.path.basename(p) not in NODE_MODULES
                  for m in _imports(p) if m in ROS_MODULES]

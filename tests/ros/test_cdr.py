@@ -243,3 +243,58 @@ def test_winch_command_of_the_old_layout_is_a_speed_order():
     old = data[:4 + 8 + 4 + 4 + 8]  # encapsulation, stamp, frame_id "" (4 + 1, padded), payout_rate
     got = cdr.decode_winch_command(old)
     assert (got.payout_rate, got.mode, got.set_tension, got.recover_tension, got.brake_load) == (-2.0, 0, 0.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize("names", [(), ("a",), ("push_aft", "ab"), ("abc", "abcd", "abcdefg")])
+def test_vessel_status_contacts(names):
+    """The contact arrays after the fixed fields, for 0..3 contacts (names shift the arrays
+    across alignment boundaries)."""
+    rng = np.random.default_rng(len(names))
+    a, b, env = rng.normal(size=5), rng.normal(size=6), rng.normal(size=5)
+    forces, points = rng.normal(size=3 * len(names)), rng.normal(size=3 * len(names))
+    data = cdr.VesselStatusEncoder("s/base_link", "s", names).encode(
+        STAMP_NS, 5, a, 1, b, False, 0, 0, env, False, forces, points)
+    got = deserialize_message(data, VesselStatus)
+    assert list(got.contact_names) == list(names)
+    assert [c for v in got.contact_forces for c in (v.x, v.y, v.z)] == list(forces)
+    assert [c for p in got.contact_points for c in (p.x, p.y, p.z)] == list(points)
+    assert got.squat == env[3] and got.step == 5
+
+
+@pytest.mark.parametrize("names", [("c", "t", "f", "h"), ("push_aft", "tug2", "bow_fender", "ship"),
+                                   ("abcdefg", "ab", "abc", "abcd")])
+def test_hull_contact_both_ways(names):
+    from tug_msgs.msg import HullContact
+    rng = np.random.default_rng(len("".join(names)))
+    values, vectors = rng.normal(size=4), rng.normal(size=12)
+    ref = HullContact(step=42, contact=names[0], fender_vessel=names[1], fender=names[2], hull_vessel=names[3],
+                      in_contact=True, penetration=values[0], gap=values[1], normal_force=values[2],
+                      friction_force=values[3])
+    ref.header.frame_id = "map"
+    _stamp(ref.header)
+    for i, field in enumerate(("force_on_hull", "point", "hull_point_body", "fender_point_body")):
+        msg = getattr(ref, field)
+        msg.x, msg.y, msg.z = vectors[3 * i:3 * i + 3]
+    data = cdr.HullContactEncoder("map", *names).encode(STAMP_NS, 42, True, values, vectors)
+    assert deserialize_message(data, HullContact) == ref
+    got = cdr.decode_hull_contact(serialize_message(ref))
+    assert (got.stamp_ns, got.step, got.contact, got.fender_vessel, got.fender, got.hull_vessel, got.in_contact) == (
+        STAMP_NS, 42, *names, True)
+    assert got.values == tuple(values) and got.force_on_hull + got.point + got.hull_point_body + \
+        got.fender_point_body == tuple(vectors)
+
+
+@pytest.mark.parametrize("frame, child", [("map", "tug/base_link"), ("", "b"), ("abcdefg", "x/y")])
+def test_decode_odometry(frame, child):
+    rng = np.random.default_rng(len(frame) + 3 * len(child))
+    v = rng.normal(size=13)
+    ref = Odometry(child_frame_id=child)
+    ref.header.frame_id = frame
+    _stamp(ref.header)
+    p, o, t = ref.pose.pose.position, ref.pose.pose.orientation, ref.twist.twist
+    p.x, p.y, p.z, o.x, o.y, o.z, o.w = v[:7]
+    t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z = v[7:]
+    ref.pose.covariance = list(rng.normal(size=36))
+    got = cdr.decode_odometry(serialize_message(ref))
+    assert (got.stamp_ns, got.frame_id, got.child_frame_id) == (STAMP_NS, frame, child)
+    assert got.position + got.orientation + got.linear + got.angular == tuple(v)

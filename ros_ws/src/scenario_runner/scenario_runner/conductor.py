@@ -137,6 +137,9 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
                     if getattr(r, f"end_{end}").split("/")[0] == v.name]
         if wrenches:
             params["wrench_topics"] = wrenches
+        contacts = [f"/{c.name}/state" for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
+        if contacts:
+            params["contact_topics"] = contacts
         if v.ship_overrides:
             params["ship_overrides"] = json.dumps(v.ship_overrides)
         if v.motion is not None:
@@ -158,6 +161,19 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         if r.n_elements:
             params["n_elements"] = int(r.n_elements)
         specs.append(NodeSpec(f"/{r.name}", "rope", "rope_model", "rope_node", {**params, **common}))
+    ships = {v.name: v for v in sc.vessels}
+    for c in sc.contacts:
+        fender_vessel, fender = c.fender.split("/")
+        params = {"fender_vessel": fender_vessel, "fender": fender, "hull_vessel": c.hull,
+                  "radius": float(c.radius), "stiffness": float(c.stiffness), "damping": float(c.damping),
+                  "friction": float(c.friction)}
+        for side, v in (("fender", ships[fender_vessel]), ("hull", ships[c.hull])):
+            params[f"{side}_ship_file"] = resolve("tug_dynamics", "ships", v.ship_file, scenario_path)
+            if v.ship_overrides:
+                params[f"{side}_ship_overrides"] = json.dumps(v.ship_overrides)
+        specs.append(NodeSpec(f"/{c.name}", "contact", "hull_contact", "contact_node", {
+            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
+            "run_id": run_id}))
     for a in sc.autopilots:
         # YAML 90 is an int; ROS would refuse it for a double parameter: numbers go as floats.
         params = {k: (list(v) if isinstance(v, tuple) else
@@ -535,7 +551,7 @@ def contract_topics(sc: Scenario) -> List[tuple]:
     from nav_msgs.msg import Odometry
     from rosgraph_msgs.msg import Clock as ClockMsg
     from tf2_msgs.msg import TFMessage
-    from tug_msgs.msg import AttachmentArray, RopeState, ThrusterCommand, ThrusterStatus, VesselStatus
+    from tug_msgs.msg import AttachmentArray, HullContact, RopeState, ThrusterCommand, ThrusterStatus, VesselStatus
     from visualization_msgs.msg import MarkerArray
     topics = [("/clock", ClockMsg, CLOCK_QOS), (rc.SIM_STEP_TOPIC, SimStep, rc.PROTOCOL_QOS),
               (rc.STEP_DONE_TOPIC, StepDone, rc.PROTOCOL_QOS), (rc.EVENTS_TOPIC, ScenarioEvent, rc.EVENTS_QOS)]
@@ -557,6 +573,7 @@ def contract_topics(sc: Scenario) -> List[tuple]:
                    for e in ("a", "b") if "/" in getattr(r, f"end_{e}")]
         if r.layout == "winch":
             topics.append((f"/{r.name}/winch", WinchCommand, rc.COMMAND_QOS))
+    topics += [(f"/{c.name}/state", HullContact, rc.LATCHED_STATE_QOS) for c in sc.contacts]
     return topics
 
 
@@ -565,11 +582,12 @@ LAYOUTS = ("processes", "one_process")
 
 def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
     """The same nodes as the executables start, constructed in this process."""
+    from hull_contact.contact_node import ContactNode
     from rope_model.rope_node import RopeNode
     from scenario_runner.autopilot import AutopilotNode
     from tug_dynamics.vessel_node import VesselNode
     classes = {("tug_dynamics", "vessel_node"): VesselNode, ("rope_model", "rope_node"): RopeNode,
-               ("scenario_runner", "autopilot"): AutopilotNode}
+               ("scenario_runner", "autopilot"): AutopilotNode, ("hull_contact", "contact_node"): ContactNode}
     unknown = [s.name for s in specs if (s.package, s.executable) not in classes]
     if unknown:
         raise RunError(f"node(s) {unknown} can only run as their own process (--layout processes)")

@@ -20,6 +20,11 @@ starts; every error names the file, the key and what was expected.
         end_b: barge/bow_bollard
         layout: winch           # straight | slack | winch (wound on end a's winch)
         equilibrium: true       # settled to static equilibrium before step 0 (default false: as laid)
+    contacts:                   # a tug pushing: its fender against another vessel's hull (hull_contact)
+      - name: push_aft
+        fender: tug2/bow_fender # "<vessel>/<attachment>"
+        hull: ship              # the vessel pushed on (outline from its ship file)
+        # radius: 0.5  stiffness: 2.0e6  damping: 4.0e5  friction: 0.3   (m, N/m, N s/m, -)
     events:
       - {time: 0.0, vessel: tug, engine_order: 0.8}
       - {time: 60.0, vessel: tug, steering_deg: 20.0}
@@ -173,6 +178,18 @@ class RopeSpec(_Strict):
     n_elements: Optional[int] = Field(None, ge=1, le=2000)
 
 
+class ContactSpec(_Strict):
+    """A tug's fender against another vessel's hull (hull_contact: spring-dashpot with friction
+    against the hull's waterline outline from its ship file). Defaults: hull_contact.fender.FenderSpec."""
+    name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
+    fender: str      # "<vessel>/<attachment>": the pushing vessel and its fender point
+    hull: str        # the vessel pushed on
+    radius: float = Field(0.5, ge=0.0, le=10.0)           # m, fender thickness
+    stiffness: float = Field(2.0e6, ge=1e3, le=1e10)      # N/m
+    damping: float = Field(4.0e5, ge=0.0, le=1e10)        # N s/m
+    friction: float = Field(0.3, ge=0.0, le=2.0)
+
+
 class Trigger(_Strict):
     """A vessel's state that fires an event (IMO trials: "when the heading has changed by 10 deg,
     put the rudder over"). Evaluated on the state at the start of each step (the step's
@@ -285,6 +302,7 @@ class Scenario(_Strict):
     environment: Environment = Environment()
     vessels: List[VesselSpec] = Field(default_factory=list)
     ropes: List[RopeSpec] = Field(default_factory=list)
+    contacts: List[ContactSpec] = Field(default_factory=list)
     autopilots: List[AutopilotSpec] = Field(default_factory=list)
     events: List[Event] = Field(default_factory=list)
     recording: Recording = Recording()
@@ -447,9 +465,21 @@ def _check_references(path: str, sc: Scenario) -> None:
     pilots = [a.name for a in sc.autopilots]
     if len(set(pilots)) != len(pilots):
         raise ScenarioError(f"{path}: key 'autopilots': duplicate name(s)")
-    clash = set(vessels) & set(ropes) | (set(pilots) & (set(vessels) | set(ropes)))
-    if clash:
-        raise ScenarioError(f"{path}: names {sorted(clash)} are used by a vessel and a rope (namespaces must differ)")
+    contacts = [c.name for c in sc.contacts]
+    groups = [set(vessels), set(ropes), set(pilots), set(contacts)]
+    clash = {n for i, a in enumerate(groups) for b in groups[i + 1:] for n in a & b}
+    if clash or len(set(contacts)) != len(contacts):
+        raise ScenarioError(f"{path}: names {sorted(clash or {n for n in contacts if contacts.count(n) > 1})} are "
+                            "used twice among vessels, ropes, contacts and autopilots (namespaces must differ)")
+    for i, c in enumerate(sc.contacts):
+        parts = c.fender.split("/")
+        if len(parts) != 2 or not all(parts):
+            raise ScenarioError(f"{path}: key 'contacts[{i}].fender': expected '<vessel>/<attachment>', got {c.fender!r}")
+        for key, vessel in (("fender", parts[0]), ("hull", c.hull)):
+            if vessel not in vessels:
+                raise ScenarioError(f"{path}: key 'contacts[{i}].{key}': vessel '{vessel}' is not in 'vessels' ({vessels})")
+        if parts[0] == c.hull:
+            raise ScenarioError(f"{path}: key 'contacts[{i}].hull': '{c.hull}' carries the fender itself")
     for i, r in enumerate(sc.ropes):
         for end in ("a", "b"):
             spec = getattr(r, f"end_{end}")
@@ -640,6 +670,8 @@ def _check_files(path: str, sc: Scenario) -> None:
             if pa is not None and pb is not None and math.dist(pa, pb) < 1e-6:
                 raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
                                     "a straight rope needs two distinct end points")
+    for i, c in enumerate(sc.contacts):
+        _check_contact(path, sc, i, c)
     depth = sc.environment.depth
     if isinstance(depth, DepthGridSpec):
         from sea_environment.bathymetry import DepthGrid
@@ -651,6 +683,29 @@ def _check_files(path: str, sc: Scenario) -> None:
         if installed_executable(a.package, a.executable) is None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
+
+
+def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
+    """The fender attachment exists, and the fender does not start inside the hull outline."""
+    import numpy as np
+    from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
+    vessel_name, fender = c.fender.split("/")
+    fv = next(v for v in sc.vessels if v.name == vessel_name)
+    hv = next(v for v in sc.vessels if v.name == c.hull)
+    try:
+        contact, _ = contact_from_ship_files(
+            FenderSpec(radius=c.radius, stiffness=c.stiffness, damping=c.damping, friction=c.friction),
+            resolve("tug_dynamics", "ships", fv.ship_file, path), fender,
+            resolve("tug_dynamics", "ships", hv.ship_file, path), fv.ship_overrides, hv.ship_overrides)
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: key 'contacts[{i}].fender': {exc}") from None
+    poses = [PlanarPose(v.initial.x, v.initial.y, heading_rad(v)) for v in (fv, hv)]
+    start = contact.force(*poses)
+    if start.penetration > c.radius:
+        where = np.round(start.point_world, 1).tolist()
+        raise ScenarioError(f"{path}: key 'contacts[{i}]': the fender point of {c.fender} starts inside the hull "
+                            f"of '{c.hull}' ({start.penetration - c.radius:.2f} m in, near {where}): move the "
+                            "vessels apart")
 
 
 def has_thrusters(sc: Scenario, v: VesselSpec) -> bool:

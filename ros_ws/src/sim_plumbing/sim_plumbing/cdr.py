@@ -174,14 +174,15 @@ VESSEL_STATUS_FLOATS_ENV = ("apparent_wind_speed", "apparent_wind_angle", "water
 
 
 class VesselStatusEncoder:
-    """tug_msgs/VesselStatus; field order of the .msg file."""
+    """tug_msgs/VesselStatus; field order of the .msg file. The vessel's hull contacts are fixed
+    when it starts: their names and the arrays' lengths are laid out once."""
 
     _A = struct.Struct("<5dB")
     _B = struct.Struct("<6d?")
     _C = struct.Struct("<II")
     _D = struct.Struct("<5d?")
 
-    def __init__(self, frame_id: str, vessel: str):
+    def __init__(self, frame_id: str, vessel: str, contact_names: Sequence[str] = ()):
         t = self.t = Template()
         _header_template(t, frame_id)
         t.slot(_U64, 8)      # step
@@ -190,13 +191,49 @@ class VesselStatusEncoder:
         t.slot(self._B, 8)   # 6 doubles, girting_warning
         t.slot(self._C, 4)   # commands_rejected, commands_clamped
         t.slot(self._D, 8)   # environment: 5 doubles, grounded
+        n = self.n_contacts = len(contact_names)
+        t.const(_U32, 4, n)
+        for name in contact_names:
+            t.string(name)
+        for _ in ("contact_forces", "contact_points"):
+            t.const(_U32, 4, n)
+            if n:   # an empty sequence has no elements to align
+                t.slot(struct.Struct(f"<{3 * n}d"), 8)
         t.seal()
 
     def encode(self, stamp_ns: int, step: int, floats_a: Sequence[float], anchor_state: int,
                floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int,
-               floats_env: Sequence[float] = (0.0, 0.0, math.inf, 0.0, math.inf), grounded: bool = False) -> bytes:
-        return self.t.pack(stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state),
-                           (*floats_b, girting_warning), (rejected, clamped), (*floats_env, grounded))
+               floats_env: Sequence[float] = (0.0, 0.0, math.inf, 0.0, math.inf), grounded: bool = False,
+               contact_forces: Sequence[float] = (), contact_points: Sequence[float] = ()) -> bytes:
+        """contact_forces / contact_points: 3 doubles per contact, flattened, in the names' order."""
+        groups = [stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state), (*floats_b, girting_warning),
+                  (rejected, clamped), (*floats_env, grounded)]
+        if self.n_contacts:
+            groups += [tuple(contact_forces), tuple(contact_points)]
+        return self.t.pack(*groups)
+
+
+class HullContactEncoder:
+    """tug_msgs/HullContact of one contact (names fixed)."""
+
+    _STATE = struct.Struct("<?")
+    _VALUES = struct.Struct("<4d")
+    _VECTORS = struct.Struct("<12d")
+
+    def __init__(self, frame_id: str, contact: str, fender_vessel: str, fender: str, hull_vessel: str):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.slot(_U64, 8)
+        for s in (contact, fender_vessel, fender, hull_vessel):
+            t.string(s)
+        t.slot(self._STATE, 1)
+        t.slot(self._VALUES, 8)    # penetration, gap, normal_force, friction_force
+        t.slot(self._VECTORS, 8)   # force_on_hull, point, hull_point_body, fender_point_body
+        t.seal()
+
+    def encode(self, stamp_ns: int, step: int, in_contact: bool, values: Sequence[float],
+               vectors: Sequence[float]) -> bytes:
+        return self.t.pack(stamp_parts(stamp_ns), (step,), (in_contact,), tuple(values), tuple(vectors))
 
 
 class ThrusterStatusEncoder:
@@ -601,3 +638,66 @@ def decode_winch_command(data: bytes) -> WinchCommandIn:
         return WinchCommandIn(stamp, rate)
     mode = r.unpack(_WINCH_MODE, 1)[0]
     return WinchCommandIn(stamp, rate, mode, *r.unpack(_WINCH_TENSIONS, 8))
+
+
+class HullContactIn(NamedTuple):
+    """A tug_msgs/HullContact as taken."""
+    stamp_ns: int
+    step: int
+    contact: str
+    fender_vessel: str
+    fender: str
+    hull_vessel: str
+    in_contact: bool
+    values: Tuple[float, float, float, float]   # penetration, gap, normal_force, friction_force
+    force_on_hull: Tuple[float, float, float]
+    point: Tuple[float, float, float]
+    hull_point_body: Tuple[float, float, float]
+    fender_point_body: Tuple[float, float, float]
+
+    def is_finite(self) -> bool:
+        return all(math.isfinite(v) for v in self.values + self.force_on_hull + self.point
+                   + self.hull_point_body + self.fender_point_body)
+
+
+def decode_hull_contact(data: bytes) -> HullContactIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    step = r.unpack(_U64, 8)[0]
+    names = [r.string() for _ in range(4)]
+    (in_contact,) = r.unpack(HullContactEncoder._STATE, 1)
+    values = r.unpack(HullContactEncoder._VALUES, 8)
+    v = r.unpack(HullContactEncoder._VECTORS, 8)
+    return HullContactIn(stamp, step, *names, bool(in_contact), values, v[0:3], v[3:6], v[6:9], v[9:12])
+
+
+class OdometryIn(NamedTuple):
+    """A nav_msgs/Odometry as taken (covariances skipped): pose in frame_id, twist in
+    child_frame_id's axes (REP-105: the body frame)."""
+    stamp_ns: int
+    frame_id: str
+    child_frame_id: str
+    position: Tuple[float, float, float]
+    orientation: Tuple[float, float, float, float]   # x, y, z, w
+    linear: Tuple[float, float, float]
+    angular: Tuple[float, float, float]
+
+    def is_finite(self) -> bool:
+        return all(math.isfinite(v) for v in self.position + self.orientation + self.linear + self.angular)
+
+
+_POSE7 = struct.Struct("<7d")
+_COV36 = struct.Struct("<36d")
+
+
+def decode_odometry(data: bytes) -> OdometryIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    frame = r.string()
+    child = r.string()
+    pose = r.unpack(_POSE7, 8)
+    r.unpack(_COV36, 8)
+    twist = r.unpack(_V6, 8)
+    r.unpack(_COV36, 8)
+    return OdometryIn(stamp, frame, child, pose[0:3], pose[3:7], twist[0:3], twist[3:6])

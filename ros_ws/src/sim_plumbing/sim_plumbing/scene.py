@@ -25,6 +25,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from sim_math.hull_plan import HullDimensions, plan_half_breadth as _plan  # noqa: F401 (HullDimensions re-exported)
 from sim_plumbing import cdr
 
 HULL_COLOR = (0.55, 0.12, 0.10, 1.0)
@@ -33,56 +34,6 @@ ATTACHMENT_COLOR = (1.0, 0.85, 0.0, 1.0)
 THRUST_COLOR = (0.1, 0.45, 1.0, 1.0)
 ROPE_FORCE_COLOR = (1.0, 0.45, 0.0, 1.0)
 TEXT_COLOR = (1.0, 1.0, 1.0, 1.0)
-BARGE_BLOCK_COEFFICIENT = 0.85
-
-
-class HullDimensions:
-    """What the scene needs from a ship file (plain numbers, SI)."""
-
-    def __init__(self, length: float, beam: float, draft: float, freeboard: float, kind: str,
-                 chine_beam: Optional[float] = None, deadrise: Optional[float] = None,
-                 propulsors: Sequence[Sequence[float]] = ()):
-        self.length, self.beam, self.draft, self.freeboard = float(length), float(beam), float(draft), float(freeboard)
-        self.kind = kind  # ship | barge | planing
-        self.chine_beam = float(chine_beam) if chine_beam else 0.88 * self.beam
-        self.deadrise = float(deadrise) if deadrise is not None else math.radians(20.0)
-        self.propulsors = [tuple(float(c) for c in p) for p in propulsors] or [(-0.48 * self.length, 0.0,
-                                                                               -0.5 * self.draft)]
-
-    @staticmethod
-    def from_ship_config(cfg: dict) -> "HullDimensions":
-        """From a ship file's mapping (overrides merged): displacement or planing_6dof."""
-        hull = cfg.get("hull", {})
-        if cfg.get("model") == "planing_6dof":
-            length = hull["length_overall"]
-            jet = cfg.get("waterjet", {}).get("position")
-            return HullDimensions(length, hull["beam"], hull["draft"], 0.1 * length, "planing",
-                                  chine_beam=hull.get("chine_beam"),
-                                  deadrise=math.radians(hull.get("deadrise_deg", 20.0)),
-                                  propulsors=[jet] if jet else ())
-        length, beam, draft = hull["length"], hull["beam"], hull["draft"]
-        rho = cfg.get("water_density", 1025.0)
-        cb = hull.get("mass", 0.0) / (rho * length * beam * draft) if hull.get("mass") else 0.7
-        # the file's freeboard, else one that puts the deck just below the highest fittings
-        heights = [float(p[2]) for p in (cfg.get("attachments") or {}).values()]
-        freeboard = cfg.get("roll", {}).get("freeboard") or max(0.5, 0.4 * draft, 0.85 * max(heights, default=0.0))
-        props = [p["position"] for p in cfg.get("propellers", []) if "position" in p]
-        return HullDimensions(length, beam, draft, freeboard, "barge" if cb >= BARGE_BLOCK_COEFFICIENT else "ship",
-                              propulsors=props)
-
-
-def _plan(kind: str, xi: np.ndarray) -> np.ndarray:
-    """Half-breadth at the deck as a fraction of the half beam, at xi = x / (L/2) in [-1, 1]."""
-    h = np.ones_like(xi)
-    if kind == "ship":
-        bow = xi > 0.4
-        h[bow] = np.sqrt(np.clip(1.0 - ((xi[bow] - 0.4) / 0.6) ** 2, 0.0, 1.0))
-        aft = xi < -0.7
-        h[aft] = 1.0 - 0.3 * ((-0.7 - xi[aft]) / 0.3) ** 2
-    elif kind == "planing":
-        bow = xi > 0.1
-        h[bow] = np.sqrt(np.clip(1.0 - ((xi[bow] - 0.1) / 0.9) ** 2, 0.0, 1.0))
-    return h
 
 
 def _sections(d: HullDimensions, n: int = 17) -> Tuple[np.ndarray, np.ndarray]:

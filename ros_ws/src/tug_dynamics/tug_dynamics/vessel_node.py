@@ -29,7 +29,7 @@ from geometry_msgs.msg import WrenchStamped
 from visualization_msgs.msg import MarkerArray
 from nav_msgs.msg import Odometry
 from tf2_msgs.msg import TFMessage
-from tug_msgs.msg import (AttachmentArray, ScenarioEvent, ThrusterCommand, ThrusterStatus, VesselCommand,
+from tug_msgs.msg import (AttachmentArray, HullContact, ScenarioEvent, ThrusterCommand, ThrusterStatus, VesselCommand,
                            VesselStatus)
 
 from sim_plumbing import cdr
@@ -75,6 +75,8 @@ class VesselNode(SteppedNode):
         self.declare_parameter("initial_speed", 0.0, rc.float_param("Initial surge speed", -30.0, 40.0, "m/s"))
         self.declare_parameter("wrench_topics", [""], rc.text_param(
             "geometry_msgs/WrenchStamped topics of external forces (rope ends) acting on this vessel"))
+        self.declare_parameter("contact_topics", [""], rc.text_param(
+            "tug_msgs/HullContact topics (hull_contact nodes) this vessel takes part in, as fender or hull"))
         self.declare_parameter("initial_engine_order", 0.0, rc.float_param(
             "Engine order held from the start, engine already at that rpm (0: the model's own start)", -1.0, 1.0))
         self.declare_parameter("initial_steering_angle", 0.0, rc.float_param(
@@ -152,6 +154,9 @@ class VesselNode(SteppedNode):
         self.clamped = 0
         self.body_frame = f"{self.vessel_name}/base_link"
         self.wrench_topics = [t for t in self.get_parameter("wrench_topics").value if t]
+        self.contact_topics = [t for t in self.get_parameter("contact_topics").value if t]
+        # contact topic -> (force on this vessel, world; point, body) of the step being computed
+        self._contacts = {t: (np.zeros(3), np.zeros(3)) for t in self.contact_topics}
 
         self.odom_pub = self.create_fed_publisher(Odometry, "odom", rc.LATCHED_STATE_QOS)
         self.tf_pub = self.create_fed_publisher(TFMessage, rc.TF_TOPIC, rc.TF_QOS)
@@ -174,7 +179,8 @@ class VesselNode(SteppedNode):
         self.init_stepping([StepInput("command", VesselCommand, kind="order", decode=cdr.decode_vessel_command),
                             StepInput(THRUSTER_COMMAND, ThrusterCommand, kind="order",
                                       decode=cdr.decode_thruster_command)] +
-                           [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics])
+                           [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics] +
+                           [StepInput(t, HullContact, decode=cdr.decode_hull_contact) for t in self.contact_topics])
         self.on_live_parameters({n: self.get_parameter(n).value for n in self.LIVE_PARAMETERS})
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
         # now, on a copy, not in the first step of a paced run.
@@ -213,7 +219,22 @@ class VesselNode(SteppedNode):
                 self._reject_thruster_command(exc)
                 return False
             return True
+        if spec.msg_type is HullContact:
+            return self._contact_fault(spec.topic, msg) is None
         return self._wrench_point(spec.topic, msg) is not None
+
+    def _contact_fault(self, topic: str, msg: cdr.HullContactIn) -> Optional[str]:
+        """Why a HullContact cannot act on this vessel (None: it can): not finite, or a contact
+        between two other vessels."""
+        why = None
+        if not msg.is_finite():
+            why = "non-finite value"
+        elif self.vessel_name not in (msg.fender_vessel, msg.hull_vessel):
+            why = (f"it couples '{msg.fender_vessel}' and '{msg.hull_vessel}', not this vessel "
+                   f"'{self.vessel_name}'")
+        if why is not None:
+            self.complaints("contact " + topic, f"contact on {topic} rejected: {why}")
+        return why
 
     def _reject_command(self, exc: CommandRejected) -> None:
         self.rejected += 1
@@ -327,6 +348,15 @@ class VesselNode(SteppedNode):
             wrenches.append(ExternalWrench(force_world=rot @ np.array(msg.force), point_body=point,
                                            moment_world=rot @ np.array(msg.torque)))
             self._rope_forces[topic] = (point, msg.force)
+        for topic in self.contact_topics:
+            msg = inputs.get(topic)
+            if msg is None:
+                continue
+            on_hull = np.array(msg.force_on_hull)
+            force, point = ((on_hull, np.array(msg.hull_point_body)) if msg.hull_vessel == self.vessel_name
+                            else (-on_hull, np.array(msg.fender_point_body)))
+            self._contacts[topic] = (force, point)
+            wrenches.append(ExternalWrench(force_world=force, point_body=point))
         if self.surroundings is not None:
             wrenches += self._environment_wrenches   # of this state, taken when it was published
         self.model.step(self.dt, wrenches)
@@ -353,7 +383,8 @@ class VesselNode(SteppedNode):
                                  float).reshape(-1, 3)
         self._odom_cdr = cdr.OdometryEncoder(rc.WORLD_FRAME, self.body_frame)
         self._attach_cdr = cdr.AttachmentArrayEncoder(rc.WORLD_FRAME, self.vessel_name, self._names)
-        self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name)
+        self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name,
+                                                   [t.strip("/").split("/")[0] for t in self.contact_topics])
         self._thrusters_cdr = cdr.ThrusterStatusEncoder(self.body_frame, self.vessel_name, self._thruster_names)
         self._tf_cdr = cdr.TFMessageEncoder([(rc.WORLD_FRAME, self.body_frame)])
         # the attachment frames: fixed in the body, axes of the body; published once, latched
@@ -395,7 +426,8 @@ class VesselNode(SteppedNode):
                 self._report_grounding(env)
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
-            st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded), stamp_ns)
+            st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded,
+            *self._contact_status()), stamp_ns)
         if self.thrusters_pub is not None:
             units = st.thrusters
             self.thrusters_pub.publish(self._thrusters_cdr.encode(stamp_ns, self.step_index, [
@@ -403,6 +435,17 @@ class VesselNode(SteppedNode):
         if self.step_index % self.marker_every == 0:
             self.marker_pub.publish(self.scene.markers(stamp_ns, st.thrust, list(self._rope_forces.values()),
                                                        self.force_scale), stamp_ns)
+
+    def _contact_status(self):
+        """Contact forces (body axes) and points (body), flattened, in contact_topics' order."""
+        if not self.contact_topics:
+            return (), ()
+        rot_t = rotation_body_to_world(self.model.state.rpy).T
+        forces, points = [], []
+        for force, point in self._contacts.values():
+            forces += (rot_t @ force).tolist()
+            points += point.tolist()
+        return forces, points
 
     def _report_grounding(self, st) -> None:
         what = "grounded" if st.grounded else "refloated"
