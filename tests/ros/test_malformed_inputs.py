@@ -223,6 +223,20 @@ CASES = {
                                       "vessel: barge")], {}, ["events[1]", "heading_change_deg"]),
     "trigger_since_without_heading": ([("{time: 1.0, vessel: barge", "{when: {vessel: barge, speed_below: 1.0, "
                                         "since: 1.0}, vessel: barge")], {}, ["events[1]", "since"]),
+    # --- contacts (hull_contact)
+    "contact_fender_attachment_unknown": ([("events:\n", "contacts:\n  - {name: push, fender: tug/nose, hull: barge}\n"
+                                            "events:\n")], {}, ["contacts[0].fender", "'nose'"]),
+    "contact_hull_vessel_unknown": ([("events:\n", "contacts:\n  - {name: push, fender: tug/bow_bollard, hull: ghost}\n"
+                                      "events:\n")], {}, ["contacts[0].hull", "'ghost'"]),
+    "contact_on_its_own_hull": ([("events:\n", "contacts:\n  - {name: push, fender: tug/bow_bollard, hull: tug}\n"
+                                  "events:\n")], {}, ["contacts[0].hull"]),
+    "contact_stiffness_nan": ([("events:\n", "contacts:\n  - {name: push, fender: tug/bow_bollard, hull: barge, "
+                                "stiffness: .nan}\nevents:\n")], {}, ["contacts[0].stiffness"]),
+    "contact_fender_starts_inside_the_hull": ([("initial: {x: -80.0, y: 5.0", "initial: {x: -20.0, y: 5.0"),
+                                               ("events:\n", "contacts:\n  - {name: push, fender: tug/stern_bollard, "
+                                                "hull: barge}\nevents:\n")], {}, ["contacts[0]", "inside the hull"]),
+    "contact_name_clashes_with_a_rope": ([("events:\n", "contacts:\n  - {name: towline, fender: tug/bow_bollard, "
+                                           "hull: barge}\nevents:\n")], {}, ["towline", "namespaces must differ"]),
     "duplicate_vessel_names": ([("  - name: barge", "  - name: tug")], {}, ["'vessels'", "duplicate"]),
     "scenario_name_is_a_path": ([("name: malformed_base", "name: ../../escape")], {}, ["'name'"]),
 }
