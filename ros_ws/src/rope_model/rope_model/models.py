@@ -19,7 +19,13 @@ from rope_model.schema import RopeParamsError, read_yaml_mapping
 
 MODELS = ("element_chain", "fd_cable")
 # What a model raises when it cannot go on; the node reports it and stops.
-ModelFailure = (RopeDivergedError, FdCableConvergenceError)
+
+
+class CableOnSeabedError(RuntimeError):
+    """The fd cable reached the seabed: it has no bottom contact, so the run cannot go on."""
+
+
+ModelFailure = (RopeDivergedError, FdCableConvergenceError, CableOnSeabedError)
 
 
 def rope_file_model(path: str) -> str:
@@ -151,11 +157,23 @@ class CableAdapter:
         return self.cable.positions
 
     def set_environment(self, current=None, wind=None, seabed_depth=None) -> None:
-        """Not available for the fd cable yet (issue 18: the per-node current and the seabed
-        contact are implemented for the element chain only)."""
-        raise NotImplementedError("fd_cable: a per-node current, wind and seabed contact are not "
-                                  "implemented (element_chain only); the cable keeps its uniform "
-                                  "current")
+        """The environment at the cable's nodes for the coming step. Park & Jung's Eq 6 takes one
+        uniform current: the cable gets the mean of the nodes' currents (exact for a uniform or
+        tidal current, the cable's average across a sheared one). Wind: none, the towed cable
+        is under water. Seabed: the model has no bottom contact, so a node below the seabed
+        stops the run (CableOnSeabedError, naming the node and the depth)."""
+        if current is not None:
+            c = np.asarray(current, float)
+            self.cable.current = c.mean(axis=0) if c.ndim == 2 else c.copy()
+        if seabed_depth is not None:
+            z = self.cable.positions[:, 2]
+            below = np.nonzero(z < -np.asarray(seabed_depth, float))[0]
+            if below.size:
+                i = int(below[0])
+                depth = float(np.broadcast_to(seabed_depth, z.shape)[i])
+                raise CableOnSeabedError(
+                    f"fd_cable: node {i} is at z = {z[i]:.2f} m, below the seabed ({depth:.2f} m deep); the "
+                    "finite-difference cable has no bottom contact (use an element_chain rope in shallow water)")
 
     def step(self, dt: float) -> None:
         self.cable.step(dt)

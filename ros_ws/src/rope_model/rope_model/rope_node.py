@@ -117,10 +117,6 @@ class RopeNode(SteppedNode):
                 raise ValueError("parameters current_east / current_north and environment both give a current: "
                                  "use environment.current")
             self.env, _ = Environment.from_parameter(gp("environment").value)
-            if rope_file_model(path) == "fd_cable" and (self.env.wind is not None or not self.env.depth.is_deep
-                                                        or self.env.current.uniform is None):
-                raise ValueError(f"rope file {path}: an fd_cable takes only a uniform current (no wind, depth or "
-                                 "current field yet)")
         self.rope_name = self.get_namespace().strip("/").split("/")[-1] or "rope"
         self.rope = None  # a rope_model.models adapter, built once the ends' positions are known
         self.rejected = 0  # winch orders refused (NaN, inf)

@@ -658,10 +658,6 @@ def _check_files(path: str, sc: Scenario) -> None:
             if r.equilibrium:
                 raise ScenarioError(f"{path}: key '{key}.equilibrium': an fd_cable rope ({r.rope_file}) starts "
                                     "from its steady tow already; the settle phase is for element-chain ropes")
-            env = sc.environment
-            if env.wind is not None or env.depth is not None or not isinstance(env.current, list):
-                raise ScenarioError(f"{path}: key 'environment': an fd_cable rope ({r.rope_file}) takes only a "
-                                    "uniform current so far (no wind, depth or current field)")
             if r.n_elements is not None and r.n_elements < 3:
                 raise ScenarioError(f"{path}: key '{key}.n_elements': an fd_cable rope needs at least 3 nodes, "
                                     f"got {r.n_elements}")
