@@ -281,7 +281,8 @@ def test_every_model_states_every_status_field_the_message_carries(path):
     ship.set_command(Command(0.5, math.radians(10.0)))
     run(ship, 5.0, 0.05)
     st = ship.status()
-    node_filled = {"header", "step", "vessel", "commands_rejected", "commands_clamped"}  # the node's own
+    node_filled = {"header", "step", "vessel", "commands_rejected", "commands_clamped",  # the node's own
+                   "contact_names", "contact_forces", "contact_points"}   # and the hull contacts it takes
     # the environment block comes from the vessel's coupling to its environment, for every model alike
     environment = {f.name for f in dataclasses.fields(EnvironmentStatus)}
     assert environment == set(VESSEL_STATUS_FLOATS_ENV) | {"grounded"}

@@ -260,9 +260,14 @@ def test_instructor_station_in_a_paced_run(tmp_path, ros_domain, browser, artifa
     # the gauges show the recording's values of the step they are stamped with ...
     _check_gauges_against(msgs, readings)
     assert readings[0]["model"].startswith("element_chain, breaking load 157 kN"), readings[0]["model"]
-    # ... and are at most about one display period behind the node's newest sample
+    # ... and are at most about one display period behind the node's newest sample, plus what the
+    # run itself fell behind the wall clock (a starved machine delays the samples, not the page)
+    import re
+    late = re.search(r"lateness p99 ([\d.]+) ms", stdout)
+    behind = float(late.group(1)) / 1000.0 if late else 0.0
     lags.sort()
-    assert lags[len(lags) // 2] <= period + 0.05 and lags[-1] <= 3 * period + 0.1, (lags, period)
+    assert lags[len(lags) // 2] <= period + 0.05 + behind and lags[-1] <= 3 * period + 0.1 + behind, \
+        (lags, period, behind)
 
     # bad input refused with its reason, out of range clamped, and logged
     for (got, code), (topic, body, _, _) in zip(report["bad"], BAD):

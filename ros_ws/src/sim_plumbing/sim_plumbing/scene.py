@@ -15,8 +15,8 @@ Markers (namespace `<vessel>`):
   3 the vessel's name above the deck;
   10 + i thrust of propulsor i (propellers or waterjet of the file): an arrow along body x from
     the propulsor, length thrust share x force_scale (astern: pointing aft);
-  20 + j force of rope end j on the vessel: an arrow from the attachment point along the force,
-    length |F| x force_scale.
+  20 + j force of rope end j, then of hull contact j (hull_contact), on the vessel: an arrow
+    from the attachment (contact) point along the force, length |F| x force_scale.
 """
 from __future__ import annotations
 

@@ -7,7 +7,10 @@ S. D. Yoon, "A Study on the Control of Ship Maneuvering by the Simulation of Anc
 Force components, one kernel function each, summed in the body frame (REP-103: x fwd, y port,
 z up) by _deriv:
   hull       _hull_polynomial: Yun & Kim Eq 2 (captive-model derivatives), or
-             _hull_lowspeed: S. D. Yoon Eq 3 (reconstructed; README "Reading decisions")
+             _hull_lowspeed: S. D. Yoon Eq 3 (reconstructed; README "Reading decisions"), or
+             _hull_crossflow: linear (ideal-fluid lift) terms continued as sin(b) cos(b) plus the
+             cross-flow drag strip integral (Oltmann & Sharma 1984; Hooft 1994), valid at any
+             drift angle 0..180 deg (escort / indirect towing; README "ASD tug")
   propeller  _propeller_thrust: S. D. Yoon Eq 4, K_T(J) quadratic, wake w_P(beta, r), thrust
              deduction; shaft-speed lag Eq 9 (_engine_rate)
   rudder     _rudder_force, _rudder_inflow: S. D. Yoon Eq 7-8 (Fujii normal force, Kijima flow
@@ -57,7 +60,7 @@ S_THR0 = NSTATE
 H_C0 = 32           # hull coefficients start here (16 slots)
 NHULL = H_C0 + 16
 
-FORM_NONE, FORM_POLY, FORM_LOWSPEED = 0, 1, 2
+FORM_NONE, FORM_POLY, FORM_LOWSPEED, FORM_CROSSFLOW = 0, 1, 2, 3
 
 # ---- propeller rows ---------------------------------------------------------
 (P_X, P_Y, P_Z, P_D, P_PITCH, P_C1, P_C2, P_C3, P_WP0, P_T, P_AST, P_XPN) = range(12)
@@ -150,6 +153,59 @@ def _hull_lowspeed(c, rho, L, T, ur, vr, rl, Ue, rv, rf):
 
 
 @njit(cache=True, inline="always")
+def _wabsw_moments(v, r, a, b):
+    """Exact integrals I0 = int_a^b w|w| dx and I1 = int_a^b x w|w| dx of the cross-flow velocity
+    w(x) = v + x r (a < b). On a piece where w keeps its sign s, w|w| = s (v + x r)^2, integrated
+    as a polynomial (no cancellation as r -> 0); the piece boundary is w's zero x0 = -v / r."""
+    I0 = 0.0
+    I1 = 0.0
+    x0 = -v / r if r != 0.0 else a - 1.0
+    for piece in range(2):
+        if piece == 0:
+            p, q = a, (x0 if a < x0 < b else b)
+        else:
+            if not (a < x0 < b):
+                break
+            p, q = x0, b
+        xm = 0.5 * (p + q)
+        wm = v + xm * r
+        sg = 1.0 if wm > 0.0 else (-1.0 if wm < 0.0 else 0.0)
+        d1 = q - p
+        d2 = q * q - p * p
+        d3 = q * q * q - p * p * p
+        d4 = q * q * q * q - p * p * p * p
+        I0 += sg * (v * v * d1 + v * r * d2 + r * r * d3 / 3.0)
+        I1 += sg * (0.5 * v * v * d2 + 2.0 * v * r * d3 / 3.0 + 0.25 * r * r * d4)
+    return I0, I1
+
+
+@njit(cache=True, inline="always")
+def _hull_crossflow(c, rho, L, T, ur, vr, r, rv, rf):
+    """Hull forces valid at any drift angle: Oltmann & Sharma (1984) split into an ideal-fluid
+    (lift) part and a cross-flow drag part, the latter as Hooft's (1994) strip integral.
+
+      X = q (X'uu u|u| + X'vr v rL) - R(u)                       (R: the resistance table)
+      Y = q (Y'v |u| v + Y'r u rL)     - 0.5 rho C_D T int w|w| dx
+      N = q L (N'v u v + N'r |u| rL)   - 0.5 rho C_D T int x w|w| dx,   w(x) = v + x r
+    q = 0.5 rho L T, the integral over the hull's lateral plane x_aft..x_fore, C_D = -Y'vv.
+
+    The linear (lift / Munk) terms are the low-aspect-ratio lift of hull and skeg: with
+    u = U cos(b), v = U sin(b) they are U^2 sin(b) cos(b) (slender-body / Jones form), zero at
+    90 deg; the cross-flow drag is U^2 sin(b)|sin(b)| at r = 0 and takes the whole (v, r) field
+    exactly, with no expansion in v or r.
+    c: X'uu X'vr Y'v Y'r N'v N'r Y'vv x_aft x_fore."""
+    q = 0.5 * rho * L * T
+    rl = r * L
+    I0, I1 = _wabsw_moments(vr, r, c[7], c[8])
+    kd = 0.5 * rho * (-c[6]) * T
+    XH = q * (c[0] * ur * abs(ur) + c[1] * vr * rl)
+    YH = q * (c[2] * abs(ur) * vr + c[3] * ur * rl) - kd * I0
+    NH = q * L * (c[4] * ur * vr + c[5] * abs(ur) * rl) - kd * I1
+    XH += _interp_resistance(ur, rv, rf)
+    return XH, YH, NH
+
+
+@njit(cache=True, inline="always")
 def _hull_forces(hp, rv, rf, ur, vr, r):
     """Hull forces X_H, Y_H, N_H of the file's hull form at the velocity through the water."""
     form = int(hp[H_FORM])
@@ -162,6 +218,8 @@ def _hull_forces(hp, rv, rf, ur, vr, r):
     c = hp[H_C0:H_C0 + 16]
     if form == FORM_POLY:
         return _hull_polynomial(c, hp[H_RHO], L, ur, vr, rl, U, Ue, rv, rf)
+    if form == FORM_CROSSFLOW:
+        return _hull_crossflow(c, hp[H_RHO], L, hp[H_T], ur, vr, r, rv, rf)
     return _hull_lowspeed(c, hp[H_RHO], L, hp[H_T], ur, vr, rl, Ue, rv, rf)
 
 
@@ -785,7 +843,7 @@ class ManeuveringVessel(Vessel):
         self.ctrl[C_CUR_X], self.ctrl[C_CUR_Y] = float(east), float(north)
 
     # the linear derivatives Y'v, Y'r, N'v, N'r: their slots in hp[H_C0:] per hull form
-    _LINEAR_SLOTS = {FORM_POLY: (3, 5, 9, 11), FORM_LOWSPEED: (2, 3, 7, 8)}
+    _LINEAR_SLOTS = {FORM_POLY: (3, 5, 9, 11), FORM_LOWSPEED: (2, 3, 7, 8), FORM_CROSSFLOW: (2, 3, 4, 5)}
 
     def set_depth(self, depth: float) -> None:
         """Water depth under the vessel (m; math.inf = deep / not given). The hull's linear

@@ -90,9 +90,9 @@ def _explain(err: dict) -> str:
     if kind == "missing":
         return "required key is missing"
     if kind == "union_tag_invalid":
-        return f"unknown hull form {err['input'].get('form')!r} (polynomial | lowspeed)"
+        return f"unknown hull form {err['input'].get('form')!r} (polynomial | lowspeed | crossflow)"
     if kind == "union_tag_not_found":
-        return "required key 'form' is missing (polynomial | lowspeed)"
+        return "required key 'form' is missing (polynomial | lowspeed | crossflow)"
     return f"{err['msg']}, got {err['input']!r}"
 
 
@@ -185,6 +185,8 @@ def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[Ves
 _POLY_KEYS = ["Xvv", "Xrr", "Xvr", "Yv", "Yvav", "Yr", "Yrar", "Yvrr", "Yrvv",
               "Nv", "Nvav", "Nr", "Nrar", "Nvrr", "Nrvv"]
 _LOW_KEYS = ["Xuu", "Xvr", "Yv", "Yr", "Yvv", "Yvr", "Yrr", "Nv", "Nr", "Nvvr", "Nvrr", "Nrr"]
+# cross-flow hull (maneuvering._hull_crossflow): c[0:7]; the lateral plane x_aft, x_fore in c[7:9]
+_CROSS_KEYS = ["Xuu", "Xvr", "Yv", "Yr", "Nv", "Nr", "Yvv"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -226,7 +228,8 @@ def _build_displacement(src: str, ship: schema.DisplacementShip, name: Optional[
 
 
 def _hull_section(hp: np.ndarray, ship: schema.DisplacementShip):
-    """hull: form and derivatives (Yun & Kim Eq 2 or S. D. Yoon Eq 3), added mass, X(u) table.
+    """hull: form and derivatives (Yun & Kim Eq 2, S. D. Yoon Eq 3 or the cross-flow hull), added
+    mass, X(u) table.
 
     Returns the added masses, the resistance table the hull uses (empty with the hull off) and
     the file's table, which the towline's X(u_c) needs even with the hull off."""
@@ -243,14 +246,18 @@ def _hull_section(hp: np.ndarray, ship: schema.DisplacementShip):
                            m_nv=-d.Nvdot * q3 * L, jz=-d.Nrdot * q3 * L * L)
         hp[mv.H_MMG_CORIOLIS] = 0.0
     else:
-        keys = _LOW_KEYS
-        hp[mv.H_FORM] = mv.FORM_LOWSPEED
+        keys = _LOW_KEYS if h.form == "lowspeed" else _CROSS_KEYS
+        hp[mv.H_FORM] = mv.FORM_LOWSPEED if h.form == "lowspeed" else mv.FORM_CROSSFLOW
         am = h.added_mass
         added = _AddedMass(mx=am.mx_over_m * m, my=am.my_over_m * m, m_yr=0.0, m_nv=0.0,
                            jz=am.Jz_over_mL2 * m * L * L)
         hp[mv.H_MMG_CORIOLIS] = 1.0
     for i, k in enumerate(keys):
         hp[mv.H_C0 + i] = getattr(d, k)
+    if h.form == "crossflow":
+        cf = h.crossflow
+        hp[mv.H_C0 + 7] = cf.x_aft if cf is not None else -0.5 * L
+        hp[mv.H_C0 + 8] = cf.x_fore if cf is not None else 0.5 * L
     if h.resistance is not None:
         rv = np.asarray(h.resistance.speed, float)
         rf = np.asarray(h.resistance.force, float)

@@ -81,6 +81,25 @@ class LowSpeedDerivatives(_S):
     Nrr: Deriv
 
 
+class CrossflowDerivatives(_S):
+    """Cross-flow hull (maneuvering._hull_crossflow), forces / 0.5 rho L d V^2 as LowSpeedDerivatives:
+    the linear (lift) derivatives and X'uu, X'vr; Y'vv = -C_D, the sectional cross-flow drag
+    coefficient of the strip integral (Hooft 1994; for a uniform strip Y'vv = -C_D exactly)."""
+    Xuu: Deriv
+    Xvr: Deriv
+    Yv: Deriv
+    Yr: Deriv
+    Nv: Deriv
+    Nr: Deriv
+    Yvv: Annotated[float, Field(ge=-10.0, le=0.0)]    # -C_D: drag opposes the cross-flow
+
+
+class CrossflowPlane(_S):
+    """The lateral plane of the strip integral: x_aft..x_fore (m, body frame, default -L/2..L/2)."""
+    x_aft: float
+    x_fore: float
+
+
 class AddedMass(_S):
     # measured / estimated ratios: surge 0.02-0.1, sway 0.2-1.5 (a flat barge to a deep hull),
     # yaw 0.01-0.1; the bounds are several times those
@@ -118,8 +137,17 @@ class LowSpeedHull(_Hull):
     added_mass: AddedMass
 
 
-HULL_FORMS = ("polynomial", "lowspeed")
-Hull = Annotated[Union[PolynomialHull, LowSpeedHull], Field(discriminator="form")]
+class CrossflowHull(_Hull):
+    """Valid at any drift angle (escort / indirect towing): linear lift terms continued as
+    sin(b) cos(b) plus Hooft's cross-flow drag integral (Oltmann & Sharma 1984; Hooft 1994)."""
+    form: Literal["crossflow"]
+    derivatives: CrossflowDerivatives
+    added_mass: AddedMass
+    crossflow: Optional[CrossflowPlane] = None
+
+
+HULL_FORMS = ("polynomial", "lowspeed", "crossflow")
+Hull = Annotated[Union[PolynomialHull, LowSpeedHull, CrossflowHull], Field(discriminator="form")]
 
 
 class Engine(_S):
@@ -297,6 +325,12 @@ def cross_checks(s: DisplacementShip) -> List[tuple]:
         # 0.5 L: all the mass at the ends; real ships 0.22-0.3 L
         out.append(("hull.yaw_radius_of_gyration",
                     f"{h.yaw_radius_of_gyration:g} m; expected 0.05 L .. 0.5 L ({0.05 * L:g} .. {0.5 * L:g} m)"))
+    cf = getattr(h, "crossflow", None)
+    if cf is not None:
+        # the lateral plane lies on the hull (its ends at most L from the reference point)
+        if not -L <= cf.x_aft < cf.x_fore <= L:
+            out.append(("hull.crossflow", f"x_aft {cf.x_aft:g} .. x_fore {cf.x_fore:g} m: expected "
+                                          f"-L <= x_aft < x_fore <= L ({L:g} m)"))
     if h.resistance is not None:
         v, f = h.resistance.speed, h.resistance.force
         if len(v) != len(f):
