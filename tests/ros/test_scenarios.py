@@ -123,7 +123,8 @@ def check_vessel(name, spec, odom, rate):
     assert (odom["x"][0], odom["y"][0]) == pytest.approx((x0, y0), abs=1e-9), f"{name}: initial position"
     if "motion" not in spec:   # (a prescribed vessel starts on its track: checked below)
         assert math.remainder(odom["yaw"][0] - psi0, 2 * math.pi) == pytest.approx(0.0, abs=1e-9), name
-        assert odom["u"][0] == pytest.approx(ini.get("speed", 0.0), abs=1e-9), f"{name}: initial speed"
+        speed0 = ini["speed_kn"] * 1852.0 / 3600.0 if "speed_kn" in ini else ini.get("speed", 0.0)
+        assert odom["u"][0] == pytest.approx(speed0, abs=1e-9), f"{name}: initial speed"
     # sanity bound (not validation): no vessel here changes speed faster than 0.5 g; the
     # fastest, the planing boat at full throttle from rest, about 0.4 g (70 kN on 18.9 t)
     speed = np.hypot(odom["u"], odom["v"])
