@@ -296,7 +296,7 @@ def test_instructor_station_in_a_paced_run(tmp_path, ros_domain, browser, artifa
 
 
 def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifacts):
-    path = _scenario(tmp_path, "rec", 20.0, "lockstep")
+    path = _scenario(tmp_path, "rec", 14.0, "lockstep")
     out = tmp_path / "rec.mcap"
     subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out), "--quiet"],
                    check=True, timeout=300, capture_output=True)
@@ -310,7 +310,8 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     readings = []
     try:
         _wait_http(url, live)
-        replay = subprocess.Popen([executable_path("scenario_runner", "replay"), str(out)],
+        # at twice the recorded pace (the page follows the replay's /clock, whatever its rate)
+        replay = subprocess.Popen([executable_path("scenario_runner", "replay"), str(out), "--rate", "2"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         page, errors = _open_page(browser, url)
         _wait_page(page, "instructor.snap && instructor.snap.t > 4 && instructor.hasGeometry('tug') && "

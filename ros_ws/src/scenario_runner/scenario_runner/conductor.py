@@ -20,7 +20,7 @@ import signal
 import subprocess
 import sys
 import time
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import rclpy
@@ -45,13 +45,61 @@ CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPoli
 FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
 
 
-def fed_topics(sc: Scenario) -> Tuple[str, ...]:
+def _node_outputs(sc: Scenario) -> List[str]:
+    """The per-step outputs of the simulation nodes: the contract's state topics
+    (LATCHED_STATE_QOS) and the vessels' frames (/tf, /tf_static), published through
+    SteppedNode.create_fed_publisher."""
+    return [t for t, _type, qos in contract_topics(sc)
+            if qos is rc.LATCHED_STATE_QOS or t in (rc.TF_TOPIC, rc.TF_STATIC_TOPIC)]
+
+
+def _published_by(topic: str, names) -> bool:
+    """Whether one of these nodes ("/<namespace>/<node>") publishes this output: a namespaced
+    topic its namespace's node, /tf and /tf_static every vessel node."""
+    if topic in (rc.TF_TOPIC, rc.TF_STATIC_TOPIC):
+        return any(n.endswith("/vessel") for n in names)
+    return any(topic.startswith(n.rsplit("/", 1)[0] + "/") for n in names)
+
+
+def fed_topics(sc: Scenario, external: Sequence[str] = ()) -> Tuple[str, ...]:
     """Topics the recorder gets without a subscription: the runner's own (FED_TOPICS) and the
     per-step outputs of the nodes it starts, through their feed (sim_plumbing/record_feed.py).
-    Those outputs are the contract's state topics (LATCHED_STATE_QOS) and the vessels' frames
-    (/tf, /tf_static), published through SteppedNode.create_fed_publisher."""
-    return FED_TOPICS + tuple(t for t, _type, qos in contract_topics(sc)
-                              if qos is rc.LATCHED_STATE_QOS or t in (rc.TF_TOPIC, rc.TF_STATIC_TOPIC))
+    Outputs of external nodes (names "/<namespace>/<node>", started by somebody else) are
+    subscribed: /tf too as soon as one vessel node is external."""
+    return FED_TOPICS + tuple(t for t in _node_outputs(sc) if not _published_by(t, external))
+
+
+def external_outputs(sc: Scenario, external: Sequence[str]) -> Tuple[Tuple[str, ...], Tuple[str, ...]]:
+    """(the outputs of these external nodes, recorded by subscription at their own stamp; those
+    of them published every exchange step, which the runner waits for before the next step, so
+    that the recording loses none of them as the nodes' feed would not)."""
+    outputs = tuple(t for t in _node_outputs(sc) if _published_by(t, external))
+    names = ({f"/{v.name}" for v in sc.vessels} | {f"/{r.name}" for r in sc.ropes}
+             | {f"/{c.name}" for c in sc.contacts})
+    per_step = ("odom", "attachments", "status", "thrusters", "state", "wrench")  # the contract's "every step"
+    every_step = tuple(t for t in outputs if t.split("/")[-1] in per_step and "/" + t.split("/")[1] in names)
+    return outputs, every_step
+
+
+def resolve_external(specs: List["NodeSpec"], wanted: Sequence[str]) -> List[str]:
+    """Node names ("/tug/vessel") of `--external` items: "all", a node name or a namespace
+    ("tug", "/tug"). ValueError naming the item that matches no node of the scenario."""
+    names = [s.name for s in specs]
+    out: List[str] = []
+    for item in wanted:
+        item = item.strip()
+        if not item:
+            continue
+        if item == "all":
+            found = names
+        else:
+            ns = "/" + item.strip("/")
+            found = [n for n in names if n == ns or n.rsplit("/", 1)[0] == ns]
+        if not found:
+            raise ValueError(f"--external {item!r}: no such node; the scenario's nodes are {', '.join(names)} "
+                             "(a name, its namespace, or all)")
+        out += [n for n in found if n not in out]
+    return out
 
 
 class RunError(RuntimeError):
@@ -70,6 +118,8 @@ class Interrupted(Exception):
 # (30 trials on this machine; Fast DDS's announcement period is 3 s); with 1 s a run already
 # on the domain went unseen now and then
 DOMAIN_DISCOVERY_WAIT = 3.0
+# s between looks at the ROS graph for external nodes that have left it (run(external=...))
+GRAPH_CHECK_PERIOD = 0.25
 
 
 def new_run_id() -> str:
@@ -303,13 +353,18 @@ class RunStats:
     refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # why -> StepDones the runner refused
     node_refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # node -> messages it refused
     rescued: int = 0  # StepDones the executor held back, taken directly (ros_common.take_missed)
+    external: List[str] = dataclasses.field(default_factory=list)  # nodes of the run started by somebody else
 
 
 class Conductor(Node):
     """The runner's own node: /clock, /sim/step, orders and events out; StepDone in."""
 
-    def __init__(self, sc: Scenario, node_names: List[str], recorder=None, run_id: Optional[str] = None, **kwargs):
+    def __init__(self, sc: Scenario, node_names: List[str], recorder=None, run_id: Optional[str] = None,
+                 external: Sequence[str] = (), **kwargs):
         super().__init__("scenario_runner", **kwargs)
+        # nodes of the run this runner did not start (--external): expected on the domain, and
+        # their ready signal counts before they have joined the run (started without a run_id)
+        self.external = set(external)
         self.created = time.monotonic()
         self.recorder = recorder
         self.sc = sc
@@ -376,6 +431,11 @@ class Conductor(Node):
     def _on_done(self, msg: cdr.DoneIn) -> None:
         """Only an answer of this run, from a node of the run, for the step now due, once."""
         if msg.run_id != self.run_id:
+            if not msg.run_id and msg.step == 0 and msg.node in self.external and self.awaited <= 1:
+                # an external node started without run_id announces itself; it joins this run
+                # with the first SimStep(0) (sim_plumbing.stepping) and answers with its id
+                self.done.setdefault(0, set()).add(msg.node)
+                return
             return self._refuse("another run", msg, f"run '{msg.run_id}', this run is '{self.run_id}'")
         if msg.node not in self.expected:
             return self._refuse("not in the run", msg, f"nodes of this run are {sorted(self.expected)}")
@@ -403,9 +463,11 @@ class Conductor(Node):
         for info in self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC):
             found.add(f"scenario runner {_node_of(info)} (publishes {rc.SIM_STEP_TOPIC})")
         for info in self.get_subscriptions_info_by_topic(rc.SIM_STEP_TOPIC):
-            found.add(f"node {_node_of(info)} (takes {rc.SIM_STEP_TOPIC})")
+            if _node_of(info) not in self.external:  # this run's external nodes are expected
+                found.add(f"node {_node_of(info)} (takes {rc.SIM_STEP_TOPIC})")
         for info in self.get_publishers_info_by_topic(rc.STEP_DONE_TOPIC):
-            found.add(f"node {_node_of(info)} (answers on {rc.STEP_DONE_TOPIC})")
+            if _node_of(info) not in self.external:
+                found.add(f"node {_node_of(info)} (answers on {rc.STEP_DONE_TOPIC})")
         own_pub = f"scenario runner {me} (publishes {rc.SIM_STEP_TOPIC})"
         if sum(1 for i in self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC) if _node_of(i) == me) <= 1:
             found.discard(own_pub)
@@ -627,19 +689,27 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
         on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes",
         on_finished: Optional[Callable[[int], Callable[[], bool]]] = None,
-        run_id: Optional[str] = None) -> RunStats:
+        run_id: Optional[str] = None, external: Sequence[str] = ()) -> RunStats:
     """Start the nodes (each its own process, or all in this process on one executor), run the
     scenario, stop everything. Raises RunError naming the node (DomainInUse before anything
     starts if another run is on the domain) and Interrupted on SIGINT / SIGTERM.
     on_finished(final stamp ns), called after the last step while the nodes still run, returns a
     predicate: the run waits (up to 5 s) until it holds, e.g. until a late subscriber got the
-    final state."""
+    final state.
+    external: names of nodes ("/tug/vessel") the runner does not start (resolve_external): started
+    by somebody else (other PCs; `-p run_id:=<this run's id>`, or no run_id: such a node joins the
+    first run it sees), waited for until they announce themselves (ready_timeout), then stepped,
+    watched (stall_timeout) and recorded (by subscription) like the others."""
     if layout not in LAYOUTS:
         raise ValueError(f"layout {layout!r}: expected one of {LAYOUTS}")
     run_id = run_id or new_run_id()
     specs = node_specs(sc, scenario_path, run_id)
     n_steps = sc.steps if steps is None else steps
-    session = _Session(sc, specs, log_dir, recorder, layout, run_id, instrument_specs(sc, scenario_path))
+    unknown = sorted(set(external) - {s.name for s in specs})
+    if unknown:
+        raise ValueError(f"external node(s) {unknown} are not nodes of the scenario")
+    session = _Session(sc, specs, log_dir, recorder, layout, run_id, instrument_specs(sc, scenario_path),
+                       external)
     with StopSignals() as session.stop:
         try:
             session.start(extra_nodes or [], ready_timeout)
@@ -654,17 +724,22 @@ class _Session:
     """One run of run(): the conductor, its executor and the nodes, from start-up to shutdown."""
 
     def __init__(self, sc: Scenario, specs: List[NodeSpec], log_dir: str, recorder, layout: str, run_id: str,
-                 instruments: List[NodeSpec] = ()):
+                 instruments: List[NodeSpec] = (), external: Sequence[str] = ()):
         self.sc, self.specs, self.recorder, self.layout = sc, specs, recorder, layout
+        self.external = set(external)
+        self.seen_in_graph: set = set()  # external nodes seen in the ROS graph (gone_external)
+        self.own_specs = [s for s in specs if s.name not in self.external]  # the nodes this runner starts
+        # the external nodes' per-step outputs, subscribed by the recorder: waited for every step
+        self.awaited_outputs = external_outputs(sc, sorted(self.external))[1] if recorder and external else ()
         self.stop: Optional[StopSignals] = None  # set by run() for the time the run handles the signals
-        self.procs = NodeProcesses(specs if layout == "processes" else [], log_dir, recorder)
+        self.procs = NodeProcesses(self.own_specs if layout == "processes" else [], log_dir, recorder)
         # bridge equipment: own processes in either layout, outside the step protocol
         self.instruments = NodeProcesses(instruments, log_dir)
-        self.conductor = Conductor(sc, [s.name for s in specs], recorder, run_id)
+        self.conductor = Conductor(sc, [s.name for s in specs], recorder, run_id, external=self.external)
         self.executor = rc.make_executor()
         self.executor.add_node(self.conductor)
         self.local_nodes: List[Node] = []
-        self.stats = RunStats(run_id=run_id)
+        self.stats = RunStats(run_id=run_id, external=sorted(self.external))
 
     def start(self, extra_nodes: List[Node], ready_timeout: float) -> None:
         """Check the domain, start the nodes, wait for their ready signal and for every
@@ -679,7 +754,7 @@ class _Session:
         if recorder is not None and self.layout == "one_process":
             record_feed.install(recorder.feed_in_process)
         try:
-            self.local_nodes = in_process_nodes(self.specs) if self.layout == "one_process" else []
+            self.local_nodes = in_process_nodes(self.own_specs) if self.layout == "one_process" else []
         finally:
             record_feed.install(None)
         for node in extra_nodes + ([recorder] if recorder else []) + self.local_nodes:
@@ -688,6 +763,8 @@ class _Session:
         self.instruments.start()
         self.wait_for(0, ready_timeout, "starting up")
         self._wait_for_matches(ready_timeout)
+        if self.external:
+            self.gone_external()  # notes the external nodes in the graph: from now on, leaving it stops the run
 
     def _wait_for_matches(self, ready_timeout: float) -> None:
         """Triggers and orders are volatile: every participant (and the recorder) must have
@@ -729,6 +806,8 @@ class _Session:
             if recorder:
                 recorder.flush()  # the previous step's messages, written while the nodes compute
             self.wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
+            if self.awaited_outputs:
+                self.wait_for_outputs(k + 1, stall_timeout)
             stats.round_trips.append(time.monotonic() - t0)
             conductor.done.pop(k, None)
             stats.steps_done = k + 1
@@ -753,6 +832,20 @@ class _Session:
                 raise RunError(f"no odometry of step {k} from {', '.join(self.conductor.states_needed(k))} within "
                                f"{timeout:g} s: a state-triggered event cannot be evaluated")
 
+    def wait_for_outputs(self, step: int, timeout: float) -> None:
+        """Spin until the recorder holds every per-step output of step `step` of the external
+        nodes (subscribed; a StepDone may overtake them on the network, and the next steps could
+        push a late one out of its publisher's history)."""
+        stamp = step * self.conductor.period_ns
+        deadline = time.monotonic() + timeout
+        while self.recorder.lagging(stamp, self.awaited_outputs):
+            self.executor.spin_once(timeout_sec=0.001)
+            self.stop.check()
+            if time.monotonic() > deadline:
+                late = ", ".join(self.recorder.lagging(stamp, self.awaited_outputs))
+                raise RunError(f"no message of step {step} on {late} "
+                               f"(external node) within {timeout:g} s: it answered the step, its output did not arrive")
+
     def settle(self, settled: Callable[[], bool]) -> None:
         """Let the last messages reach subscribers in this process (recorder, summary): 0.3 s,
         and up to 5 s until settled() holds."""
@@ -770,6 +863,7 @@ class _Session:
         rescue_at = now + RESCUE_AFTER
         expected = conductor.expected
         done = conductor.done
+        graph_check = now + GRAPH_CHECK_PERIOD
         while done.get(step) != expected:
             try:
                 executor.spin_once(timeout_sec=0.001)
@@ -795,10 +889,30 @@ class _Session:
             if dead:
                 raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
                                f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
+            if self.external and step > 0 and now > graph_check:
+                graph_check = now + GRAPH_CHECK_PERIOD
+                gone = self.gone_external()
+                if gone:
+                    raise RunError(f"node(s) {', '.join(gone)} left the network while {what}: external, their DDS "
+                                   "participant is no longer announced (process ended, or its host is down or "
+                                   "cut off)")
             if now > deadline:
                 missing = sorted(conductor.expected - conductor.done.get(step, set()))
+                remote = [n for n in missing if n in self.external]
+                note = (f" ({', '.join(remote)}: external, not started by this runner: is it running, on this "
+                        f"ROS_DOMAIN_ID, and can this host reach it?)" if remote else "")
+                if step == 0 and remote:
+                    raise RunError(f"node(s) {', '.join(missing)} did not announce themselves: no StepDone(0) within "
+                                   f"{timeout:g} s while {what}{note}")
                 raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
-                               f"{timeout:g} s while {what}")
+                               f"{timeout:g} s while {what}{note}")
+
+    def gone_external(self) -> List[str]:
+        """External nodes no longer in the ROS graph: their participant stopped announcing itself
+        for its lease duration (Fast DDS default 20 s; 3 s with scripts/fastdds_lan.xml)."""
+        present = {f"{ns.rstrip('/')}/{name}" for name, ns in self.conductor.get_node_names_and_namespaces()}
+        self.seen_in_graph |= self.external & present
+        return sorted(self.seen_in_graph - present)  # one not seen yet is left to the stall timeout
 
     def close(self) -> None:
         """Protocol counts into the stats, then stop the nodes and the executor."""

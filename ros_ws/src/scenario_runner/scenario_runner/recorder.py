@@ -11,7 +11,10 @@
   simulation time stamp of the step (receive order kept), publish time the same;
 - the per-step outputs of the nodes the scenario runner started come through their feed
   (sim_plumbing/record_feed.py: the bytes each node publishes, handed over by a pipe or, in one
-  process, a call) instead of a second DDS delivery; every other topic by subscription;
+  process, a call) instead of a second DDS delivery; every other topic by subscription. The
+  outputs of nodes the runner did not start (`run_scenario --external`, e.g. on other PCs) are
+  subscribed and logged at the simulation time they are stamped with (`by_stamp`), however late
+  the network delivers them; the runner waits for each step's (lagging()) before the next;
 - chunked, with a summary section (statistics, chunk and message indexes) written on close,
   also after Ctrl-C;
 - on close, like rosbag2's MCAP storage plugin (Jazzy), a metadata record "rosbag2" whose key
@@ -25,6 +28,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import struct
 from typing import Callable, Dict, List, Optional, Tuple
 
 import yaml
@@ -205,6 +209,30 @@ def readable_extent(path: str) -> str:
     return f"{count} messages up to t = {last * 1e-9:.2f} s"
 
 
+def _stamp_layout(msg_class) -> Optional[str]:
+    """Where a message's simulation time stamp is: "header" (first field a std_msgs/Header),
+    "sequence" (first field a sequence of messages that start with one), or None."""
+    try:
+        first = next(iter(msg_class.get_fields_and_field_types().values()))
+    except (AttributeError, StopIteration):
+        return None
+    if first == "std_msgs/Header":
+        return "header"
+    if first.startswith("sequence<") and first[9:-1] in ("geometry_msgs/TransformStamped",
+                                                         "visualization_msgs/Marker"):
+        return "sequence"
+    return None
+
+
+def _first_stamp(data: bytes, layout: Optional[str]) -> Optional[int]:
+    """The stamp (ns) at the start of a CDR message of that layout; None if there is none."""
+    offset = {"header": 4, "sequence": 8}.get(layout)
+    if offset is None or len(data) < offset + 8 or (layout == "sequence" and data[4:8] == b"\0\0\0\0"):
+        return None
+    sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, offset)
+    return sec * 1_000_000_000 + nanosec
+
+
 def type_name(msg_class) -> str:
     module = msg_class.__module__.split(".")[0]
     return f"{module}/msg/{msg_class.__name__}"
@@ -217,12 +245,16 @@ class McapRecorder(Node):
     """Subscribes the given topics (raw CDR) and writes them to an MCAP file."""
 
     def __init__(self, path: str, topics: List[Tuple[str, type, QoSProfile]], period_ns: Optional[int] = None,
-                 fed_topics: Tuple[str, ...] = (), metadata: Optional[Dict[str, Dict[str, str]]] = None):
+                 fed_topics: Tuple[str, ...] = (), metadata: Optional[Dict[str, Dict[str, str]]] = None,
+                 by_stamp: Tuple[str, ...] = ()):
         """fed_topics: not subscribed; recorded from record() calls of their owner in this
         process (the scenario runner's /clock and /sim/step, and /sim/step_done which it takes
-        raw anyway) or from the nodes' feeds (add_pipe_feed, feed_in_process). metadata: MCAP
+        raw anyway) or from the nodes' feeds (add_pipe_feed, feed_in_process); a feed's message
+        on any other topic is not recorded (that topic is subscribed). metadata: MCAP
         metadata records (name -> string map) written at the start, so a run that is cut
-        short keeps them."""
+        short keeps them. by_stamp: subscribed topics whose messages are logged at their own
+        stamp (the header's, or the first element's for a sequence of stamped messages such as
+        /tf and markers) instead of the time of arrival; latest_stamp holds the newest."""
         super().__init__("recorder")
         self.path = path
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
@@ -250,6 +282,8 @@ class McapRecorder(Node):
         self.pipes: List[PipeReader] = []
         self.refused: Dict[str, int] = {}  # topic -> undecodable messages not recorded
         self.complaints = RateLimitedLog(self.get_logger())
+        self.by_stamp = {t: _stamp_layout(c) for t, c, _qos in topics if t in set(by_stamp)}
+        self.latest_stamp: Dict[str, int] = {}  # by_stamp topic -> newest stamp recorded
         for topic, msg_class, qos in topics:
             self.add_topic(topic, msg_class, qos)
 
@@ -297,12 +331,25 @@ class McapRecorder(Node):
         self.pipes.append(PipeReader(fd))
 
     def feed_in_process(self, topic: str, log_time_ns: int, data: bytes) -> None:
-        """The feed of nodes running in this process (record_feed.install)."""
-        if topic in self.channels:
+        """The feed of nodes running in this process (record_feed.install). Only fed topics: a
+        topic also published by a node the runner did not start (/tf) is subscribed instead."""
+        if topic in self.fed_topics and topic in self.channels:
             self._queue(topic, log_time_ns, data)
 
     def _write(self, topic: str, data: bytes) -> None:
-        self._queue(topic, self.log_time_ns, data)
+        layout = self.by_stamp.get(topic)
+        if layout is None:
+            return self._queue(topic, self.log_time_ns, data)
+        stamp = _first_stamp(data, layout)
+        if stamp is None:
+            return self._queue(topic, self.log_time_ns, data)
+        if stamp > self.latest_stamp.get(topic, -1):
+            self.latest_stamp[topic] = stamp
+        self._queue(topic, stamp, data)
+
+    def lagging(self, stamp_ns: int, topics) -> List[str]:
+        """Of these by_stamp topics, those with no message stamped stamp_ns or later yet."""
+        return [t for t in topics if self.latest_stamp.get(t, -1) < stamp_ns]
 
     def _take(self, topic: str, msg_class, data: bytes) -> None:
         """The message the executor hands over, then what else the topic's reader holds (up to

@@ -4,7 +4,9 @@
 
 The scenario is validated before any node starts (errors name the file and the key); then
 every node is started as its own process, the run is stepped in lockstep (or paced real
-time), progress is shown, everything is shut down, and a summary is printed. Exit status:
+time), progress is shown, everything is shut down, and a summary is printed. With --external the
+runner drives nodes somebody else started (other PCs; --print-nodes gives their commands): it
+waits for them to announce themselves and records their outputs by subscription. Exit status:
 0 done, 2 invalid scenario, 3 a node died / stopped answering / failed, 4 the ROS domain is
 in use by another run (refused before anything starts), 130 Ctrl-C, 143 SIGTERM (both stop the
 nodes and finalise the recording).
@@ -136,7 +138,9 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
         lines.append(f"  step round trip: p50 {1e3 * cd.percentile(stats.round_trips, 50):.2f} ms, "
                      f"p99 {1e3 * cd.percentile(stats.round_trips, 99):.2f} ms")
     if stats.steps_done and math.isfinite(stats.cpu_time):
-        lines.append(f"  CPU per step, all processes: {1e3 * stats.cpu_time / stats.steps_done:.2f} ms")
+        lines.append(f"  CPU per step, all processes: {1e3 * stats.cpu_time / stats.steps_done:.2f} ms"
+                     + (" (of this runner and the nodes it started; external nodes not counted)"
+                        if stats.external else ""))
     if stats.compute_times:
         lines.append("  compute per step: " + ", ".join(
             f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
@@ -189,6 +193,7 @@ class RunPlan:
     output: str  # the recording
     log_dir: str
     record: bool
+    external: List[str] = dataclasses.field(default_factory=list)  # node names the runner does not start
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -208,7 +213,34 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--live-host", default="127.0.0.1", help="address --live listens on (default 127.0.0.1)")
     parser.add_argument("--live-rate", type=float, default=20.0,
                         help="rate at which --live sends new messages to its clients, Hz (default 20)")
+    parser.add_argument("--external", action="append", default=[], metavar="NODES",
+                        help="nodes this runner does not start (comma-separated; a node name such as /tug/vessel, "
+                             "its namespace such as tug, or all): somebody starts them, e.g. on other PCs "
+                             "(--print-nodes); the runner waits for them to announce themselves, steps, watches "
+                             "and records them like its own")
+    parser.add_argument("--print-nodes", action="store_true",
+                        help="print the `ros2 run` command of every node of the scenario and exit")
+    parser.add_argument("--run-id", help="this run's id (default: random); nodes started with -p run_id:=<it> "
+                                         "take part in this run only")
+    parser.add_argument("--stall-timeout", type=float, default=30.0,
+                        help="s without an answer after which a node counts as stopped (default 30)")
+    parser.add_argument("--ready-timeout", type=float, default=240.0,
+                        help="s to wait for every node to announce itself at start-up (default 240)")
     return parser
+
+
+def node_commands(plan: "RunPlan", run_id: str = "") -> List[str]:
+    """The `ros2 run` command line of every node of the scenario (for --external: what to start
+    on the other PCs). Without a run id the nodes join the first run that starts."""
+    import shlex
+    lines = []
+    for spec in cd.node_specs(plan.sc, plan.path, run_id):
+        args = spec.ros_args()
+        if not run_id:
+            i = args.index("run_id:=" + cd._yaml_value(""))
+            del args[i - 1:i + 1]
+        lines.append(shlex.join(["ros2", "run", spec.package, spec.executable, "--ros-args", *args]))
+    return lines
 
 
 def live_topics(sc: Scenario) -> List[Tuple[str, str, bool]]:
@@ -257,11 +289,16 @@ def main(argv: Optional[List[str]] = None) -> int:
     plan, exit_code = plan_run(args)
     if plan is None:
         return exit_code
+    if args.print_nodes:
+        print("\n".join(node_commands(plan, args.run_id or "")))
+        return 0
     # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
     # shut the context down under the running loop (an RCLError traceback, or exit 3).
     rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     try:
-        recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc), fed_topics=cd.fed_topics(plan.sc),
+        recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc),
+                                fed_topics=cd.fed_topics(plan.sc, plan.external),
+                                by_stamp=cd.external_outputs(plan.sc, plan.external)[0],
                                 metadata={PARTICULARS_METADATA: {"particulars": json.dumps(
                                     particulars(plan.path, plan.sc))}}) if plan.record else None
     except OSError as exc:
@@ -301,6 +338,12 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         sys.stderr.write(f"run_scenario: --duration {args.duration!r}: expected a finite number of seconds > 0\n")
         return None, 2
+    for option in ("stall_timeout", "ready_timeout"):
+        value = getattr(args, option, None)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            sys.stderr.write(f"run_scenario: --{option.replace('_', '-')} {value!r}: expected a finite number of "
+                             "seconds > 0\n")
+            return None, 2
     path = scenario_path(args.scenario)
     try:
         sc = load_scenario(path)
@@ -318,10 +361,16 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
     if problem:
         sys.stderr.write(f"run_scenario: {problem}\n")
         return None, 2
-    if record and os.path.exists(output):
+    try:
+        wanted = ",".join(getattr(args, "external", None) or []).split(",")
+        external = cd.resolve_external(cd.node_specs(sc, path), wanted)
+    except ValueError as exc:
+        sys.stderr.write(f"run_scenario: {exc}\n")
+        return None, 2
+    if record and os.path.exists(output) and not getattr(args, "print_nodes", False):
         sys.stderr.write(f"run_scenario: replacing the existing recording {os.path.abspath(output)} "
                          "(give --output to keep it)\n")
-    return RunPlan(path, sc, steps, output, log_dir, record), 0
+    return RunPlan(path, sc, steps, output, log_dir, record, external), 0
 
 
 def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
@@ -338,7 +387,9 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
         stats = cd.run(plan.sc, plan.path, plan.log_dir, steps=plan.steps, extra_nodes=[mon] + ([live] if live else []),
                        recorder=recorder,
                        layout=args.layout, on_step=(lambda k: progress.update(1)) if progress else None,
-                       on_finished=mon.finish)
+                       on_finished=mon.finish, external=plan.external, run_id=getattr(args, "run_id", None),
+                       stall_timeout=getattr(args, "stall_timeout", 30.0),
+                       ready_timeout=getattr(args, "ready_timeout", 240.0))
     except OSError as exc:  # the recording could not be written (disk full, file system gone)
         if progress:
             progress.close()
