@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import executable_path
+from test_recording import decoded as _decoded
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
 
@@ -24,17 +25,6 @@ def _run(out, *extra):
                            "--output", str(out), "--quiet", *extra], capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     return proc
-
-
-def _decoded(path):
-    from collections import defaultdict
-    from mcap.reader import make_reader
-    from mcap_ros2.decoder import DecoderFactory
-    out = defaultdict(list)
-    with open(path, "rb") as f:
-        for _s, channel, _m, msg in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
-            out[channel.topic].append(msg)
-    return out
 
 
 def _yaw(odom):

@@ -23,6 +23,7 @@ from nav_msgs.msg import Odometry
 from tug_msgs.msg import HullContact, ScenarioEvent
 
 from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
+from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
@@ -30,8 +31,7 @@ from sim_plumbing.stepping import SteppedNode, StepInput
 
 def _pose(msg: cdr.OdometryIn) -> PlanarPose:
     """The odometry's horizontal pose and velocity (world; twist is in body axes, REP-105)."""
-    x, y, z, w = msg.orientation
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    yaw = yaw_from_quaternion(*msg.orientation)
     u, v, _ = msg.linear
     c, s = math.cos(yaw), math.sin(yaw)
     return PlanarPose(msg.position[0], msg.position[1], yaw, c * u - s * v, s * u + c * v, msg.angular[2])

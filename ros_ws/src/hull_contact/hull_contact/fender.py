@@ -156,13 +156,6 @@ class FenderContact:
         return ContactResult(True, -gap, gap, fn, float(math.hypot(*ft_vec)), -on_fender, point, nearest_body)
 
 
-def _merged(base: dict, over: Optional[dict]) -> dict:
-    out = dict(base)
-    for key, value in (over or {}).items():
-        out[key] = _merged(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
-    return out
-
-
 def contact_from_ship_files(spec: FenderSpec, fender_ship: str, fender: str, hull_ship: str,
                             fender_overrides: Optional[dict] = None,
                             hull_overrides: Optional[dict] = None) -> Tuple[FenderContact, np.ndarray]:
@@ -171,12 +164,12 @@ def contact_from_ship_files(spec: FenderSpec, fender_ship: str, fender: str, hul
     Raises ValueError naming the file and the attachment when the fender is not there."""
     from sim_math.hull_plan import HullDimensions, waterline_outline
     from sim_math.input_files import load_yaml
-    from tug_dynamics.ship_file import load_ship
+    from tug_dynamics.ship_file import _deep_merge, load_ship   # the merge load_ship applies
     points = load_ship(fender_ship, overrides=fender_overrides).attachments
     if fender not in points:
         raise ValueError(f"ship file {fender_ship}: no attachment '{fender}' for the fender "
                          f"(it has {sorted(points)})")
     point = np.asarray(points[fender], float)
     load_ship(hull_ship, overrides=hull_overrides)   # the same checks as the vessel node's
-    dims = HullDimensions.from_ship_config(_merged(load_yaml(hull_ship), hull_overrides))
+    dims = HullDimensions.from_ship_config(_deep_merge(load_yaml(hull_ship), hull_overrides or {}))
     return FenderContact(spec, point[:2], waterline_outline(dims)), point
