@@ -61,8 +61,12 @@ def main(argv=None) -> int:
         pub = node.create_publisher(VesselCommand, topic, rc.COMMAND_QOS)
         clock = SimClock(node)
         deadline = time.monotonic() + args.wait
-        while pub.get_subscription_count() == 0:
+        # Wait until every reader the graph knows of has matched (the vessel, and a recorder or a
+        # console too): a volatile sample published before a reader matches never reaches it.
+        while not 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
             if time.monotonic() > deadline:
+                if pub.get_subscription_count() > 0:
+                    break   # the vessel has matched; a reader still discovering gets nothing
                 sys.stderr.write(f"send_command: no subscriber on {topic} after {args.wait:g} s "
                                  f"(is the vessel node for '{args.vessel}' running, same ROS_DOMAIN_ID?)\n")
                 return 1
