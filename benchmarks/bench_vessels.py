@@ -4,8 +4,9 @@
 
 Prints a markdown table (median microseconds per Vessel.step call over 2000 calls after a
 warm-up, without and with one external wrench, and with one wrench plus the environment: gusty
-wind, a tidal sheared current and a bathymetry grid sampled by tug_dynamics.environment_loads
-before every step, the vessel node's per-step work); --update-readme writes it between the
+wind, a tidal sheared current and a bathymetry grid attached through
+tug_dynamics.environment_loads, as the vessel node does; the last two timed side by side, their
+blocks interleaved); --update-readme writes it between the
 <!-- bench:start --> / <!-- bench:end --> markers of ros_ws/src/tug_dynamics/README.md.
 """
 from __future__ import annotations
@@ -32,33 +33,24 @@ from sea_environment.environment import Environment  # noqa: E402
 README = os.path.join(HERE, "..", "ros_ws", "src", "tug_dynamics", "README.md")
 
 
-def time_steps(vessel, dt, wrenches, n=2000, repeats=5):
-    for _ in range(200):
+def _time_block(vessel, dt, wrenches, n):
+    t0 = time.perf_counter()
+    for _ in range(n):
         vessel.step(dt, wrenches)
-    best = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            vessel.step(dt, wrenches)
-        best.append((time.perf_counter() - t0) / n * 1e6)
-    return float(np.median(best))
+    return (time.perf_counter() - t0) / n * 1e6
 
 
-def time_steps_in_environment(vessel, dt, wrenches, env, n=2000, repeats=5):
-    """As time_steps, with the environment sampled and applied before every step."""
-    coupling = VesselInEnvironment(vessel, env)
-    t = 0.0
-    for _ in range(200):
-        vessel.step(dt, list(wrenches) + coupling.prepare(t))
-        t += dt
-    best = []
+def time_steps(vessels, dt, wrenches, n=2000, repeats=5):
+    """Median us per step of each vessel, their blocks of n steps interleaved (the machine's
+    speed drifts: a ratio between them is only fair when measured side by side)."""
+    for v in vessels:
+        for _ in range(200):
+            v.step(dt, wrenches)
+    times = [[] for _ in vessels]
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            vessel.step(dt, list(wrenches) + coupling.prepare(t))
-            t += dt
-        best.append((time.perf_counter() - t0) / n * 1e6)
-    return float(np.median(best))
+        for v, t in zip(vessels, times):
+            t.append(_time_block(v, dt, wrenches, n))
+    return [float(np.median(t)) for t in times]
 
 
 def bench_environment(tmpdir):
@@ -86,16 +78,20 @@ def main(argv=None):
     for path in list_ship_files():
         name = os.path.basename(path)
         try:
-            v = load_ship(path)
-            v.set_command(Command(0.5, math.radians(10.0)))
+            v, in_env = load_ship(path), load_ship(path)
+            for model in (v, in_env):
+                model.set_command(Command(0.5, math.radians(10.0)))
             point = next(iter(v.attachments.values())) if v.attachments else np.zeros(3)
             w = [ExternalWrench(np.array([1e3, 2e3, 0.0]), np.asarray(point, float))]
-            t0 = time_steps(v, a.dt, ())
-            t1 = time_steps(v, a.dt, w)
+            t0, = time_steps([v], a.dt, ())
             if v.windage is not None:
-                t2 = time_steps_in_environment(v, a.dt, w, env)
+                # the environment attached: every step samples it (inside the model's compiled step)
+                # and applies its current, wind, depth factors and bottom friction
+                VesselInEnvironment(in_env, env)
+                t1, t2 = time_steps([v, in_env], a.dt, w)
                 env_cell = f"{t2:.1f} ({100.0 * (t2 - t1) / t1:+.0f} %)"
             else:
+                t1, = time_steps([v], a.dt, w)
                 env_cell = "(no windage section)"
             sub = getattr(v, "hmax", None)
             nsub = math.ceil(a.dt / sub - 1e-9) if sub else "-"
@@ -104,7 +100,7 @@ def main(argv=None):
             rows.append(f"| {name} | (not loadable: {type(exc).__name__}: {str(exc)[:60]}) | | | | |")
     table = "\n".join([
         f"Step dt = {a.dt} s; {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
-        f"median of 5 x 2000 calls.",
+        f"median of 5 x 2000 calls (with and without the environment: interleaved blocks).",
         "",
         "| ship file | model | RK4 sub-steps per call | us / step | us / step, 1 wrench | "
         "us / step, 1 wrench + environment |",

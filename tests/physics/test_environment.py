@@ -9,7 +9,7 @@ import pytest
 from sea_environment.bathymetry import BathymetryError, DepthGrid
 from sea_environment.environment import Environment
 from sea_environment.shallow_water import squat
-from sea_environment.wind import KNOT
+from sea_environment.wind import KNOT, apparent_wind
 from sea_environment.wind_loads import BLENDERMANN_TABLE, Windage, blendermann_coefficients, wind_wrench_body
 from tug_dynamics.environment_loads import GROUND_FRICTION, VesselInEnvironment
 from tug_dynamics.ship_file import ShipFileError, load_ship
@@ -77,7 +77,7 @@ def test_beam_wind_free_drift_reaches_the_hand_calculated_speed():
     coupling = VesselInEnvironment(barge, env)
     dt = 0.05
     for i in range(8000):            # 400 s: the drift's time constant is about 30 s
-        barge.step(dt, coupling.prepare(i * dt))
+        barge.step(dt)
     k = math.sqrt(RHO_AIR * 25.0 * 0.70 / (1025.0 * 50.0 * 0.5 * 1.0))
     v_hand = k * 20.0 / (1.0 + k)
     vel = barge.state.linear_velocity_body
@@ -104,7 +104,7 @@ def test_unpowered_vessel_drifting_with_the_current_stays_with_it(ship):
                                  body, np.zeros(3)))
     dt = 0.05
     for i in range(2000):
-        vessel.step(dt, coupling.prepare(i * dt))
+        vessel.step(dt)
     s = vessel.state
     assert s.rpy[2] == pytest.approx(yaw, abs=1e-3)
     cy, sy = math.cos(s.rpy[2]), math.sin(s.rpy[2])
@@ -121,7 +121,7 @@ def test_vessel_released_in_a_current_is_taken_up_by_it():
     coupling = VesselInEnvironment(barge, env)
     dt, through = 0.1, []
     for i in range(12000):
-        barge.step(dt, coupling.prepare(i * dt))
+        barge.step(dt)
         through.append(barge.status().speed_through_water)
     assert through[0] > 0.9 * 2.0 * KNOT
     assert through[-1] < 0.05 * 2.0 * KNOT
@@ -219,7 +219,7 @@ def test_icorels_squat_by_hand():
     assert squat(u, math.inf, 175.0, 21120.4) == 0.0
 
 
-def test_running_aground_stops_the_vessel_within_the_friction_distance():
+def test_running_aground_stops_the_vessel_within_the_friction_distance(tmp_path):
     """The tug steams at 4 m/s towards a shoal (depth 10 m falling to 1 m over 100 m). Aground
     (under-keel clearance < 0) the bottom's friction mu N at least mu rho g A_wp (T - h) decelerates
     it: it stops, and its kinetic energy bounds how far it slides: it never reaches the dry line."""
@@ -227,19 +227,16 @@ def test_running_aground_stops_the_vessel_within_the_friction_distance():
         np.zeros(3), np.zeros(3), np.array([4.0, 0.0, 0.0]), np.zeros(3)))
     tug.set_command(Command(0.0, 0.0))
 
-    class Shoal:   # a stand-in depth field: the environment only calls .at and .is_deep
-        is_deep = False
-
-        @staticmethod
-        def at(x, y):
-            return float(np.clip(10.0 - 9.0 * (x - 100.0) / 100.0, 1.0, 10.0))
-
-    env = Environment.from_mapping({})
-    env.depth = Shoal()
+    # a shoal rising along x: 10 m up to x = 100, 1 m from x = 200, linear between (a grid whose
+    # bilinear interpolation is exactly that ramp)
+    grid = tmp_path / "shoal.asc"
+    grid.write_text("ncols 4\nnrows 2\nxllcenter 0\nyllcenter -100\ncellsize 100\n"
+                    "10 10 1 1\n10 10 1 1\n")
+    env = Environment.from_mapping({"depth": {"grid": str(grid)}})
     coupling = VesselInEnvironment(tug, env)
     dt, grounded_at = 0.05, None
     for i in range(4000):
-        tug.step(dt, coupling.prepare(i * dt))
+        tug.step(dt)
         if coupling.status.grounded and grounded_at is None:
             grounded_at = tug.state.position[0]
     assert grounded_at is not None
@@ -293,7 +290,7 @@ def test_s175_anchor_dredges_with_what_its_chain_allows(depth):
     from tug_dynamics.vessel import ANCHOR_LET_GO
     ship.set_command(Command(0.0, 0.0, ANCHOR_LET_GO))
     for i in range(400):                 # 20 s: let go (15 s) and dredging
-        ship.step(0.05, coupling.prepare(i * 0.05))
+        ship.step(0.05)
     h = depth + 9.0
     lam_w = 1.5 * 70608.0
     expect = 0.0 if h >= 137.5 else min(lam_w, 765.0 * (137.5 ** 2 - h ** 2) / (2.0 * h))
@@ -354,3 +351,58 @@ def test_s175_turns_wider_in_shallow_water_and_as_in_deep_water_beyond_h_over_t_
     deep35 = _steady_turn_diameter(None, 35.0)
     assert abs(_steady_turn_diameter(4.0, 35.0) / deep35 - 1.0) < 0.02
     assert 1.15 < _steady_turn_diameter(1.2, 35.0) / _steady_turn_diameter(1.5, 35.0) < 1.6
+
+
+# ---- the compiled sampler a vessel's step calls ------------------------------------------------
+def test_vessel_sampler_equals_the_fields_numpy_and_scipy_forms(tmp_path):
+    """The one compiled call per step (sea_environment.vessel_sampler) against the fields'
+    vectorised numpy forms (current, wind), scipy's RegularGridInterpolator (depth) and the
+    wind-load, squat and Ankudinov functions composed here by hand, at 200 random states."""
+    from sea_environment.shallow_water import ankudinov_factors
+    from sea_environment.vessel_sampler import (E_APPARENT_ANGLE, E_APPARENT_SPEED, E_CLEARANCE, E_CURRENT_X,
+                                                E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV, E_GROUND_FX,
+                                                E_GROUND_FY, E_GROUNDED, E_SQUAT, E_WIND_FX, E_WIND_FY, E_WIND_X,
+                                                E_WIND_Z, VesselEnvironmentSampler)
+    grid = tmp_path / "depth.asc"
+    rows = [" ".join(f"{4.0 + 3.0 * math.sin(0.4 * i + 0.3 * j):.3f}" for j in range(9)) for i in range(7)]
+    grid.write_text("ncols 9\nnrows 7\nxllcorner -450\nyllcorner -350\ncellsize 100\n" + "\n".join(rows) + "\n")
+    env = Environment.from_mapping({
+        "wind": {"speed_kn": 30.0, "from_deg": 200.0, "gusts": True, "seed": 3},
+        "current": {"speed_kn": 2.5, "towards_deg": 70.0, "shear_per_s": 0.001, "tidal_period_s": 3000.0},
+        "depth": {"grid": str(grid)}})
+    w = Windage("tender", 40.0, 110.0, 1.5, 2.5, 28.0)
+    length, beam, draft, volume = 28.0, 9.0, 3.0, 400.0
+    sampler = VesselEnvironmentSampler(env, length=length, beam=beam, draft=draft, volume=volume, windage=w,
+                                       ground_friction=0.4, ground_slip=0.05)
+    rng = np.random.default_rng(7)
+    grounded = 0
+    for _ in range(200):
+        t, x, y = rng.uniform(0, 4000), rng.uniform(-600, 600), rng.uniform(-500, 500)
+        yaw, u, v = rng.uniform(-math.pi, math.pi), rng.uniform(-2, 6), rng.uniform(-1, 1)
+        sampler.time = t
+        e = sampler.sample(x, y, yaw, u, v)
+        cur = env.current_velocity(t, np.array([x]), np.array([y]))[0]
+        h = float(env.depth.grid._interp(np.array([[min(max(y, -300.0), 300.0), min(max(x, -400.0), 400.0)]]))[0])
+        vx, vy = math.cos(yaw) * u - math.sin(yaw) * v, math.sin(yaw) * u + math.cos(yaw) * v
+        speed, angle = apparent_wind(env.wind_velocity(t), (vx, vy), yaw)
+        fx, fy, xp, zp, _ = wind_wrench_body(speed, angle, w)
+        sq = squat(math.hypot(vx - cur[0], vy - cur[1]), max(h, draft), length, volume)
+        factors = ankudinov_factors(length, beam, draft, volume / (length * beam * draft), max(h, 1e-3))[:4]
+        assert [e[E_CURRENT_X], e[E_CURRENT_Y]] == pytest.approx(cur, abs=1e-12)
+        assert [e[E_APPARENT_SPEED], e[E_APPARENT_ANGLE]] == pytest.approx([speed, angle], abs=1e-12)
+        assert [e[E_WIND_FX], e[E_WIND_FY]] == pytest.approx(
+            [math.cos(yaw) * fx - math.sin(yaw) * fy, math.sin(yaw) * fx + math.cos(yaw) * fy], rel=1e-12, abs=1e-9)
+        assert [e[E_WIND_X], e[E_WIND_Z]] == pytest.approx([xp, zp], rel=1e-12)
+        assert [e[E_DEPTH], e[E_SQUAT], e[E_CLEARANCE]] == pytest.approx([h, sq, h - draft - sq], abs=1e-9)
+        assert [e[E_F_YV], e[E_F_YR], e[E_F_NV], e[E_F_NR]] == pytest.approx(factors, rel=1e-9)
+        assert bool(e[E_GROUNDED]) == (h - draft - sq < 0.0)
+        if e[E_GROUNDED]:
+            grounded += 1
+            normal = 1025.0 * 9.80665 * (1.0 + 2.0 * volume / (length * beam * draft)) / 3.0 * length * beam \
+                * (draft + sq - h)
+            friction = 0.4 * normal * min(1.0, math.hypot(vx, vy) / 0.05)
+            assert math.hypot(e[E_GROUND_FX], e[E_GROUND_FY]) == pytest.approx(friction, rel=1e-9)
+            assert e[E_GROUND_FX] * vx + e[E_GROUND_FY] * vy <= 0.0     # it opposes the motion
+        else:
+            assert e[E_GROUND_FX] == e[E_GROUND_FY] == 0.0
+    assert 10 < grounded < 190      # both branches taken

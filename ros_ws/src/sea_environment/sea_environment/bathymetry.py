@@ -103,9 +103,9 @@ class DepthGrid:
 
     def depth_at(self, x, y):
         """Depth (m) at world (x, y): a float for scalars, an array for arrays. Scalars (a vessel's
-        position, every step) go through `_bilinear`; arrays through scipy."""
+        position, every step) go through `bilinear`; arrays through scipy."""
         if np.ndim(x) == 0:
-            return _bilinear(self.x[0], self.x[1] - self.x[0], self.y[0], self.y[1] - self.y[0], self.values,
+            return bilinear(self.x[0], self.x[1] - self.x[0], self.y[0], self.y[1] - self.y[0], self.values,
                              float(x), float(y))
         xmin, xmax, ymin, ymax = self.bounds
         xs = np.clip(np.asarray(x, float), xmin, xmax)
@@ -114,7 +114,7 @@ class DepthGrid:
 
 
 @njit(cache=True)
-def _bilinear(x0, dx, y0, dy, values, x, y):
+def bilinear(x0, dx, y0, dy, values, x, y):
     """Bilinear interpolation on the regular grid, clamped to its edges: what
     RegularGridInterpolator computes for one point (the tests compare the two), hand-written
     because scipy's call costs about 26 us, five times a whole vessel model step (measured,

@@ -27,6 +27,7 @@ import re
 from typing import List, Optional, Union
 
 import numpy as np
+from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 from typing_extensions import Annotated
 
@@ -112,6 +113,11 @@ def _profile_ratio(u10: float, z):
     return 1.0 + c * np.log(z / 10.0)
 
 
+# CurrentField.packed: the field's parameters in the order current_xy reads them
+(CUR_UNIFORM, CUR_UX, CUR_UY, CUR_AXIS_X, CUR_AXIS_Y, CUR_LEFT_X, CUR_LEFT_Y, CUR_SPEED, CUR_SHEAR,
+ CUR_HALF_WIDTH, CUR_OMEGA, CUR_PHASE, N_CURRENT) = range(13)
+
+
 class CurrentField:
     """Water velocity over ground (east, north), m/s, at (x, y) and time t (CurrentFieldSpec)."""
 
@@ -129,16 +135,16 @@ class CurrentField:
             self.uniform = (float(spec[0]), float(spec[1]))
         self.varies_in_space = self.uniform is None and self.shear != 0.0
         self.varies_in_time = self.uniform is None and self.omega != 0.0
+        self.packed = np.zeros(N_CURRENT)
+        if self.uniform is not None:
+            self.packed[[CUR_UNIFORM, CUR_UX, CUR_UY]] = (1.0, *self.uniform)
+        else:
+            self.packed[CUR_AXIS_X:] = (*self.axis, *self.left, self.speed, self.shear, self.half_width, self.omega,
+                                        self.phase)
 
     def velocity_xy(self, t: float, x: float, y: float) -> tuple:
         """(east, north) m/s at one point: the scalar form a vessel needs every step."""
-        if self.uniform is not None:
-            return self.uniform[0], self.uniform[1]
-        s = min(max(x * self.left[0] + y * self.left[1], -self.half_width), self.half_width)
-        speed = self.speed + self.shear * s
-        if self.omega:
-            speed *= math.cos(self.omega * t + self.phase)
-        return speed * self.axis[0], speed * self.axis[1]
+        return current_xy(self.packed, t, x, y)
 
     def velocity(self, t: float, x, y):
         """(2,) for scalar x, y; (N, 2) for arrays."""
@@ -151,6 +157,19 @@ class CurrentField:
         if self.omega:
             speed = speed * math.cos(self.omega * t + self.phase)
         return np.multiply.outer(speed, np.array(self.axis))
+
+
+@njit(cache=True)
+def current_xy(c, t, x, y):
+    """CurrentField.velocity_xy on its packed parameters c, as a kernel."""
+    if c[CUR_UNIFORM] != 0.0:
+        return c[CUR_UX], c[CUR_UY]
+    hw = c[CUR_HALF_WIDTH]
+    s = min(max(x * c[CUR_LEFT_X] + y * c[CUR_LEFT_Y], -hw), hw)
+    speed = c[CUR_SPEED] + c[CUR_SHEAR] * s
+    if c[CUR_OMEGA] != 0.0:
+        speed *= math.cos(c[CUR_OMEGA] * t + c[CUR_PHASE])
+    return speed * c[CUR_AXIS_X], speed * c[CUR_AXIS_Y]
 
 
 class DepthField:

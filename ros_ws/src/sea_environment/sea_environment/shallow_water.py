@@ -1,5 +1,5 @@
 """Shallow water: the change of a ship's manoeuvring derivatives with the depth, and its squat.
-Pure Python, no ROS.
+Numba kernels (the vessel's environment sampler calls them every step), callable from Python; no ROS.
 
 Derivatives: the MARAD shallow-water factors of Ankudinov et al. (MARAD systematic series,
 around 1990), as restated by Taimuri et al. (2020, Ocean Engineering, doi
@@ -30,11 +30,14 @@ from __future__ import annotations
 import math
 from typing import Tuple
 
+from numba import njit
+
 G = 9.80665
 FNH_MAX = 0.7
 MIN_DEPTH_RATIO = 1.1   # h/T: the shallowest the MARAD regression covers
 
 
+@njit(cache=True)
 def ankudinov_factors(length: float, beam: float, draft: float, block: float,
                       depth: float) -> Tuple[float, float, float, float, float]:
     """(f_yv, f_yr, f_nv, f_nr, g_v): shallow / deep ratios of Y'v, Y'r, N'v, N'r and of the
@@ -53,6 +56,7 @@ def ankudinov_factors(length: float, beam: float, draft: float, block: float,
     return 1.5 * f_nv - 0.5, f_yr, f_nv, f_nr, g_v
 
 
+@njit(cache=True)
 def squat(speed: float, depth: float, length: float, volume: float) -> float:
     """ICORELS bow squat (m) at speed through the water `speed` (m/s) in depth h (m)."""
     if not math.isfinite(depth) or speed == 0.0:

@@ -25,6 +25,7 @@ import math
 from typing import Tuple
 
 import numpy as np
+from numba import njit
 
 KNOT = 1852.0 / 3600.0  # m/s
 NPD_N = 0.468
@@ -82,19 +83,33 @@ class GustRecord:
 
     def speed(self, t: float) -> float:
         """Wind speed (m/s, along the mean direction) at simulation time t (s)."""
-        x = (t % self.period) / self.dt
-        i = int(x)
-        w = x - i
-        g = self.gust
-        return self.mean + (1.0 - w) * g[i % g.size] + w * g[(i + 1) % g.size]
+        return gust_speed(self.mean, self.gust, self.dt, self.period, t)
+
+
+@njit(cache=True)
+def gust_speed(mean, gust, dt, period, t):
+    """GustRecord.speed as a kernel (the vessel's environment sampler calls it every step): the
+    record, periodic in `period`, interpolated linearly between its samples `dt` apart."""
+    x = (t % period) / dt
+    i = int(x)
+    w = x - i
+    n = gust.size
+    return mean + (1.0 - w) * gust[i % n] + w * gust[(i + 1) % n]
 
 
 def apparent_wind(wind_enu, velocity_enu, yaw: float) -> Tuple[float, float]:
     """(speed m/s, angle rad) of the wind a vessel feels: the air's velocity relative to the
     vessel, the angle being where it comes FROM relative to the bow, + to port (REP-103 body y),
     in (-pi, pi]: 0 = from dead ahead, +pi/2 = on the port beam."""
-    rx = float(wind_enu[0]) - float(velocity_enu[0])
-    ry = float(wind_enu[1]) - float(velocity_enu[1])
+    return apparent_wind_xy(float(wind_enu[0]), float(wind_enu[1]), float(velocity_enu[0]),
+                            float(velocity_enu[1]), float(yaw))
+
+
+@njit(cache=True)
+def apparent_wind_xy(wx, wy, vx, vy, yaw):
+    """apparent_wind on scalars, as a kernel."""
+    rx = wx - vx
+    ry = wy - vy
     c, s = math.cos(yaw), math.sin(yaw)
     bx, by = c * rx + s * ry, -s * rx + c * ry       # world -> body (rotation by -yaw)
     return math.hypot(bx, by), math.atan2(-by, -bx)  # it comes from the opposite of where it goes

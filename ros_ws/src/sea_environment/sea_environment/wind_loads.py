@@ -1,7 +1,7 @@
 """Wind loads on a vessel's above-water hull after W. Blendermann (1994), "Parameter
 identification of wind loads on ships", J. Wind Eng. Ind. Aerodyn. 51, 339-351: a four-parameter
 model fitted to wind-tunnel data of 17 ship types (his Table 2, also Fossen, Handbook of Marine
-Craft Hydrodynamics and Motion Control, 2nd ed. 2021, Table 10.4). Pure numpy, no ROS.
+Craft Hydrodynamics and Motion Control, 2nd ed. 2021, Table 10.4). Numba kernels with Python wrappers, no ROS.
 
 With gamma the angle the apparent wind comes FROM, measured from the bow (0 = head wind,
 pi = from astern; the coefficients are symmetric port / starboard), A_F and A_L the frontal and
@@ -27,6 +27,8 @@ from __future__ import annotations
 import dataclasses
 import math
 from typing import Dict, Tuple
+
+from numba import njit
 
 RHO_AIR = 1.225  # kg/m^3, ISA sea level, 15 C
 
@@ -78,6 +80,12 @@ class Windage:
             raise ValueError(f"windage.centroid_x: {self.centroid_x!r} m must lie within half the length overall "
                              f"({0.5 * self.length_overall:g} m) of the reference point")
 
+    def parameters(self) -> Tuple[float, ...]:
+        """Blendermann's five coefficients of the type, then the five particulars: the argument
+        list of the `blendermann` and `wind_wrench` kernels."""
+        return (*BLENDERMANN_TABLE[self.ship_type], self.frontal_area, self.lateral_area, self.centroid_x,
+                self.centroid_height, self.length_overall)
+
     @staticmethod
     def from_config(section: dict) -> "Windage":
         """From a ship file's ``windage`` mapping (keys: type, frontal_area, lateral_area,
@@ -102,15 +110,21 @@ class Windage:
 
 def blendermann_coefficients(gamma: float, w: Windage) -> Tuple[float, float, float, float]:
     """(C_X, C_Y, C_K, C_N) for a wind from gamma (rad, 0 = from ahead, 0 <= gamma <= pi)."""
-    cdt, cdl_bow, cdl_stern, delta, kappa = BLENDERMANN_TABLE[w.ship_type]
+    return blendermann(gamma, *w.parameters())
+
+
+@njit(cache=True)
+def blendermann(gamma, cdt, cdl_bow, cdl_stern, delta, kappa, frontal_area, lateral_area, centroid_x,
+                centroid_height, length_overall):
+    """blendermann_coefficients on Windage.parameters(), as a kernel."""
     cdl_af = cdl_bow if gamma <= 0.5 * math.pi else cdl_stern
-    cdl = cdl_af * w.frontal_area / w.lateral_area
+    cdl = cdl_af * frontal_area / lateral_area
     den = 1.0 - 0.5 * delta * (1.0 - cdl / cdt) * math.sin(2.0 * gamma) ** 2
     cx = -cdl_af * math.cos(gamma) / den
     cy = cdt * math.sin(gamma) / den
-    hm = w.lateral_area / w.length_overall
-    ck = kappa * w.centroid_height / hm * cy
-    cn = (w.centroid_x / w.length_overall - 0.18 * (gamma - 0.5 * math.pi)) * cy
+    hm = lateral_area / length_overall
+    ck = kappa * centroid_height / hm * cy
+    cn = (centroid_x / length_overall - 0.18 * (gamma - 0.5 * math.pi)) * cy
     return cx, cy, ck, cn
 
 
@@ -122,13 +136,20 @@ def wind_wrench_body(speed: float, angle: float, w: Windage,
     Returns (X, Y, x_point, z_point, N): force components (N), the point (m, body x, height
     above the waterline) where the side force acts (Blendermann's centre of pressure), and the
     yaw moment N about the body origin (N m; = x_point * Y, given for checks)."""
-    g = abs(angle)
-    cx, cy, ck, cn = blendermann_coefficients(g, w)
+    return wind_wrench(speed, angle, rho_air, *w.parameters())
+
+
+@njit(cache=True)
+def wind_wrench(speed, angle, rho_air, cdt, cdl_bow, cdl_stern, delta, kappa, frontal_area, lateral_area,
+                centroid_x, centroid_height, length_overall):
+    """wind_wrench_body on Windage.parameters(), as a kernel."""
+    cx, cy, ck, cn = blendermann(abs(angle), cdt, cdl_bow, cdl_stern, delta, kappa, frontal_area, lateral_area,
+                                 centroid_x, centroid_height, length_overall)
     q = 0.5 * rho_air * speed * speed
     side = -1.0 if angle >= 0.0 else 1.0   # a wind from port pushes to starboard (-y)
-    fx = q * w.frontal_area * cx
-    fy = side * q * w.lateral_area * cy
-    x_point = cn / cy * w.length_overall if cy != 0.0 else w.centroid_x
-    hm = w.lateral_area / w.length_overall
-    z_point = ck / cy * hm if cy != 0.0 else w.centroid_height
+    fx = q * frontal_area * cx
+    fy = side * q * lateral_area * cy
+    x_point = cn / cy * length_overall if cy != 0.0 else centroid_x
+    hm = lateral_area / length_overall
+    z_point = ck / cy * hm if cy != 0.0 else centroid_height
     return fx, fy, x_point, z_point, x_point * fy

@@ -39,6 +39,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 from numba import njit
 
+from sea_environment.vessel_sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV,
+                                            E_GROUND_FX, E_GROUND_FY, E_WIND_FX, E_WIND_FY, E_WIND_X, E_WIND_Z,
+                                            N_SAMPLE, P_TIME, VesselEnvironmentSampler, sample)
 from sim_math.integration import rk4_stage, rk4_update
 
 from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, AnchorState, Command, CommandRejected, ExternalWrench,
@@ -58,7 +61,10 @@ S_THR0 = NSTATE
  H_TOW_ON, H_TOW_F, H_TOW_X, H_TOW_DRIFT, H_TOW_RATE, H_TOW_MAX, H_ANC_LW, H_ANC_LA, H_ANC_UEPS,
  H_ANC_RON, H_ANC_VUCAP, H_NPROP, H_NRUD, H_MAXRATE, H_TE, H_TN, H_ANC_UREF, H_NTHR) = range(32)
 H_C0 = 32           # hull coefficients start here (16 slots)
-NHULL = H_C0 + 16
+# the slots (in hp[H_C0:]) of Y'v, Y'r, N'v, N'r, then their deep-water values: what the
+# shallow-water factors multiply (slot -1: the hull form has no such derivatives)
+H_LIN = H_C0 + 16
+NHULL = H_LIN + 8
 
 FORM_NONE, FORM_POLY, FORM_LOWSPEED, FORM_CROSSFLOW = 0, 1, 2, 3
 
@@ -724,6 +730,42 @@ def _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_fo
     return s
 
 
+@njit(cache=True)
+def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point,
+                              wrench_moment, out, env):
+    """_integrate in the environment (env: a VesselEnvironmentSampler's data) as sampled at the
+    start state: its wind and the bottom's friction are the last two wrench rows (filled here);
+    then the environment is sampled at the new state, its time advanced by dt, and its current and
+    Ankudinov's factors on the linear derivatives set for the next step. One compiled call: the same as Python calls cost twice the step (bench_vessels)."""
+    e = env[E0:E0 + N_SAMPLE]
+    k = wrench_force.shape[0] - 2
+    wrench_force[k, 0], wrench_force[k, 1], wrench_force[k, 2] = e[E_WIND_FX], e[E_WIND_FY], 0.0
+    wrench_point[k, 0], wrench_point[k, 1], wrench_point[k, 2] = e[E_WIND_X], 0.0, e[E_WIND_Z]
+    wrench_force[k + 1, 0], wrench_force[k + 1, 1], wrench_force[k + 1, 2] = e[E_GROUND_FX], e[E_GROUND_FY], 0.0
+    for i in range(3):
+        wrench_point[k + 1, i] = 0.0
+        wrench_moment[k, i] = 0.0
+        wrench_moment[k + 1, i] = 0.0
+    _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+               out)
+    env[P_TIME] += dt
+    sample(env, s[S_X], s[S_Y], s[S_PSI], s[S_U], s[S_V])
+    _apply_environment(e, ctrl, hp)
+    return s
+
+
+@njit(cache=True)
+def _apply_environment(e, ctrl, hp):
+    """The sampled current, and the shallow-water factors of Y'v, Y'r, N'v, N'r on their deep
+    values (hp[H_LIN:]), into ctrl and hp."""
+    ctrl[C_CUR_X], ctrl[C_CUR_Y] = e[E_CURRENT_X], e[E_CURRENT_Y]
+    if hp[H_LIN] >= 0.0:
+        hp[H_C0 + int(hp[H_LIN])] = hp[H_LIN + 4] * e[E_F_YV]
+        hp[H_C0 + int(hp[H_LIN + 1])] = hp[H_LIN + 5] * e[E_F_YR]
+        hp[H_C0 + int(hp[H_LIN + 2])] = hp[H_LIN + 6] * e[E_F_NV]
+        hp[H_C0 + int(hp[H_LIN + 3])] = hp[H_LIN + 7] * e[E_F_NR]
+
+
 # AnchorState members bound once: an Enum class attribute costs ~0.1 us per lookup in step()
 _NO_ANCHOR, _STOWED, _LETTING_GO, _DREDGING, _HEAVING_UP = (
     AnchorState.NONE, AnchorState.STOWED, AnchorState.LETTING_GO, AnchorState.DREDGING, AnchorState.HEAVING_UP)
@@ -770,6 +812,8 @@ class ManeuveringVessel(Vessel):
         self.name = name
         self.source = source
         self.hp = np.ascontiguousarray(hp, float)
+        slots = self._LINEAR_SLOTS.get(int(self.hp[H_FORM]))     # deep-water linear derivatives (H_LIN)
+        self.hp[H_LIN:H_LIN + 8] = (*slots, *self.hp[H_C0 + np.array(slots)]) if slots else -1.0
         self.props = np.ascontiguousarray(props, float).reshape(-1, NPROP) if len(props) else np.zeros((1, NPROP))
         self.ruds = np.ascontiguousarray(ruds, float).reshape(-1, NRUD) if len(ruds) else np.zeros((1, NRUD))
         self.rv = np.ascontiguousarray(res_speed, float)
@@ -804,6 +848,7 @@ class ManeuveringVessel(Vessel):
         self._anchor_side = 0.0
         self._anchor_hold = 1.0   # share of the holding force the chain allows (set_depth)
         self._no_wrench = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
+        self._environment: Optional[VesselEnvironmentSampler] = None   # attach_environment
         self.set_state(initial_state or VesselState.at_rest())
 
     # ---- state and environment ---------------------------------------------------------
@@ -827,6 +872,8 @@ class ManeuveringVessel(Vessel):
         if rudder is not None:
             s[S_DELTA] = rudder
         self._sync_state()
+        if self._environment is not None:
+            self._sample_environment()
 
     def _sync_state(self) -> None:
         s = self.s
@@ -857,18 +904,35 @@ class ManeuveringVessel(Vessel):
             raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
         slots = self._LINEAR_SLOTS.get(int(self.hp[H_FORM]))
         if slots is not None:
-            if not hasattr(self, "_deep_linear"):
-                self._deep_linear = self.hp[[H_C0 + i for i in slots]].copy()
             block = self.volume / (self.length * self.beam * self.draft)
-            f_yv, f_yr, f_nv, f_nr, _ = ankudinov_factors(self.length, self.beam, self.draft, block, depth)
-            for i, deep, f in zip(slots, self._deep_linear, (f_yv, f_yr, f_nv, f_nr)):
+            factors = ankudinov_factors(self.length, self.beam, self.draft, block, depth)[:4]
+            for i, deep, f in zip(slots, self.hp[H_LIN + 4:H_LIN + 8], factors):
                 self.hp[H_C0 + i] = deep * f
+        self._set_anchor_hold(depth)
+
+    def _set_anchor_hold(self, depth: float) -> None:
+        self._anchor_depth = depth
         a = self.anchor_cfg
         if a is None or a.get("chain_out") is None or math.isinf(depth):
             self._anchor_hold = 1.0
         else:
             self._anchor_hold = anchor_holding_factor(a["holding_force"], a["chain_out"], a["chain_weight"],
                                                       depth + a["hawse_height"])
+
+    def attach_environment(self, sampler: VesselEnvironmentSampler) -> None:
+        """From now on every step feels the sampler's environment (current, wind, depth and its
+        factors, the bottom); sampled here on the present state at sampler.time."""
+        self._environment = sampler
+        self._env_rows = (np.empty((2, 3)), np.empty((2, 3)), np.empty((2, 3)))
+        self._anchor_chain = self.anchor_cfg is not None and self.anchor_cfg.get("chain_out") is not None
+        self._sample_environment()
+
+    def _sample_environment(self) -> None:
+        """The attached environment at the present state (set_state keeps it so)."""
+        env, s = self._environment, self.s
+        env.sample(s[S_X], s[S_Y], s[S_PSI], s[S_U], s[S_V])
+        _apply_environment(env.out, self.ctrl, self.hp)
+        self._set_anchor_hold(max(float(env.out[E_DEPTH]), 1e-3))
 
     @property
     def towline_angle(self) -> float:
@@ -1036,21 +1100,29 @@ class ManeuveringVessel(Vessel):
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"{self.name}: dt={dt!r} must be positive and finite")
+        env = self._environment
         if wrenches:
             k = len(wrenches)
-            force = np.empty((k, 3))
-            point = np.empty((k, 3))
-            moment = np.empty((k, 3))
+            rows = k if env is None else k + 2      # + the environment's wind and bottom friction
+            force = np.empty((rows, 3))
+            point = np.empty((rows, 3))
+            moment = np.empty((rows, 3))
             for i, w in enumerate(wrenches):
                 force[i] = w.force_world
                 point[i] = w.point_body
                 moment[i] = w.moment_world
         else:
-            force, point, moment = self._no_wrench
+            force, point, moment = self._no_wrench if env is None else self._env_rows
         if self.anchor_cfg is not None:
             self._update_anchor(dt)
-        _integrate(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv, self.rf, self.minv,
-                   self.ctrl, force, point, moment, self.out)
+        if env is None:
+            _integrate(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv, self.rf,
+                       self.minv, self.ctrl, force, point, moment, self.out)
+        else:
+            _integrate_in_environment(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv,
+                                      self.rf, self.minv, self.ctrl, force, point, moment, self.out, env.data)
+            if self._anchor_chain and env.out[E_DEPTH] != self._anchor_depth:
+                self._set_anchor_hold(max(float(env.out[E_DEPTH]), 1e-3))
         self.time += dt
         self._sync_state()
 

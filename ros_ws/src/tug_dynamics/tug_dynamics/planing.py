@@ -18,6 +18,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from sea_environment.vessel_sampler import E_CURRENT_X, E_CURRENT_Y, VesselEnvironmentSampler
 from tug_dynamics import planing_core as pc
 from tug_dynamics import savitsky
 from tug_dynamics.vessel import (AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
@@ -163,6 +164,7 @@ class PlaningHull(Vessel):
         self._diag = np.zeros(pc.D_ND)
         self._no_wrench = np.zeros((0, 9))
         self._current = np.zeros(3)
+        self._environment: Optional[VesselEnvironmentSampler] = None   # attach_environment
         self._x = np.zeros(12)
         self.state = VesselState.at_rest()
         if initial_state is not None:
@@ -252,10 +254,26 @@ class PlaningHull(Vessel):
         if not float(depth) > 0.0:
             raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
 
+    def attach_environment(self, sampler: VesselEnvironmentSampler) -> None:
+        """From now on every step feels the sampler's environment (current, wind, the bottom;
+        the depth has no other effect, see set_depth); sampled here on the present state."""
+        self._env_rows = np.empty((2, 9))
+        self._environment = sampler
+        self._sample_environment()
+
+    def _sample_environment(self) -> None:
+        """The attached environment at the present state (set_state keeps it so)."""
+        env, s = self._environment, self.state
+        out = env.sample(s.position[0], s.position[1], s.rpy[2], s.linear_velocity_body[0],
+                         s.linear_velocity_body[1])
+        self._current = np.array([out[E_CURRENT_X], out[E_CURRENT_Y], 0.0])
+
     def set_state(self, state: VesselState) -> None:
         """Put the boat in this state as given (set_steady_run finds a planing equilibrium)."""
         self.state = _copied(state)
         self._refresh_diag()
+        if self._environment is not None:
+            self._sample_environment()
 
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         if not (dt > 0.0 and math.isfinite(dt)):
@@ -266,15 +284,21 @@ class PlaningHull(Vessel):
         x[3:6] = s.rpy
         x[6:9] = s.linear_velocity_body
         x[9:12] = s.angular_velocity_body
+        env = self._environment
         if wrenches:
-            rows = np.empty((len(wrenches), 9))     # [F_world, r_body, M_world] per wrench
+            # [F_world, r_body, M_world] per wrench (+ the environment's wind and bottom friction)
+            rows = np.empty((len(wrenches) + (0 if env is None else 2), 9))
             for i, ew in enumerate(wrenches):
                 rows[i, 0:3] = ew.force_world
                 rows[i, 3:6] = ew.point_body
                 rows[i, 6:9] = ew.moment_world
         else:
-            rows = self._no_wrench
-        pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt, self._diag)
+            rows = self._no_wrench if env is None else self._env_rows
+        if env is None:
+            pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt, self._diag)
+        else:
+            pc.integrate_in_environment(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt,
+                                        self._diag, env.data)
         if not np.all(np.isfinite(x)):
             raise FloatingPointError(f"vessel {self.name!r}: state became non-finite")
         s.position[:] = x[0:3]

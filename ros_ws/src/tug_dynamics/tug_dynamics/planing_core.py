@@ -21,6 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
+from sea_environment.vessel_sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_GROUND_FX, E_GROUND_FY, E_WIND_FX,
+                                            E_WIND_FY, E_WIND_X, E_WIND_Z, N_SAMPLE, P_TIME, sample)
 from sim_math.integration import rk4_stage, rk4_update
 from sim_math.linalg import lu_factor, lu_solve
 from sim_math.rotations import matrix_entries_from_trig
@@ -443,3 +445,23 @@ def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag):
         x[5] -= 2.0 * math.pi
     elif x[5] <= -math.pi:
         x[5] += 2.0 * math.pi
+
+
+@njit(cache=True)
+def integrate_in_environment(x, act, cmd, P, C, rtab, wrenches, current, dt, diag, env):
+    """integrate in the environment (env: a VesselEnvironmentSampler's data) as sampled at the
+    start state: its wind and the bottom's friction are the last two wrench rows (filled here);
+    then the environment is sampled at the new state, its time advanced by dt, and its current
+    set for the next step (Savitsky's forces are deep-water ones: the depth changes nothing else)."""
+    e = env[E0:E0 + N_SAMPLE]
+    k = wrenches.shape[0] - 2
+    for i in range(9):
+        wrenches[k, i] = 0.0
+        wrenches[k + 1, i] = 0.0
+    wrenches[k, 0], wrenches[k, 1] = e[E_WIND_FX], e[E_WIND_FY]
+    wrenches[k, 3], wrenches[k, 5] = e[E_WIND_X], e[E_WIND_Z]
+    wrenches[k + 1, 0], wrenches[k + 1, 1] = e[E_GROUND_FX], e[E_GROUND_FY]
+    integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag)
+    env[P_TIME] += dt
+    sample(env, x[0], x[1], x[5], x[6], x[7])
+    current[0], current[1], current[2] = e[E_CURRENT_X], e[E_CURRENT_Y], 0.0

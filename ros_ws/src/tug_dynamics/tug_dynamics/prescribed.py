@@ -100,6 +100,7 @@ class PrescribedMotion(Vessel):
         self.length, self.beam, self.draft, self.volume = base.length, base.beam, base.draft, base.volume
         self.windage = base.windage
         self.time = 0.0
+        self._environment = None    # attach_environment
         self.set_state(base.state)
 
     # ---- commands: validated and held by the base model; they do not move this vessel ----
@@ -120,6 +121,8 @@ class PrescribedMotion(Vessel):
         self.yaw0 = float(state.rpy[2])
         self.time = 0.0
         self._apply()
+        if self._environment is not None:
+            self._sample_environment()
 
     def set_current(self, current_world: Sequence[float]) -> None:
         """Checked, then without effect: the track is prescribed over ground, so the water's
@@ -130,11 +133,25 @@ class PrescribedMotion(Vessel):
     def set_depth(self, depth: float) -> None:
         """Without effect: the track is prescribed."""
 
+    def attach_environment(self, sampler) -> None:
+        """The environment changes nothing on the track; the sampler is kept up to date on every
+        step's state (its apparent wind, depth, squat and clearance are reported)."""
+        self._environment = sampler
+        self._sample_environment()
+
+    def _sample_environment(self) -> None:
+        s = self.state
+        self._environment.sample(s.position[0], s.position[1], s.rpy[2], s.linear_velocity_body[0],
+                                 s.linear_velocity_body[1])
+
     # ---- stepping ---------------------------------------------------------------------------
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         """Advance along the track; wrenches have no effect on a prescribed motion."""
         self.time += dt
         self._apply()
+        if self._environment is not None:
+            self._environment.time += dt
+            self._sample_environment()
 
     def _apply(self) -> None:
         (x, y), (vx, vy), (ax, ay) = self.law.track(self.time)

@@ -225,6 +225,15 @@ class Vessel(ABC):
         """Water depth (m, > 0; math.inf = not given) under the vessel. A model on which the depth
         has no effect says so in its implementation."""
 
+    @abstractmethod
+    def attach_environment(self, sampler) -> None:
+        """From now on every step feels the environment of `sampler` (sea_environment.
+        vessel_sampler.VesselEnvironmentSampler): the model samples it on its present state now
+        and, inside its step, on each new state (time sampler.time), and applies the current,
+        wind, depth and bottom friction of a state over the step that follows it; sampler.out
+        then holds what the environment is at the present state. Used through
+        tug_dynamics.environment_loads.VesselInEnvironment."""
+
     # ---- time stepping and outputs -------------------------------------------------------
     @abstractmethod
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:

@@ -146,8 +146,8 @@ class VesselNode(SteppedNode):
         current = np.array([self.get_parameter("current_east").value, self.get_parameter("current_north").value, 0.0])
         if np.any(current):   # 0, 0 keeps the ship file's own current
             self.model.set_current(current)
+        # attached to the model: from here on its steps feel the environment
         self.surroundings = self._environment(self.get_parameter("environment").value, current)
-        self._environment_wrenches = []
         self._was_grounded = False
 
         self.rejected = 0
@@ -357,8 +357,6 @@ class VesselNode(SteppedNode):
                             else (-on_hull, np.array(msg.fender_point_body)))
             self._contacts[topic] = (force, point)
             wrenches.append(ExternalWrench(force_world=force, point_body=point))
-        if self.surroundings is not None:
-            wrenches += self._environment_wrenches   # of this state, taken when it was published
         self.model.step(self.dt, wrenches)
         self._check_finite()
 
@@ -418,9 +416,7 @@ class VesselNode(SteppedNode):
         st = self.model.status()
         env = _STILL_DEEP
         if self.surroundings is not None:
-            # the environment of the state being published: its wrenches act over the next step
-            self._environment_wrenches = self.surroundings.prepare(self.step_index * self.dt)
-            env = self.surroundings.status
+            env = self.surroundings.status     # of the state being published; it acts over the next step
             if env.grounded != self._was_grounded:
                 self._was_grounded = env.grounded
                 self._report_grounding(env)
