@@ -282,3 +282,49 @@ def test_seabed_keys_in_the_rope_file(tmp_path):
     assert load_rope_params(default_rope_path()).seabed == SeabedParams()
     with pytest.raises(RopeParamsError, match="seabed.slip_speed"):
         TABLE1.replace(seabed=SeabedParams(slip_speed=0.0))
+
+
+def test_attached_environment_equals_sampling_by_the_caller(tmp_path):
+    """attach_environment (the rope samples the fields at its element centres inside its
+    compiled step) against the caller sampling them with the fields' numpy / scipy forms and
+    set_environment before every step (the rope node's way before): a sheared tidal current, a
+    gusty wind on a rope lifted partly out of the water, a bathymetry grid; 100 steps, the two
+    ropes agree to round-off and each step's per-element values equal the numpy ones (the
+    depth inf where an element cannot reach the shallowest seabed: the kernel's shortcut)."""
+    from sea_environment.environment import Environment
+    from sea_environment.sampler import EnvironmentSampler
+    grid = tmp_path / "depth.asc"
+    rows = [" ".join(f"{10.0 + 5.0 * math.sin(0.5 * i + 0.4 * j):.3f}" for j in range(6)) for i in range(5)]
+    grid.write_text("ncols 6\nnrows 5\nxllcorner -60\nyllcorner -50\ncellsize 20\n" + "\n".join(rows) + "\n")
+    env = Environment.from_mapping({
+        "wind": {"speed_kn": 35.0, "from_deg": 300.0, "gusts": True, "seed": 5},
+        "current": {"speed_kn": 1.5, "towards_deg": 20.0, "shear_per_s": 0.004, "tidal_period_s": 600.0},
+        "depth": {"grid": str(grid)}})
+    ropes = []
+    for _ in range(2):
+        rope = RopeChain.straight(TABLE1, (0.0, 0.0, 8.0), (40.0, 10.0, -0.5), n_elements=12, end_b="free")
+        rope.set_end_kinematics("a", (0.0, 0.0, 8.0), (0.5, 0.2, 0.0))
+        ropes.append(rope)
+    fused, by_caller = ropes
+    fused.attach_environment(EnvironmentSampler(env).data)
+    for k in range(100):
+        t = k * DT
+        c = by_caller.element_centres()
+        cur = np.zeros_like(c)
+        cur[:, :2] = env.current_velocity(t, c[:, 0], c[:, 1])
+        wind = np.zeros_like(c)
+        wind[:, :2] = env.wind_velocity(t, c[:, 2])
+        depth = np.asarray(env.depth_at(c[:, 0], c[:, 1]), float)
+        reach = 0.5 * by_caller.lengths + TABLE1.radius + 5.0
+        in_reach = c[:, 2] - reach < -env.depth.grid.values.min()
+        depth = np.where(in_reach, depth, math.inf)
+        by_caller.set_environment(cur, wind, depth)
+        by_caller.step(DT)
+        fused.step(DT)
+        assert fused.env[:, 0:3] == pytest.approx(cur, abs=1e-9)
+        assert fused.env[:, 3:6] == pytest.approx(wind, abs=1e-9)
+        assert fused.env[:, 6] == pytest.approx(depth, abs=1e-9)
+    assert np.max(np.abs(wind[:, :2])) > 10.0 and np.ptp(cur[:, 0]) > 0.01   # the fields did vary
+    assert 0 < np.count_nonzero(in_reach) < len(in_reach)                   # both kinds of element
+    assert fused.positions == pytest.approx(by_caller.positions, abs=1e-9)
+    assert fused.velocities == pytest.approx(by_caller.velocities, abs=1e-9)

@@ -148,6 +148,7 @@ class RopeChain:
         self.V = np.zeros((n, 3))
         self.W = np.zeros((n, 3))
         self.env = self._calm_env(n)
+        self._environment = None    # attach_environment
         self.end_modes = [end_a, end_b]
         self._bind_io()
         self.att_on[:] = [m != "free" for m in self.end_modes]
@@ -270,6 +271,13 @@ class RopeChain:
         """(N, 3) element centres, m, world: where the caller samples the current, wind and
         seabed depth for set_environment (N changes when the winch turns)."""
         return self.X.copy()
+
+    def attach_environment(self, data) -> None:
+        """From now on every step samples the environment itself at the element centres (at
+        its start; the current, wind and seabed depth set_environment would take) from `data`,
+        a sea_environment.sampler.EnvironmentSampler's packed array, whose time it advances by
+        each step's dt. None detaches (the last values stay, as after set_environment)."""
+        self._environment = data
 
     def set_environment(self, current=None, wind=None, seabed_depth=None):
         """The environment for the following steps, sampled by the caller at the element
@@ -796,12 +804,21 @@ class RopeChain:
             h = dt / n_sub
             self._split = (dt, self.max_substep, n_sub, h)
         if self.winch and (self.payout_rate != 0.0 or self.winch_mode != "speed"):
+            if self._environment is not None:    # at the step's start, as the kernel's path below
+                if not self._packed:
+                    self._pack()
+                K.sample_environment(self._S, self._io, self._environment)
+                self._environment[K.P_TIME] += dt
             st = self._step_winch(dt, n_sub, h)
         else:  # the kernel restores the last good state itself on divergence, moves the
             # attachments on and writes the mean end force (impulse / dt)
             if not self._packed:
                 self._pack()
-            st = K.run_substeps(self._S, self._F, self._io, self._ws, h, n_sub, 0.0, dt)
+            if self._environment is None:
+                st = K.run_substeps(self._S, self._F, self._io, self._ws, h, n_sub, 0.0, dt)
+            else:
+                st = K.run_substeps_in_environment(self._S, self._F, self._io, self._ws, h, n_sub, 0.0, dt,
+                                                   self._environment)
             if st == K.PARTED:
                 self._collect_events(self.time)
                 st = K.OK

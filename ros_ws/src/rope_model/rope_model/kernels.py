@@ -42,6 +42,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from sea_environment.environment import tidal_factor
+from sea_environment.sampler import P_TIME, sample_point, wind_at_10m
 from sim_math.linalg import lu_factor, lu_solve, lu_solve_columns
 
 # status codes returned by run_substeps
@@ -1271,6 +1273,42 @@ def set_environment(S, io, cur, wind, depth):
     for a in range(3):
         io[IO_CUR, a] = 0.0
     return -1
+
+
+SEABED_MARGIN = 5.0  # m: further than any element moves in one exchange step (250 m/s at 50 Hz)
+
+
+@njit(cache=True)
+def sample_environment(S, io, env):
+    """The environment (env: a sea_environment.sampler.EnvironmentSampler's data, at its
+    time) at every element centre into S's SCUR / SWIND / SDEPTH columns (horizontal current
+    and wind; inf: no seabed within the element's reach), the uniform current io[IO_CUR] set to 0: what
+    RopeChain.set_environment takes, sampled here instead of by the caller."""
+    N = S.shape[0] - 1
+    tide = tidal_factor(env, env[P_TIME])
+    w10 = wind_at_10m(env)
+    radius = io[P_RADIUS]
+    for j in range(N):
+        # how far below its centre the element may reach within a step: its half length and
+        # radius, with a SEABED_MARGIN (inf beyond it: see sample_point)
+        reach = 0.5 * S[j, SL] + radius + SEABED_MARGIN
+        cx, cy, wx, wy, h = sample_point(env, tide, w10, S[j, SX], S[j, SX + 1], S[j, SX + 2], reach)
+        S[j, SCUR], S[j, SCUR + 1], S[j, SCUR + 2] = cx, cy, 0.0
+        S[j, SWIND], S[j, SWIND + 1], S[j, SWIND + 2] = wx, wy, 0.0
+        S[j, SDEPTH] = h
+    for a in range(3):
+        io[IO_CUR, a] = 0.0
+
+
+@njit(cache=True)
+def run_substeps_in_environment(S, F, io, ws, h, n_sub, payout_a, dt, env):
+    """run_substeps over the exchange step dt in the environment sampled at its start
+    (sample_environment), the environment's time then advanced by dt: one compiled call, as
+    a separate one costs about a tenth of a short rope's step (benchmarks/bench_rope.py)."""
+    sample_environment(S, io, env)
+    st = run_substeps(S, F, io, ws, h, n_sub, payout_a, dt)
+    env[P_TIME] += dt
+    return st
 
 
 # ------------------------------------------------------------------ entry point

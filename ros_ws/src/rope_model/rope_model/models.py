@@ -10,6 +10,8 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
+from sea_environment.environment import Environment
+from sea_environment.sampler import EnvironmentSampler
 from sim_math.rotations import yaw_pitch_quaternions
 
 from rope_model.chain import RopeChain, RopeDivergedError
@@ -91,6 +93,11 @@ class ChainAdapter:
         ValueError naming the argument and element for bad values."""
         self.rope.set_environment(current, wind, seabed_depth)
 
+    def attach_environment(self, env: Environment) -> None:
+        """From now on every step samples `env` (current, wind at each height, seabed depth) at
+        the element centres inside the rope's compiled step, from t = 0 (RopeChain.attach_environment)."""
+        self.rope.attach_environment(EnvironmentSampler(env).data)
+
     def set_payout_rate(self, rate: float) -> List[str]:
         """Winch order, m/s (+ pays out); clamped to the rope file's winch limits. Returns
         the notes of any clamp (empty list: taken as given); ValueError for NaN / inf."""
@@ -142,6 +149,7 @@ class CableAdapter:
                              current=np.asarray(current, float))
         self.breaking_load = float("inf")
         self.radius = 0.5 * self.params.diameter
+        self._env = None    # attach_environment
 
     def set_end(self, label: str, position, velocity) -> None:
         if label == "a":
@@ -175,7 +183,19 @@ class CableAdapter:
                     f"fd_cable: node {i} is at z = {z[i]:.2f} m, below the seabed ({depth:.2f} m deep); the "
                     "finite-difference cable has no bottom contact (use an element_chain rope in shallow water)")
 
+    def attach_environment(self, env: Environment) -> None:
+        """From now on every step samples `env` at the nodes first, from t = 0 (set_environment:
+        the mean current; the seabed check)."""
+        self._env, self._env_time = env, 0.0
+
     def step(self, dt: float) -> None:
+        env = self._env
+        if env is not None:
+            c = self.cable.positions
+            current = np.zeros((c.shape[0], 3))
+            current[:, :2] = env.current_velocity(self._env_time, c[:, 0], c[:, 1])
+            self.set_environment(current, None, None if env.depth.is_deep else env.depth_at(c[:, 0], c[:, 1]))
+            self._env_time += dt
         self.cable.step(dt)
 
     def new_events(self) -> List[Tuple[str, float]]:

@@ -111,7 +111,6 @@ class RopeNode(SteppedNode):
         self.max_substep = gp("max_substep").value
         self.current = (gp("current_east").value, gp("current_north").value, 0.0)
         self.env = None
-        self._uniform_set = False
         if gp("environment").value:
             if any(self.current):
                 raise ValueError("parameters current_east / current_north and environment both give a current: "
@@ -243,6 +242,8 @@ class RopeNode(SteppedNode):
                                equilibrium=self.equilibrium, velocity_b=self.ends[1].velocity,
                                **({"seabed": lambda c: self.env.depth_at(c[:, 0], c[:, 1])}
                                   if self.env is not None and not self.env.depth.is_deep else {}))
+        if self.env is not None:   # from here on every step samples it at the elements, from t = 0
+            self.rope.attach_environment(self.env)
         for end in self.ends:
             if end.mode == "pinned":
                 self.rope.set_end(end.label, end.position, end.velocity)
@@ -255,24 +256,6 @@ class RopeNode(SteppedNode):
                    + " kN)")
         self.get_logger().info(f"rope laid out ({self.rope.name}): {len(out['positions'])} elements/nodes, "
                                f"{out['unstretched_length']:.2f} m deployed{settled}")
-
-    def _sample_environment(self) -> None:
-        """Current, wind and seabed depth at every element's centre for the coming step."""
-        env, t = self.env, self.step_index * self.dt
-        if env.current.uniform is not None and env.wind is None and env.depth.is_deep:
-            if self._uniform_set:
-                return
-            self._uniform_set = True
-        c = self.rope.element_centres()
-        n = c.shape[0]
-        current = np.zeros((n, 3))
-        current[:, :2] = env.current_velocity(t, c[:, 0], c[:, 1])
-        wind = None
-        if env.wind is not None:
-            wind = np.zeros((n, 3))
-            wind[:, :2] = env.wind_velocity(t, c[:, 2])
-        depth = None if env.depth.is_deep else np.asarray(env.depth_at(c[:, 0], c[:, 1]), float)
-        self.rope.set_environment(current=current, wind=wind, seabed_depth=depth)
 
     # -- stepping -------------------------------------------------------------------------
     def compute_step(self, inputs) -> None:
@@ -299,8 +282,6 @@ class RopeNode(SteppedNode):
                 self.clamped += 1
                 if self.complaints("winch clamped", f"winch command clamped: {note}", "warning"):
                     self.emit_event("command_clamped", note)
-        if self.env is not None:
-            self._sample_environment()
         try:
             self.rope.step(self.dt)
         except ModelFailure as exc:

@@ -105,8 +105,9 @@ class DepthGrid:
         """Depth (m) at world (x, y): a float for scalars, an array for arrays. Scalars (a vessel's
         position, every step) go through `bilinear`; arrays through scipy."""
         if np.ndim(x) == 0:
-            return bilinear(self.x[0], self.x[1] - self.x[0], self.y[0], self.y[1] - self.y[0], self.values,
-                             float(x), float(y))
+            ny, nx = self.values.shape
+            return bilinear(self.x[0], self.x[1] - self.x[0], self.y[0], self.y[1] - self.y[0], self.values.ravel(),
+                            0, nx, ny, float(x), float(y))
         xmin, xmax, ymin, ymax = self.bounds
         xs = np.clip(np.asarray(x, float), xmin, xmax)
         ys = np.clip(np.asarray(y, float), ymin, ymax)
@@ -114,17 +115,18 @@ class DepthGrid:
 
 
 @njit(cache=True)
-def bilinear(x0, dx, y0, dy, values, x, y):
-    """Bilinear interpolation on the regular grid, clamped to its edges: what
-    RegularGridInterpolator computes for one point (the tests compare the two), hand-written
-    because scipy's call costs about 26 us, five times a whole vessel model step (measured,
-    benchmarks/bench_vessels.py), and the vessel node asks once per step."""
-    ny, nx = values.shape
+def bilinear(x0, dx, y0, dy, values, at, nx, ny, x, y):
+    """Bilinear interpolation on the regular grid (its ny x nx depths row-major in the flat
+    array values from index `at`: a view of them costs the samplers more than this), clamped
+    to its edges: what RegularGridInterpolator computes for one point (the tests compare the
+    two), hand-written because scipy's call costs about 26 us, five times a whole vessel model
+    step (measured, benchmarks/bench_vessels.py), and the models ask once per step and body."""
     fx = min(max((x - x0) / dx, 0.0), nx - 1.0)
     fy = min(max((y - y0) / dy, 0.0), ny - 1.0)
     i = min(int(fx), nx - 2)
     j = min(int(fy), ny - 2)
     wx = fx - i
     wy = fy - j
-    return ((1.0 - wy) * ((1.0 - wx) * values[j, i] + wx * values[j, i + 1])
-            + wy * ((1.0 - wx) * values[j + 1, i] + wx * values[j + 1, i + 1]))
+    k = at + j * nx + i
+    return ((1.0 - wy) * ((1.0 - wx) * values[k] + wx * values[k + 1])
+            + wy * ((1.0 - wx) * values[k + nx] + wx * values[k + nx + 1]))

@@ -107,10 +107,14 @@ class WindField:
         return np.multiply.outer(s10 * ratio, np.array(self.direction))
 
 
+def profile_c(u10: float) -> float:
+    """C of the ISO 19901-1 mean profile U(z) = U(10 m) (1 + C ln(z/10)) (wind.mean_speed_at)."""
+    return 5.73e-2 * math.sqrt(1.0 + 0.148 * u10)
+
+
 def _profile_ratio(u10: float, z):
     """U(z) / U(10 m) of the ISO 19901-1 mean profile (wind.mean_speed_at)."""
-    c = 5.73e-2 * math.sqrt(1.0 + 0.148 * u10)
-    return 1.0 + c * np.log(z / 10.0)
+    return 1.0 + profile_c(u10) * np.log(z / 10.0)
 
 
 # CurrentField.packed: the field's parameters in the order current_xy reads them
@@ -162,13 +166,26 @@ class CurrentField:
 @njit(cache=True)
 def current_xy(c, t, x, y):
     """CurrentField.velocity_xy on its packed parameters c, as a kernel."""
+    return current_xy_at(c, tidal_factor(c, t), x, y)
+
+
+@njit(cache=True)
+def tidal_factor(c, t):
+    """cos(2 pi t / T + phase) of a reversing stream (1 for a steady one): the time-dependent
+    part, computed once per call where many points are sampled at one time."""
+    return math.cos(c[CUR_OMEGA] * t + c[CUR_PHASE]) if c[CUR_OMEGA] != 0.0 else 1.0
+
+
+@njit(cache=True, inline="always")
+def current_xy_at(c, factor, x, y):
+    """The current at (x, y) at the time whose tidal_factor is `factor`."""
     if c[CUR_UNIFORM] != 0.0:
         return c[CUR_UX], c[CUR_UY]
     hw = c[CUR_HALF_WIDTH]
     s = min(max(x * c[CUR_LEFT_X] + y * c[CUR_LEFT_Y], -hw), hw)
     speed = c[CUR_SPEED] + c[CUR_SHEAR] * s
     if c[CUR_OMEGA] != 0.0:
-        speed *= math.cos(c[CUR_OMEGA] * t + c[CUR_PHASE])
+        speed *= factor
     return speed * c[CUR_AXIS_X], speed * c[CUR_AXIS_Y]
 
 

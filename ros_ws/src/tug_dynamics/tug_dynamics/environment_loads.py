@@ -15,7 +15,7 @@ The environment of a state acts over the step that follows it (sampled once per 
   resists its horizontal motion at the reference point (regularised linearly below GROUND_SLIP
   speed so it stops without chatter).
 
-All of it is computed by sea_environment.vessel_sampler inside the model's compiled step (the
+All of it is computed by sea_environment.sampler inside the model's compiled step (the
 same work as Python calls cost twice a model step: benchmarks/bench_vessels.py).
 """
 from __future__ import annotations
@@ -24,8 +24,8 @@ import dataclasses
 import math
 
 from sea_environment.environment import Environment
-from sea_environment.vessel_sampler import (E_APPARENT_ANGLE, E_APPARENT_SPEED, E_CLEARANCE, E_DEPTH, E_GROUNDED,
-                                            E_SQUAT, VesselEnvironmentSampler)
+from sea_environment.sampler import (E_APPARENT_ANGLE, E_APPARENT_SPEED, E_CLEARANCE, E_DEPTH, E_GROUNDED,
+                                     E_SQUAT, EnvironmentSampler)
 from sea_environment.wind_loads import RHO_AIR
 
 from .vessel import Vessel
@@ -60,7 +60,7 @@ class VesselInEnvironment:
                              "(above-water areas for Blendermann's wind loads)")
         if not env.depth.is_deep and not math.isfinite(vessel.draft):
             raise ValueError(f"{src}: the scenario has a depth but the vessel's draft is unknown")
-        self.sampler = VesselEnvironmentSampler(env, length=vessel.length, beam=vessel.beam, draft=vessel.draft,
+        self.sampler = EnvironmentSampler(env, length=vessel.length, beam=vessel.beam, draft=vessel.draft,
                                                 volume=vessel.volume, windage=vessel.windage, rho_water=rho_water,
                                                 rho_air=rho_air, ground_friction=GROUND_FRICTION,
                                                 ground_slip=GROUND_SLIP)

@@ -39,9 +39,9 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 from numba import njit
 
-from sea_environment.vessel_sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV,
-                                            E_GROUND_FX, E_GROUND_FY, E_WIND_FX, E_WIND_FY, E_WIND_X, E_WIND_Z,
-                                            N_SAMPLE, P_TIME, VesselEnvironmentSampler, sample)
+from sea_environment.sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV,
+                                     E_GROUND_FX, E_GROUND_FY, E_WIND_FX, E_WIND_FY, E_WIND_X, E_WIND_Z,
+                                     N_SAMPLE, P_TIME, EnvironmentSampler, sample)
 from sim_math.integration import rk4_stage, rk4_update
 
 from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, AnchorState, Command, CommandRejected, ExternalWrench,
@@ -733,7 +733,7 @@ def _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_fo
 @njit(cache=True)
 def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point,
                               wrench_moment, out, env):
-    """_integrate in the environment (env: a VesselEnvironmentSampler's data) as sampled at the
+    """_integrate in the environment (env: a EnvironmentSampler's data) as sampled at the
     start state: its wind and the bottom's friction are the last two wrench rows (filled here);
     then the environment is sampled at the new state, its time advanced by dt, and its current and
     Ankudinov's factors on the linear derivatives set for the next step. One compiled call: the same as Python calls cost twice the step (bench_vessels)."""
@@ -848,7 +848,7 @@ class ManeuveringVessel(Vessel):
         self._anchor_side = 0.0
         self._anchor_hold = 1.0   # share of the holding force the chain allows (set_depth)
         self._no_wrench = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
-        self._environment: Optional[VesselEnvironmentSampler] = None   # attach_environment
+        self._environment: Optional[EnvironmentSampler] = None   # attach_environment
         self.set_state(initial_state or VesselState.at_rest())
 
     # ---- state and environment ---------------------------------------------------------
@@ -919,7 +919,7 @@ class ManeuveringVessel(Vessel):
             self._anchor_hold = anchor_holding_factor(a["holding_force"], a["chain_out"], a["chain_weight"],
                                                       depth + a["hawse_height"])
 
-    def attach_environment(self, sampler: VesselEnvironmentSampler) -> None:
+    def attach_environment(self, sampler: EnvironmentSampler) -> None:
         """From now on every step feels the sampler's environment (current, wind, depth and its
         factors, the bottom); sampled here on the present state at sampler.time."""
         self._environment = sampler

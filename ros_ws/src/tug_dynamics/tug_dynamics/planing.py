@@ -18,7 +18,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from sea_environment.vessel_sampler import E_CURRENT_X, E_CURRENT_Y, VesselEnvironmentSampler
+from sea_environment.sampler import E_CURRENT_X, E_CURRENT_Y, EnvironmentSampler
 from tug_dynamics import planing_core as pc
 from tug_dynamics import savitsky
 from tug_dynamics.vessel import (AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
@@ -164,7 +164,7 @@ class PlaningHull(Vessel):
         self._diag = np.zeros(pc.D_ND)
         self._no_wrench = np.zeros((0, 9))
         self._current = np.zeros(3)
-        self._environment: Optional[VesselEnvironmentSampler] = None   # attach_environment
+        self._environment: Optional[EnvironmentSampler] = None   # attach_environment
         self._x = np.zeros(12)
         self.state = VesselState.at_rest()
         if initial_state is not None:
@@ -254,7 +254,7 @@ class PlaningHull(Vessel):
         if not float(depth) > 0.0:
             raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
 
-    def attach_environment(self, sampler: VesselEnvironmentSampler) -> None:
+    def attach_environment(self, sampler: EnvironmentSampler) -> None:
         """From now on every step feels the sampler's environment (current, wind, the bottom;
         the depth has no other effect, see set_depth); sampled here on the present state."""
         self._env_rows = np.empty((2, 9))

@@ -21,8 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
-from sea_environment.vessel_sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_GROUND_FX, E_GROUND_FY, E_WIND_FX,
-                                            E_WIND_FY, E_WIND_X, E_WIND_Z, N_SAMPLE, P_TIME, sample)
+from sea_environment.sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_GROUND_FX, E_GROUND_FY, E_WIND_FX,
+                                     E_WIND_FY, E_WIND_X, E_WIND_Z, N_SAMPLE, P_TIME, sample)
 from sim_math.integration import rk4_stage, rk4_update
 from sim_math.linalg import lu_factor, lu_solve
 from sim_math.rotations import matrix_entries_from_trig
@@ -449,7 +449,7 @@ def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag):
 
 @njit(cache=True)
 def integrate_in_environment(x, act, cmd, P, C, rtab, wrenches, current, dt, diag, env):
-    """integrate in the environment (env: a VesselEnvironmentSampler's data) as sampled at the
+    """integrate in the environment (env: a EnvironmentSampler's data) as sampled at the
     start state: its wind and the bottom's friction are the last two wrench rows (filled here);
     then the environment is sampled at the new state, its time advanced by dt, and its current
     set for the next step (Savitsky's forces are deep-water ones: the depth changes nothing else)."""

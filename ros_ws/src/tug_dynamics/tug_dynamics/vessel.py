@@ -228,7 +228,7 @@ class Vessel(ABC):
     @abstractmethod
     def attach_environment(self, sampler) -> None:
         """From now on every step feels the environment of `sampler` (sea_environment.
-        vessel_sampler.VesselEnvironmentSampler): the model samples it on its present state now
+        sampler.EnvironmentSampler): the model samples it on its present state now
         and, inside its step, on each new state (time sampler.time), and applies the current,
         wind, depth and bottom friction of a state over the step that follows it; sampler.out
         then holds what the environment is at the present state. Used through

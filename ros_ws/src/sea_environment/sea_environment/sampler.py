@@ -1,13 +1,15 @@
-"""The environment at one vessel, in one compiled call: the current at its reference point, the
-apparent wind and Blendermann's wind force, the depth, Ankudinov's shallow-water factors, squat,
-the under-keel clearance and the bottom's friction when aground. No ROS.
+"""The environment of a run packed for compiled code, and sampled in one compiled call: for a
+vessel (`sample`) the current at its reference point, the apparent wind and Blendermann's wind
+force, the depth, Ankudinov's shallow-water factors, squat, the under-keel clearance and the
+bottom's friction when aground; for a point of a rope (`sample_point`) the current, the wind at
+its height and the depth. No ROS.
 
-A vessel model calls `sample` from inside its own compiled step, once per exchange step, on the
-state it has just reached (the values then hold over the next step). Every piece is the kernel
-the rest of this package uses (current_xy, gust_speed, apparent_wind_xy, wind_wrench,
-bilinear, squat, ankudinov_factors): one implementation, which the package's tests check
-against their published sources. Why compiled: the same work as Python function calls cost
-about twice a whole vessel model step (measured, benchmarks/bench_vessels.py).
+The models call these from inside their own compiled steps, once per exchange step, on the state
+they have just reached (the values then hold over the next step). Every piece is a kernel the
+rest of this package uses (current_xy, gust_speed, apparent_wind_xy, wind_wrench, bilinear,
+squat, ankudinov_factors): one implementation, which the package's tests check against their
+published sources. Why compiled: the same work as Python function calls cost about twice a
+whole vessel model step (measured, benchmarks/bench_vessels.py).
 
 Grounding (the physics is tug_dynamics.environment_loads'; its constants come in the
 parameters): below zero clearance the lost buoyancy rho g A_wp (T + squat - h) presses the hull
@@ -22,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from .bathymetry import bilinear
-from .environment import N_CURRENT, Environment, current_xy
+from .environment import N_CURRENT, Environment, current_xy, current_xy_at, profile_c as _profile_c
 from .shallow_water import ankudinov_factors, squat
 from .wind import apparent_wind_xy, gust_speed
 from .wind_loads import wind_wrench
@@ -35,8 +37,8 @@ G = 9.80665
 # depth grid (row-major, south row first).
 (P_TIME, P_HAS_WIND, P_WIND_MEAN, P_WIND_DIR_X, P_WIND_DIR_Y, P_GUST_DT, P_GUST_PERIOD, P_GUST_AT, P_GUST_N,
  P_DEPTH_KIND, P_DEPTH, P_GRID_X0, P_GRID_DX, P_GRID_Y0, P_GRID_DY, P_GRID_AT, P_GRID_NX, P_GRID_NY,
- P_LENGTH, P_BEAM, P_DRAFT, P_VOLUME, P_RHO_WATER, P_RHO_AIR, P_FRICTION, P_SLIP,
- P_WINDAGE) = range(N_CURRENT, N_CURRENT + 27)
+ P_LENGTH, P_BEAM, P_DRAFT, P_VOLUME, P_RHO_WATER, P_RHO_AIR, P_FRICTION, P_SLIP, P_WIND_PROFILE,
+ P_WIND_LOW, P_DEPTH_MIN, P_WINDAGE) = range(N_CURRENT, N_CURRENT + 30)
 N_PARAMS = P_WINDAGE + 10       # Windage.parameters(): Blendermann's five, then the five particulars
 DEEP, UNIFORM_DEPTH, DEPTH_GRID = 0.0, 1.0, 2.0
 
@@ -49,13 +51,14 @@ DEEP, UNIFORM_DEPTH, DEPTH_GRID = 0.0, 1.0, 2.0
 E0 = N_PARAMS                   # where the sample starts in the data array
 
 
-class VesselEnvironmentSampler:
-    """The packed environment and particulars of one vessel (.data), the sample of its present
-    state (.out, a view) and the simulation time of that sample (.time)."""
+class EnvironmentSampler:
+    """The packed environment (.data) with the particulars of one vessel (for `sample`; a rope's
+    `sample_point` needs none), the sample of a vessel's present state (.out, a view) and the
+    simulation time the samples are taken at (.time)."""
 
-    def __init__(self, env: Environment, *, length: float, beam: float, draft: float, volume: float,
-                 windage=None, rho_water: float = 1025.0, rho_air: float = 1.225,
-                 ground_friction: float = 0.4, ground_slip: float = 0.05):
+    def __init__(self, env: Environment, *, length: float = math.nan, beam: float = math.nan,
+                 draft: float = math.nan, volume: float = math.nan, windage=None, rho_water: float = 1025.0,
+                 rho_air: float = 1.225, ground_friction: float = 0.4, ground_slip: float = 0.05):
         p = np.zeros(N_PARAMS + N_SAMPLE)
         p[:N_CURRENT] = env.current.packed
         gust, grid = np.zeros(0), np.zeros((0, 0))
@@ -67,7 +70,10 @@ class VesselEnvironmentSampler:
             if wind.record is not None:
                 p[P_GUST_DT], p[P_GUST_PERIOD] = wind.record.dt, wind.record.period
                 gust = np.asarray(wind.record.gust, float)
-            p[P_WINDAGE:N_PARAMS] = windage.parameters()
+            p[P_WIND_PROFILE] = _profile_c(wind.u10)
+            p[P_WIND_LOW] = 1.0 + p[P_WIND_PROFILE] * math.log(1.0 / 10.0)
+            if windage is not None:
+                p[P_WINDAGE:N_PARAMS] = windage.parameters()
         depth = env.depth
         if depth.grid is not None:
             g = depth.grid
@@ -76,8 +82,12 @@ class VesselEnvironmentSampler:
             p[P_GRID_Y0], p[P_GRID_DY] = g.y[0], g.y[1] - g.y[0]
             grid = np.asarray(g.values, float)
             p[P_GRID_NY], p[P_GRID_NX] = grid.shape
+            p[P_DEPTH_MIN] = grid.min()
         elif not depth.is_deep:
             p[P_DEPTH_KIND], p[P_DEPTH] = UNIFORM_DEPTH, depth.uniform
+            p[P_DEPTH_MIN] = depth.uniform
+        else:
+            p[P_DEPTH_MIN] = math.inf
         p[P_LENGTH], p[P_BEAM], p[P_DRAFT], p[P_VOLUME] = length, beam, draft, volume
         p[P_RHO_WATER], p[P_RHO_AIR], p[P_FRICTION], p[P_SLIP] = rho_water, rho_air, ground_friction, ground_slip
         p[P_GUST_AT], p[P_GUST_N] = p.size, gust.size
@@ -101,21 +111,59 @@ class VesselEnvironmentSampler:
 
 
 @njit(cache=True)
+def wind_at_10m(data):
+    """The wind speed at 10 m (mean + gust) at time data[P_TIME]; 0 without wind."""
+    p = data
+    if p[P_HAS_WIND] == 0.0:
+        return 0.0
+    if p[P_GUST_N] == 0.0:
+        return p[P_WIND_MEAN]
+    at = int(p[P_GUST_AT])
+    return gust_speed(p[P_WIND_MEAN], data[at:at + int(p[P_GUST_N])], p[P_GUST_DT], p[P_GUST_PERIOD], p[P_TIME])
+
+
+@njit(cache=True, inline="always")
+def depth_at(data, x, y):
+    """The depth at (x, y): the grid's bilinear value, the uniform depth or inf (deep)."""
+    p = data
+    if p[P_DEPTH_KIND] == DEEP:
+        return math.inf
+    if p[P_DEPTH_KIND] == DEPTH_GRID:
+        at, nx, ny = int(p[P_GRID_AT]), int(p[P_GRID_NX]), int(p[P_GRID_NY])
+        return bilinear(p[P_GRID_X0], p[P_GRID_DX], p[P_GRID_Y0], p[P_GRID_DY], data, at, nx, ny, x, y)
+    return p[P_DEPTH]
+
+
+@njit(cache=True, inline="always")
+def sample_point(data, tide, w10, x, y, z, reach):
+    """(current east, north; wind east, north; depth) at (x, y, z) at the time whose tidal
+    factor (environment.tidal_factor) and 10 m wind (wind_at_10m) are `tide` and `w10` (the
+    time-dependent parts: once per call for a whole rope). The wind at height z follows the
+    ISO 19901-1 mean profile, heights below 1 m counting as 1 m (as WindField.velocity). The
+    depth is inf (no seabed) where a body reaching `reach` metres below z cannot touch even the
+    shallowest seabed: the same contact, without the interpolation (half a short rope's cost)."""
+    p = data
+    cx, cy = current_xy_at(p, tide, x, y)
+    if z > 1.0:
+        w = w10 * (1.0 + p[P_WIND_PROFILE] * math.log(z / 10.0))
+    else:       # at and below 1 m: the profile's value at 1 m (no log per submerged element)
+        w = w10 * p[P_WIND_LOW]
+    h = depth_at(data, x, y) if z - reach < -p[P_DEPTH_MIN] else math.inf
+    return cx, cy, w * p[P_WIND_DIR_X], w * p[P_WIND_DIR_Y], h
+
+
+@njit(cache=True)
 def sample(data, x, y, yaw, u, v):
     """The E_* values at time data[P_TIME] for a vessel at (x, y) heading yaw (rad) moving at
     (u, v) (body, m/s), into data[E0:]."""
     p = data
     e = data[E0:E0 + N_SAMPLE]
-    t = p[P_TIME]
-    cx, cy = current_xy(p, t, x, y)
+    cx, cy = current_xy(p, p[P_TIME], x, y)
     e[E_CURRENT_X], e[E_CURRENT_Y] = cx, cy
     c, s = math.cos(yaw), math.sin(yaw)
     vx, vy = c * u - s * v, s * u + c * v               # horizontal velocity over ground
     if p[P_HAS_WIND] != 0.0:
-        w10 = p[P_WIND_MEAN]
-        if p[P_GUST_N] > 0.0:
-            at = int(p[P_GUST_AT])
-            w10 = gust_speed(w10, data[at:at + int(p[P_GUST_N])], p[P_GUST_DT], p[P_GUST_PERIOD], t)
+        w10 = wind_at_10m(data)
         speed, angle = apparent_wind_xy(w10 * p[P_WIND_DIR_X], w10 * p[P_WIND_DIR_Y], vx, vy, yaw)
         w = P_WINDAGE
         fx, fy, xp, zp, _n = wind_wrench(speed, angle, p[P_RHO_AIR], p[w], p[w + 1], p[w + 2], p[w + 3],
@@ -131,12 +179,7 @@ def sample(data, x, y, yaw, u, v):
         e[E_DEPTH], e[E_SQUAT], e[E_CLEARANCE] = math.inf, 0.0, math.inf
         e[E_F_YV] = e[E_F_YR] = e[E_F_NV] = e[E_F_NR] = 1.0
         return
-    if p[P_DEPTH_KIND] == DEPTH_GRID:
-        at, nx, ny = int(p[P_GRID_AT]), int(p[P_GRID_NX]), int(p[P_GRID_NY])
-        h = bilinear(p[P_GRID_X0], p[P_GRID_DX], p[P_GRID_Y0], p[P_GRID_DY],
-                     data[at:at + nx * ny].reshape((ny, nx)), x, y)
-    else:
-        h = p[P_DEPTH]
+    h = depth_at(data, x, y)
     length, beam, draft, volume = p[P_LENGTH], p[P_BEAM], p[P_DRAFT], p[P_VOLUME]
     block = volume / (length * beam * draft)
     # 0 (dry land in a grid) -> aground, not an error
