@@ -354,15 +354,15 @@ def test_s175_turns_wider_in_shallow_water_and_as_in_deep_water_beyond_h_over_t_
 
 
 # ---- the compiled sampler a vessel's step calls ------------------------------------------------
-def test_vessel_sampler_equals_the_fields_numpy_and_scipy_forms(tmp_path):
-    """The one compiled call per step (sea_environment.vessel_sampler) against the fields'
+def test_sampler_equals_the_fields_numpy_and_scipy_forms(tmp_path):
+    """The one compiled call per step (sea_environment.sampler) against the fields'
     vectorised numpy forms (current, wind), scipy's RegularGridInterpolator (depth) and the
     wind-load, squat and Ankudinov functions composed here by hand, at 200 random states."""
     from sea_environment.shallow_water import ankudinov_factors
-    from sea_environment.vessel_sampler import (E_APPARENT_ANGLE, E_APPARENT_SPEED, E_CLEARANCE, E_CURRENT_X,
-                                                E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV, E_GROUND_FX,
-                                                E_GROUND_FY, E_GROUNDED, E_SQUAT, E_WIND_FX, E_WIND_FY, E_WIND_X,
-                                                E_WIND_Z, VesselEnvironmentSampler)
+    from sea_environment.sampler import (E_APPARENT_ANGLE, E_APPARENT_SPEED, E_CLEARANCE, E_CURRENT_X,
+                                         E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV, E_GROUND_FX,
+                                         E_GROUND_FY, E_GROUNDED, E_SQUAT, E_WIND_FX, E_WIND_FY, E_WIND_X,
+                                         E_WIND_Z, EnvironmentSampler)
     grid = tmp_path / "depth.asc"
     rows = [" ".join(f"{4.0 + 3.0 * math.sin(0.4 * i + 0.3 * j):.3f}" for j in range(9)) for i in range(7)]
     grid.write_text("ncols 9\nnrows 7\nxllcorner -450\nyllcorner -350\ncellsize 100\n" + "\n".join(rows) + "\n")
@@ -372,7 +372,7 @@ def test_vessel_sampler_equals_the_fields_numpy_and_scipy_forms(tmp_path):
         "depth": {"grid": str(grid)}})
     w = Windage("tender", 40.0, 110.0, 1.5, 2.5, 28.0)
     length, beam, draft, volume = 28.0, 9.0, 3.0, 400.0
-    sampler = VesselEnvironmentSampler(env, length=length, beam=beam, draft=draft, volume=volume, windage=w,
+    sampler = EnvironmentSampler(env, length=length, beam=beam, draft=draft, volume=volume, windage=w,
                                        ground_friction=0.4, ground_slip=0.05)
     rng = np.random.default_rng(7)
     grounded = 0
