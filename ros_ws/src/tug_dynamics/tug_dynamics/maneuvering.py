@@ -1114,6 +1114,9 @@ class ManeuveringVessel(Vessel):
         else:
             force, point, moment = self._no_wrench if env is None else self._env_rows
         if self.anchor_cfg is not None:
+            if (env is not None and self._anchor_chain and self._anchor_state != _STOWED
+                    and env.out[E_DEPTH] != self._anchor_depth):   # stowed, the chain's hold does not matter
+                self._set_anchor_hold(max(float(env.out[E_DEPTH]), 1e-3))
             self._update_anchor(dt)
         if env is None:
             _integrate(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv, self.rf,
@@ -1121,8 +1124,6 @@ class ManeuveringVessel(Vessel):
         else:
             _integrate_in_environment(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv,
                                       self.rf, self.minv, self.ctrl, force, point, moment, self.out, env.data)
-            if self._anchor_chain and env.out[E_DEPTH] != self._anchor_depth:
-                self._set_anchor_hold(max(float(env.out[E_DEPTH]), 1e-3))
         self.time += dt
         self._sync_state()
 
