@@ -213,18 +213,10 @@ ENV_MODES = ("calm", "field once", "environment attached", "line pulled, no seab
 
 
 def _bench_environment():
-    """Gusty 25 kn wind, a 2 kn tidal stream with shear and a 41 x 41 bathymetry grid 480-520 m
-    deep (the vessel benchmark's fields, deep enough that the line never touches)."""
-    from sea_environment.environment import Environment
-    grid = os.path.join(tempfile.mkdtemp(), "bench_depth.asc")
-    with open(grid, "w") as f:
-        f.write("ncols 41\nnrows 41\nxllcorner -10000\nyllcorner -10000\ncellsize 500\n")
-        for i in range(41):
-            f.write(" ".join(f"{500.0 + 20.0 * math.sin(0.3 * i + 0.2 * j):.2f}" for j in range(41)) + "\n")
-    return Environment.from_mapping({
-        "wind": {"speed_kn": 25.0, "from_deg": 250.0, "gusts": True, "seed": 1},
-        "current": {"speed_kn": 2.0, "towards_deg": 80.0, "shear_per_s": 0.0005, "tidal_period_s": 44712.0},
-        "depth": {"grid": grid}})
+    """The vessel benchmark's fields, the grid 480-520 m deep (the line never touches)."""
+    sys.path.insert(0, HERE)
+    from bench_vessels import bench_environment
+    return bench_environment(tempfile.mkdtemp(), mean_depth=500.0)
 
 
 def env_run(n, seconds, max_substep, mode):

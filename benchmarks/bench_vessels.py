@@ -53,13 +53,14 @@ def time_steps(vessels, dt, wrenches, n=2000, repeats=5):
     return [float(np.median(t)) for t in times]
 
 
-def bench_environment(tmpdir):
-    """Gusty 25 kn wind, a 2 kn tidal stream with shear, a 41 x 41 bathymetry grid (20-60 m)."""
+def bench_environment(tmpdir, mean_depth=40.0):
+    """Gusty 25 kn wind, a 2 kn tidal stream with shear, a 41 x 41 bathymetry grid (mean_depth
+    +- 20 m; bench_rope uses it too, 500 m deep)."""
     grid = os.path.join(tmpdir, "bench_depth.asc")
     with open(grid, "w") as f:
         f.write("ncols 41\nnrows 41\nxllcorner -10000\nyllcorner -10000\ncellsize 500\n")
         for i in range(41):
-            f.write(" ".join(f"{40.0 + 20.0 * math.sin(0.3 * i + 0.2 * j):.2f}" for j in range(41)) + "\n")
+            f.write(" ".join(f"{mean_depth + 20.0 * math.sin(0.3 * i + 0.2 * j):.2f}" for j in range(41)) + "\n")
     return Environment.from_mapping({
         "wind": {"speed_kn": 25.0, "from_deg": 250.0, "gusts": True, "seed": 1},
         "current": {"speed_kn": 2.0, "towards_deg": 80.0, "shear_per_s": 0.0005, "tidal_period_s": 44712.0},
