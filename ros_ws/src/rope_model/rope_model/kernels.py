@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit
 
 from sea_environment.environment import tidal_factor
-from sea_environment.sampler import P_TIME, sample_point, wind_at_10m
+from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at, flow_at_point, wind_at_10m
 from sim_math.linalg import lu_factor, lu_solve, lu_solve_columns
 
 # status codes returned by run_substeps
@@ -1287,14 +1287,22 @@ def sample_environment(S, io, env):
     N = S.shape[0] - 1
     tide = tidal_factor(env, env[P_TIME])
     w10 = wind_at_10m(env)
-    radius = io[P_RADIUS]
+    # two loops, the depth's branch written out in the loop: as one loop, or through a helper
+    # function, sampling cost 12-24 ns per element, as here 5 ns (N = 200, measured)
     for j in range(N):
-        # how far below its centre the element may reach within a step: its half length and
-        # radius, with a SEABED_MARGIN (inf beyond it: see sample_point)
-        reach = 0.5 * S[j, SL] + radius + SEABED_MARGIN
-        cx, cy, wx, wy, h = sample_point(env, tide, w10, S[j, SX], S[j, SX + 1], S[j, SX + 2], reach)
+        cx, cy, wx, wy = flow_at_point(env, tide, w10, S[j, SX], S[j, SX + 1], S[j, SX + 2])
         S[j, SCUR], S[j, SCUR + 1], S[j, SCUR + 2] = cx, cy, 0.0
         S[j, SWIND], S[j, SWIND + 1], S[j, SWIND + 2] = wx, wy, 0.0
+    radius = io[P_RADIUS]
+    shallowest_bed_z = -env[P_DEPTH_MIN]
+    for j in range(N):
+        # depth inf (no seabed, the same contact without the interpolation) where the element
+        # cannot reach the shallowest seabed within a step: its half length and radius, with
+        # a SEABED_MARGIN
+        reach = 0.5 * S[j, SL] + radius + SEABED_MARGIN
+        h = math.inf
+        if S[j, SX + 2] - reach < shallowest_bed_z:
+            h = depth_at(env, S[j, SX], S[j, SX + 1])
         S[j, SDEPTH] = h
     for a in range(3):
         io[IO_CUR, a] = 0.0

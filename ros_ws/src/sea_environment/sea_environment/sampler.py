@@ -1,8 +1,8 @@
 """The environment of a run packed for compiled code, and sampled in one compiled call: for a
 vessel (`sample`) the current at its reference point, the apparent wind and Blendermann's wind
 force, the depth, Ankudinov's shallow-water factors, squat, the under-keel clearance and the
-bottom's friction when aground; for a point of a rope (`sample_point`) the current, the wind at
-its height and the depth. No ROS.
+bottom's friction when aground; for a point of a rope (`flow_at_point`, `depth_at`) the current, the wind at its height and
+the depth. No ROS.
 
 The models call these from inside their own compiled steps, once per exchange step, on the state
 they have just reached (the values then hold over the next step). Every piece is a kernel the
@@ -53,7 +53,7 @@ E0 = N_PARAMS                   # where the sample starts in the data array
 
 class EnvironmentSampler:
     """The packed environment (.data) with the particulars of one vessel (for `sample`; a rope's
-    `sample_point` needs none), the sample of a vessel's present state (.out, a view) and the
+    points need none), the sample of a vessel's present state (.out, a view) and the
     simulation time the samples are taken at (.time)."""
 
     def __init__(self, env: Environment, *, length: float = math.nan, beam: float = math.nan,
@@ -135,21 +135,18 @@ def depth_at(data, x, y):
 
 
 @njit(cache=True, inline="always")
-def sample_point(data, tide, w10, x, y, z, reach):
-    """(current east, north; wind east, north; depth) at (x, y, z) at the time whose tidal
-    factor (environment.tidal_factor) and 10 m wind (wind_at_10m) are `tide` and `w10` (the
+def flow_at_point(data, tide, w10, x, y, z):
+    """(current east, north; wind east, north) at (x, y, z) at the time whose tidal factor
+    (environment.tidal_factor) and 10 m wind (wind_at_10m) are `tide` and `w10` (the
     time-dependent parts: once per call for a whole rope). The wind at height z follows the
-    ISO 19901-1 mean profile, heights below 1 m counting as 1 m (as WindField.velocity). The
-    depth is inf (no seabed) where a body reaching `reach` metres below z cannot touch even the
-    shallowest seabed: the same contact, without the interpolation (half a short rope's cost)."""
+    ISO 19901-1 mean profile, heights below 1 m counting as 1 m (as WindField.velocity)."""
     p = data
     cx, cy = current_xy_at(p, tide, x, y)
     if z > 1.0:
         w = w10 * (1.0 + p[P_WIND_PROFILE] * math.log(z / 10.0))
     else:       # at and below 1 m: the profile's value at 1 m (no log per submerged element)
         w = w10 * p[P_WIND_LOW]
-    h = depth_at(data, x, y) if z - reach < -p[P_DEPTH_MIN] else math.inf
-    return cx, cy, w * p[P_WIND_DIR_X], w * p[P_WIND_DIR_Y], h
+    return cx, cy, w * p[P_WIND_DIR_X], w * p[P_WIND_DIR_Y]
 
 
 @njit(cache=True)
