@@ -11,8 +11,13 @@
    free-end depth (Table 1 grid, 7 nodes, and a 49-node / dt 0.05 s reference).
 
 BLAS is pinned to one thread so both solvers use one core. Prints markdown tables.
+--environment prints the cost of the environment instead (issue 18): the turning case through
+the rope node's CableAdapter with bench_vessels' gusty wind, tidal sheared current and
+bathymetry grid (480-520 m deep) attached, against the same cable given that current's value
+at the origin once (the same physics to within the shear; CPU time, modes interleaved).
 
 Usage: PYTHONPATH=ros_ws/src/rope_model python benchmarks/bench_fd_cable.py [--seconds 100]
+       [--environment]
 """
 import os
 
@@ -79,10 +84,53 @@ def best_time(fn, min_total=0.2):
     return best
 
 
+def environment_run(n, dt, seconds, attached, env):
+    """CPU us per step of the turning case through CableAdapter, the environment `env`
+    attached, or its current at the origin given once."""
+    from rope_model.models import CableAdapter
+    cable = CableAdapter(default_cable_path(), "straight", (0.0, 0.0, 0.0), None, end_a="vessel",
+                         end_b="free", current=(-1.0, 0.0, 0.0), n_elements=n, deployed_length=None,
+                         max_substep=dt, velocity_a=(P.tow_speed, 0.0, 0.0))
+    if attached:
+        cable.attach_environment(env)
+    else:
+        cable.cable.current = np.array([*env.current.velocity_xy(0.0, 0.0, 0.0), 0.0])
+    steps = int(round(seconds / dt))
+    t0 = time.process_time()
+    for k in range(1, steps + 1):
+        psi = RATE * k * dt
+        cable.set_end("a", P.tow_speed / RATE * np.array([math.sin(psi), 1.0 - math.cos(psi), 0.0]),
+                      P.tow_speed * np.array([math.cos(psi), math.sin(psi), 0.0]))
+        cable.step(dt)
+    return 1e6 * (time.process_time() - t0) / steps
+
+
+def environment_table(seconds, repeat=5):
+    import tempfile
+    sys.path.insert(0, HERE)
+    sys.path.insert(0, os.path.join(HERE, "..", "ros_ws", "src", "sea_environment"))
+    from bench_vessels import bench_environment
+    env = bench_environment(tempfile.mkdtemp(), mean_depth=500.0)
+    print("| nodes | dt (s) | current given once: CPU us per step | environment attached: CPU us per step (cost) |")
+    print("|---:|---:|---:|---:|")
+    for n, dt in ((7, 0.1), (7, 0.02), (50, 0.1), (50, 0.02)):
+        environment_run(n, dt, 1.0, True, env)  # compile / load the numba cache
+        runs = {True: [], False: []}
+        for _ in range(repeat):  # interleaved: the machine's speed drifts
+            for attached in (False, True):
+                runs[attached].append(environment_run(n, dt, seconds, attached, env))
+        once, att = min(runs[False]), min(runs[True])
+        print(f"| {n} | {dt:g} | {once:.0f} | {att:.0f} ({100 * (att / once - 1):+.1f} %) |", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=100.0, help="simulated time per speed run")
+    ap.add_argument("--environment", action="store_true", help="the cost of the environment (issue 18)")
     args = ap.parse_args()
+    if args.environment:
+        environment_table(args.seconds)
+        return
 
     turning(7, 0.1, 1.0)  # compile / load the numba cache outside the timings
 

@@ -557,14 +557,9 @@ class FdCable:
 
         Integrated from the towing point along the stretched tangent (1+e) t (trapezoid rule).
         """
-        tri = self._tri_world()
-        e1 = 1.0 + self.H[:, 0] / self.params.ea
-        d = (e1[:, None] * tri[:, 0])
-        seg = 0.5 * self.ds * (d[1:] + d[:-1])  # r[j+1] - r[j], paper order
         pos = np.empty((self.n, 3))
-        pos[-1] = self._state_top
-        pos[:-1] = self._state_top - np.cumsum(seg[::-1], axis=0)[::-1]
-        return pos[::-1].copy()
+        FK.node_positions(self.H, self._R, self.params.ea, self.ds, self._state_top, pos)
+        return pos
 
     @property
     def velocities(self):

@@ -34,6 +34,8 @@ import math
 import numpy as np
 from numba import njit
 
+from sea_environment.environment import current_xy_at, tidal_factor
+from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at
 from sim_math.linalg import lu_factor, lu_solve_columns
 
 NV = 10
@@ -400,3 +402,52 @@ def blocks_to_dense(A, D, C):
         if k < n - 1:
             M[k * m:(k + 1) * m, (k + 1) * m:(k + 2) * m] = C[k]
     return M
+
+
+# ------------------------------------------------------------------ node positions, environment
+@njit(cache=True)
+def node_positions(H, R, ea, ds, top, out):
+    """World positions of the nodes into out (n, 3), index 0 = the towing point `top`:
+    integrated from it along the stretched tangent (1 + T/EA) t by the trapezoid rule (H in the
+    paper's order, index 0 = the free end; R: world = R @ paper). FdCable.positions, compiled
+    because the rope node needs them every step (outputs, environment)."""
+    n = H.shape[0]
+    sx = sy = sz = 0.0
+    dx1 = dy1 = dz1 = 0.0
+    for k in range(n - 1, -1, -1):
+        e1 = 1.0 + H[k, 0] / ea
+        cp, sp, ct, st = math.cos(H[k, 6]), math.sin(H[k, 6]), math.cos(H[k, 7]), math.sin(H[k, 7])
+        t0, t1, t2 = ct * cp, ct * sp, -st
+        dx = e1 * (R[0, 0] * t0 + R[0, 1] * t1 + R[0, 2] * t2)
+        dy = e1 * (R[1, 0] * t0 + R[1, 1] * t1 + R[1, 2] * t2)
+        dz = e1 * (R[2, 0] * t0 + R[2, 1] * t1 + R[2, 2] * t2)
+        if k < n - 1:
+            sx += 0.5 * ds * (dx + dx1)
+            sy += 0.5 * ds * (dy + dy1)
+            sz += 0.5 * ds * (dz + dz1)
+        out[n - 1 - k, 0] = top[0] - sx
+        out[n - 1 - k, 1] = top[1] - sy
+        out[n - 1 - k, 2] = top[2] - sz
+        dx1, dy1, dz1 = dx, dy, dz
+
+
+@njit(cache=True)
+def sample_environment(positions, env):
+    """The environment (env: a sea_environment.sampler.EnvironmentSampler's data, at its time)
+    at the nodes, as CableAdapter.set_environment takes it: (mean current east, north over the
+    nodes; the first node below the seabed, -1 for none; the depth there)."""
+    n = positions.shape[0]
+    tide = tidal_factor(env, env[P_TIME])
+    sx = sy = 0.0
+    for i in range(n):
+        cx, cy = current_xy_at(env, tide, positions[i, 0], positions[i, 1])
+        sx += cx
+        sy += cy
+    shallowest_bed_z = -env[P_DEPTH_MIN]
+    for i in range(n):
+        z = positions[i, 2]
+        if z < shallowest_bed_z:
+            h = depth_at(env, positions[i, 0], positions[i, 1])
+            if z < -h:
+                return sx / n, sy / n, i, h
+    return sx / n, sy / n, -1, math.inf

@@ -11,9 +11,10 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from sea_environment.environment import Environment
-from sea_environment.sampler import EnvironmentSampler
+from sea_environment.sampler import P_TIME, EnvironmentSampler
 from sim_math.rotations import yaw_pitch_quaternions
 
+from rope_model import fd_kernels as FK
 from rope_model.chain import RopeChain, RopeDivergedError
 from rope_model.fd_cable import FdCable, FdCableConvergenceError, load_cable_params
 from rope_model.params import load_rope_params
@@ -178,24 +179,22 @@ class CableAdapter:
             below = np.nonzero(z < -np.asarray(seabed_depth, float))[0]
             if below.size:
                 i = int(below[0])
-                depth = float(np.broadcast_to(seabed_depth, z.shape)[i])
-                raise CableOnSeabedError(
-                    f"fd_cable: node {i} is at z = {z[i]:.2f} m, below the seabed ({depth:.2f} m deep); the "
-                    "finite-difference cable has no bottom contact (use an element_chain rope in shallow water)")
+                raise _on_seabed(i, z[i], float(np.broadcast_to(seabed_depth, z.shape)[i]))
 
     def attach_environment(self, env: Environment) -> None:
-        """From now on every step samples `env` at the nodes first, from t = 0 (set_environment:
-        the mean current; the seabed check)."""
-        self._env, self._env_time = env, 0.0
+        """From now on every step samples `env` at the nodes first, from t = 0, in one compiled
+        call (fd_kernels.sample_environment; what set_environment takes: the mean current; the
+        seabed check)."""
+        self._env = EnvironmentSampler(env).data
 
     def step(self, dt: float) -> None:
         env = self._env
         if env is not None:
-            c = self.cable.positions
-            current = np.zeros((c.shape[0], 3))
-            current[:, :2] = env.current_velocity(self._env_time, c[:, 0], c[:, 1])
-            self.set_environment(current, None, None if env.depth.is_deep else env.depth_at(c[:, 0], c[:, 1]))
-            self._env_time += dt
+            cx, cy, below, depth = FK.sample_environment(self.cable.positions, env)
+            if below >= 0:
+                raise _on_seabed(below, self.cable.positions[below, 2], depth)
+            self.cable.current = np.array([cx, cy, 0.0])
+            env[P_TIME] += dt
         self.cable.step(dt)
 
     def new_events(self) -> List[Tuple[str, float]]:
@@ -212,6 +211,12 @@ class CableAdapter:
                     angular_velocities=c.angular_velocities, lengths=c.segment_lengths,
                     tensions=np.maximum(c.tensions, 0.0), piece_starts=[0], unstretched_length=c.unstretched_length,
                     mass=c.total_mass, line=c.positions, broken=False)
+
+
+def _on_seabed(node: int, z: float, depth: float) -> CableOnSeabedError:
+    return CableOnSeabedError(
+        f"fd_cable: node {node} is at z = {z:.2f} m, below the seabed ({depth:.2f} m deep); the "
+        "finite-difference cable has no bottom contact (use an element_chain rope in shallow water)")
 
 
 def make_model(path: str, layout: str, p_a, p_b, **kw):
