@@ -128,7 +128,7 @@ def test_runner_refuses_answers_not_of_this_run_step_or_node(rclpy_context):
         c.destroy_node()
 
 
-def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_path, ros_domain):
+def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_path, ros_domain, full_domain_check):
     log_dir = tmp_path / "logs"
     first = subprocess.Popen(runner(None, "--log-dir", str(log_dir), duration=600), stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
@@ -155,7 +155,7 @@ def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_pat
 
 
 @pytest.mark.parametrize("victims", ["runner", "all"])
-def test_a_run_after_a_killed_run_on_the_same_domain(tmp_path, ros_domain, victims):
+def test_a_run_after_a_killed_run_on_the_same_domain(tmp_path, ros_domain, victims, full_domain_check):
     """The runner killed with SIGKILL (its nodes then end on their own), or runner and nodes
     killed at once (a container stopped, the OOM killer): the next run on that domain runs to
     its end. (Ports of Fast DDS's shared-memory transport that a killed process still held stay
@@ -349,3 +349,15 @@ def test_nonfinite_vessel_state_is_named_by_the_vessel_node(start_node, rclpy_co
     node.destroy_node()
     assert vessel.proc.returncode == 3, vessel.log()
     assert "vessel 'tug' diverged at step" in vessel.log() and "not finite" in vessel.log()
+
+
+@pytest.mark.parametrize("text", ["soon", "-1", "nan", "inf"])
+def test_a_bad_domain_check_wait_is_refused_naming_the_variable(monkeypatch, text):
+    from scenario_runner.conductor import DOMAIN_CHECK_WAIT_VARIABLE, RunError, domain_discovery_wait
+    monkeypatch.setenv(DOMAIN_CHECK_WAIT_VARIABLE, text)
+    with pytest.raises(RunError, match=f"{DOMAIN_CHECK_WAIT_VARIABLE}='{text}': expected a number of seconds >= 0"):
+        domain_discovery_wait()
+    monkeypatch.setenv(DOMAIN_CHECK_WAIT_VARIABLE, "0.5")
+    assert domain_discovery_wait() == 0.5
+    monkeypatch.delenv(DOMAIN_CHECK_WAIT_VARIABLE)
+    assert domain_discovery_wait() == 3.0

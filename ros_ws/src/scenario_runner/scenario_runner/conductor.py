@@ -118,6 +118,25 @@ class Interrupted(Exception):
 # (30 trials on this machine; Fast DDS's announcement period is 3 s); with 1 s a run already
 # on the domain went unseen now and then
 DOMAIN_DISCOVERY_WAIT = 3.0
+# where the domain is known to be one's own (the test suite reserves one per test), the wait can
+# be shortened: TUGSIM_DOMAIN_CHECK_WAIT=<s>
+DOMAIN_CHECK_WAIT_VARIABLE = "TUGSIM_DOMAIN_CHECK_WAIT"
+
+
+def domain_discovery_wait() -> float:
+    """s of discovery before the domain check: DOMAIN_DISCOVERY_WAIT, or the environment's
+    TUGSIM_DOMAIN_CHECK_WAIT (a number of seconds >= 0; RunError naming it otherwise)."""
+    text = os.environ.get(DOMAIN_CHECK_WAIT_VARIABLE)
+    if text is None:
+        return DOMAIN_DISCOVERY_WAIT
+    try:
+        wait = float(text)
+    except ValueError:
+        wait = math.nan
+    if not (math.isfinite(wait) and wait >= 0.0):
+        raise RunError(f"{DOMAIN_CHECK_WAIT_VARIABLE}={text!r}: expected a number of seconds >= 0 "
+                       f"(unset: {DOMAIN_DISCOVERY_WAIT:g} s)")
+    return wait
 # s between looks at the ROS graph for external nodes that have left it (run(external=...))
 GRAPH_CHECK_PERIOD = 0.25
 
@@ -473,8 +492,10 @@ class Conductor(Node):
             found.discard(own_pub)
         return sorted(found)
 
-    def check_domain(self, executor, wait: float = DOMAIN_DISCOVERY_WAIT) -> None:
-        """Refuse to start on a domain where another run (or its leftover nodes) is present."""
+    def check_domain(self, executor, wait: Optional[float] = None) -> None:
+        """Refuse to start on a domain where another run (or its leftover nodes) is present,
+        after `wait` s of discovery (None: domain_discovery_wait())."""
+        wait = domain_discovery_wait() if wait is None else wait
         while time.monotonic() < self.created + wait:
             executor.spin_once(timeout_sec=0.02)
         found = self.foreign_participants()
