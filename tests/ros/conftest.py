@@ -109,7 +109,8 @@ def ros_domain():
 
 @pytest.fixture
 def full_domain_check(ros_domain):
-    """The runner's look for another run on the domain as users get it (its default wait)."""
+    """The runner's look for another run on the domain as users get it (its default wait; also
+    the time an observer in the test process has to match the nodes before step 0)."""
     os.environ.pop(DOMAIN_CHECK_WAIT_VARIABLE, None)
     yield
 

@@ -133,7 +133,9 @@ async def _clients(port, expected, report):
         await p.close()
 
 
-def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context):
+def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context, full_domain_check):
+    # full_domain_check: the runner's 3 s of discovery before its nodes start is what lets this
+    # test's own observer match them before step 0 (it checks every step's odometry)
     from ament_index_python.packages import get_package_share_directory
     from rclpy.serialization import deserialize_message
     from scenario_runner.recorder import message_definition

@@ -50,14 +50,17 @@ def _yaw(q):
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
-def _decoded(path, topics):
-    """topic -> decoded messages in stamp order, for the topics asked only (mcap-ros2-support)."""
+def _decoded(path, topics, until_s=None):
+    """topic -> decoded messages in stamp order, for the topics asked only (mcap-ros2-support);
+    with until_s only those logged before that simulated time (the recorder logs at simulated
+    time from 0: decoding is most of this test's time, a whole run's several times its start)."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
     out = {t: [] for t in topics}
+    end = None if until_s is None else int(until_s * 1e9)
     with open(path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=list(topics)):
+        for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=list(topics), ending_before=end):
             out[channel.topic].append(msg)
     return {t: sorted(m, key=_stamp) for t, m in out.items()}
 
@@ -211,7 +214,7 @@ def test_scenario_runs_and_its_recording_holds_physics(path, ros_domain, tmp_pat
         whole = os.path.basename(path)[:-5] in WHOLE_RUN
         out = _recorded(path, tmp_path, None if whole else min(WINDOW, float(scenario["duration"])))
         msgs = {t: [m for m in ms if _stamp(m) - _stamp(ms[0]) <= DURATION + 1e-9]
-                for t, ms in _decoded(out, topics).items()}
+                for t, ms in _decoded(out, topics, until_s=DURATION + 2.0).items()}
     else:
         out = tmp_path / "run.mcap"
         proc = run_scenario(path, "--duration", str(DURATION), "--output", str(out))
