@@ -149,6 +149,14 @@ def _grid_file(tmp_path, rows, header=None, name="depth.asc"):
     return str(path)
 
 
+def wavy_grid_file(tmp_path, nx, ny, corner, cell, mean, amplitude, ki, kj):
+    """An ESRI grid of depths mean + amplitude sin(ki i + kj j) (row i, column j), its lower-left
+    corner at `corner` (the samplers' tests: a seabed that varies in both directions)."""
+    rows = [[f"{mean + amplitude * math.sin(ki * i + kj * j):.3f}" for j in range(nx)] for i in range(ny)]
+    return _grid_file(tmp_path, rows, [f"ncols {nx}", f"nrows {ny}", f"xllcorner {corner[0]}",
+                                       f"yllcorner {corner[1]}", f"cellsize {cell}"])
+
+
 def test_bathymetry_grid_reproduces_a_plane(tmp_path):
     """Bilinear interpolation is exact for a plane: depth = 10 + 0.02 x - 0.01 y sampled at the
     cell centres (x = -75, -25, 25, 75; y = 75 (first row, north), 25, -25)."""
@@ -363,9 +371,7 @@ def test_sampler_equals_the_fields_numpy_and_scipy_forms(tmp_path):
                                          E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV, E_GROUND_FX,
                                          E_GROUND_FY, E_GROUNDED, E_SQUAT, E_WIND_FX, E_WIND_FY, E_WIND_X,
                                          E_WIND_Z, EnvironmentSampler)
-    grid = tmp_path / "depth.asc"
-    rows = [" ".join(f"{4.0 + 3.0 * math.sin(0.4 * i + 0.3 * j):.3f}" for j in range(9)) for i in range(7)]
-    grid.write_text("ncols 9\nnrows 7\nxllcorner -450\nyllcorner -350\ncellsize 100\n" + "\n".join(rows) + "\n")
+    grid = wavy_grid_file(tmp_path, 9, 7, (-450, -350), 100, 4.0, 3.0, 0.4, 0.3)
     env = Environment.from_mapping({
         "wind": {"speed_kn": 30.0, "from_deg": 200.0, "gusts": True, "seed": 3},
         "current": {"speed_kn": 2.5, "towards_deg": 70.0, "shear_per_s": 0.001, "tidal_period_s": 3000.0},

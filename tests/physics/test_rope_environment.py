@@ -293,9 +293,8 @@ def test_attached_environment_equals_sampling_by_the_caller(tmp_path):
     depth inf where an element cannot reach the shallowest seabed: the kernel's shortcut)."""
     from sea_environment.environment import Environment
     from sea_environment.sampler import EnvironmentSampler
-    grid = tmp_path / "depth.asc"
-    rows = [" ".join(f"{10.0 + 5.0 * math.sin(0.5 * i + 0.4 * j):.3f}" for j in range(6)) for i in range(5)]
-    grid.write_text("ncols 6\nnrows 5\nxllcorner -60\nyllcorner -50\ncellsize 20\n" + "\n".join(rows) + "\n")
+    from test_environment import wavy_grid_file
+    grid = wavy_grid_file(tmp_path, 6, 5, (-60, -50), 20, 10.0, 5.0, 0.5, 0.4)
     env = Environment.from_mapping({
         "wind": {"speed_kn": 35.0, "from_deg": 300.0, "gusts": True, "seed": 5},
         "current": {"speed_kn": 1.5, "towards_deg": 20.0, "shear_per_s": 0.004, "tidal_period_s": 600.0},

@@ -1,8 +1,8 @@
 """The environment of a run packed for compiled code, and sampled in one compiled call: for a
 vessel (`sample`) the current at its reference point, the apparent wind and Blendermann's wind
 force, the depth, Ankudinov's shallow-water factors, squat, the under-keel clearance and the
-bottom's friction when aground; for a point of a rope (`flow_at_point`, `depth_at`) the current, the wind at its height and
-the depth. No ROS.
+bottom's friction when aground; for a point of a rope or cable (`flow_at_point`, `depth_at`)
+the current, the wind at its height and the depth. No ROS.
 
 The models call these from inside their own compiled steps, once per exchange step, on the state
 they have just reached (the values then hold over the next step). Every piece is a kernel the
