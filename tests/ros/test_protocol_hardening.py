@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import executable_path, processes_of_domain, spin_until
+from conftest import DOMAIN_CHECK_WAIT_VARIABLE, executable_path, processes_of_domain, spin_until
 from test_recording import physics, _node_pid
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
@@ -44,11 +44,20 @@ def _domain_nodes(domain):
 
 
 def _wait_until_stepping(domain, log_dir, timeout=120):
-    deadline = time.monotonic() + timeout
-    log = log_dir / "towline_rope.log"
-    while time.monotonic() < deadline and not (log.exists() and "laid out" in log.read_text()):
-        time.sleep(0.2)
-    time.sleep(1.0)
+    """Until the run's /clock is past step 0 (its start-up checks are behind it)."""
+    import rclpy
+    from rclpy.node import Node
+    from rosgraph_msgs.msg import Clock
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx, domain_id=domain)
+    try:
+        node = Node("stepping_watch", context=ctx)
+        seen = []
+        node.create_subscription(Clock, "/clock", lambda m: seen.append(m.clock.sec * 10**9 + m.clock.nanosec), 10)
+        assert spin_until(node, lambda: any(t > 0 for t in seen), timeout), f"no step past 0 (logs: {log_dir})"
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
 
 
 def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_context):
@@ -58,12 +67,13 @@ def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_c
     from tug_msgs.msg import SimStep, StepDone
     from sim_plumbing import ros_common as rc
     clean = tmp_path / "clean.mcap"
-    assert subprocess.run(runner(clean, duration=40), capture_output=True, text=True, timeout=240).returncode == 0
+    # long enough (about 7 s of wall time) for the stranger to be discovered while the run steps
+    assert subprocess.run(runner(clean, duration=120), capture_output=True, text=True, timeout=240).returncode == 0
     stop = threading.Event()
     sent = [0]
     disturbed = tmp_path / "disturbed.mcap"
     log_dir = tmp_path / "disturbed_logs"
-    proc = subprocess.Popen(runner(disturbed, duration=40), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    proc = subprocess.Popen(runner(disturbed, duration=120), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     # the stranger appears once the run is under way (before, the runner rightly refuses the domain)
     _wait_until_stepping(ros_domain, log_dir)
@@ -184,17 +194,30 @@ def test_a_run_after_a_killed_run_on_the_same_domain(tmp_path, ros_domain, victi
     assert not any(os.path.exists(p) for p in planted)
 
 
-def test_leftover_lockstep_node_is_refused_by_the_next_run(tmp_path, ros_domain, start_node):
+@pytest.mark.parametrize("check_wait", ["default", "0"])
+def test_leftover_lockstep_node_is_refused_by_the_next_run(tmp_path, ros_domain, start_node, monkeypatch,
+                                                           check_wait):
     """A lockstep node on the domain that is not this run's (left by a killed runner, or started
-    by hand) would mix its latched outputs into the run: the runner refuses to start, naming it."""
+    by hand) would mix its latched outputs into the run: the runner refuses to start, naming it.
+    With no discovery wait the look before the start sees nothing: the stray, a second /tug/vessel,
+    is then found once the run's nodes are up, before step 0."""
+    if check_wait == "default":
+        monkeypatch.delenv(DOMAIN_CHECK_WAIT_VARIABLE)
+    else:
+        monkeypatch.setenv(DOMAIN_CHECK_WAIT_VARIABLE, check_wait)
     stray = start_node("tug_dynamics", "vessel_node", "--ros-args", "-r", "__ns:=/tug", "-p",
                        "ship_file:=harbour_tug.yaml", "-p", "lockstep:=true", "-p", "run_id:=old-run")
     time.sleep(3.0)
-    proc = subprocess.run(runner(None, "--log-dir", str(tmp_path / "logs")), capture_output=True, text=True,
+    out = tmp_path / "refused.mcap"
+    proc = subprocess.run(runner(out, "--log-dir", str(tmp_path / "logs")), capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == 4, proc.stdout + proc.stderr
-    assert "/tug/vessel" in proc.stderr and f"ROS_DOMAIN_ID={ros_domain}" in proc.stderr
+    assert "/tug/vessel" in proc.stderr and f"ROS_DOMAIN_ID={ros_domain}" in proc.stderr, proc.stderr
+    if check_wait == "0":
+        assert "seen once this run's nodes were up; nothing was stepped" in proc.stderr, proc.stderr
+        assert "2 nodes named /tug/vessel (takes /sim/step)" in proc.stderr, proc.stderr
     assert stray.proc.poll() is None  # the stranger is named, not touched
+    assert not out.exists() and "no recording written" in proc.stderr  # nothing that passes for a run
 
 
 @pytest.mark.parametrize("layout", ["processes", "one_process"])

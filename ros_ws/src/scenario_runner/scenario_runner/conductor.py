@@ -107,7 +107,8 @@ class RunError(RuntimeError):
 
 
 class DomainInUse(RunError):
-    """Another run, or nodes left by one, are on this ROS domain: refused before anything starts."""
+    """Another run, or nodes left by one, are on this ROS domain: refused before anything starts
+    or, if seen only once this run's nodes are up, before step 0."""
 
 
 class Interrupted(Exception):
@@ -492,22 +493,44 @@ class Conductor(Node):
             found.discard(own_pub)
         return sorted(found)
 
+    def unexpected_participants(self, local: Sequence[str]) -> List[str]:
+        """Once this run's nodes are up: step-protocol endpoints beyond one per node of the run
+        (`local`: the names of this process's other nodes). A node of another run under one of
+        this run's names, or any the look before the start missed (discovery can take seconds)."""
+        me = self.get_fully_qualified_name()
+        own = self.expected | set(local)
+        found = []
+        for topic, kind, infos, allowed in (
+                (rc.SIM_STEP_TOPIC, "publishes", self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC), {me}),
+                (rc.SIM_STEP_TOPIC, "takes", self.get_subscriptions_info_by_topic(rc.SIM_STEP_TOPIC), own),
+                (rc.STEP_DONE_TOPIC, "answers on", self.get_publishers_info_by_topic(rc.STEP_DONE_TOPIC), own)):
+            for node, count in sorted(collections.Counter(_node_of(i) for i in infos).items()):
+                if node not in allowed:
+                    found.append(f"node {node} ({kind} {topic})")
+                elif count > 1:
+                    found.append(f"{count} nodes named {node} ({kind} {topic}): one is not this run's")
+        return found
+
     def check_domain(self, executor, wait: Optional[float] = None) -> None:
         """Refuse to start on a domain where another run (or its leftover nodes) is present,
         after `wait` s of discovery (None: domain_discovery_wait())."""
         wait = domain_discovery_wait() if wait is None else wait
         while time.monotonic() < self.created + wait:
             executor.spin_once(timeout_sec=0.02)
-        found = self.foreign_participants()
+        self.refuse_if_found(executor, self.foreign_participants)
+
+    def refuse_if_found(self, executor, look: Callable[[], List[str]], when: str = "") -> None:
+        """DomainInUse naming what look() finds (after a moment for names still unknown)."""
+        found = look()
         # endpoints are discovered before the names of their nodes: give the names a moment
         deadline = time.monotonic() + 3.0
         while any("_UNKNOWN_" in f for f in found) and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
-            found = self.foreign_participants()
+            found = look()
         if found:
             domain = os.environ.get("ROS_DOMAIN_ID", "0")
             raise DomainInUse(
-                f"ROS_DOMAIN_ID={domain} is in use by another run: {'; '.join(found)}. Stop that run (or its "
+                f"ROS_DOMAIN_ID={domain} is in use by another run{when}: {'; '.join(found)}. Stop that run (or its "
                 f"leftover nodes), or start this one on another domain, e.g. ROS_DOMAIN_ID={(int(domain) + 1) % 101}")
 
     def _on_odom(self, name: str, msg: Odometry) -> None:
@@ -784,6 +807,12 @@ class _Session:
         self.instruments.start()
         self.wait_for(0, ready_timeout, "starting up")
         self._wait_for_matches(ready_timeout)
+        # a stranger seen only now (the look before the start is one discovery window) is refused
+        # before step 0, so nothing of it can mix into the run
+        local = [n.get_fully_qualified_name() for n in extra_nodes + ([recorder] if recorder else [])
+                 + self.local_nodes]
+        conductor.refuse_if_found(self.executor, lambda: conductor.unexpected_participants(local),
+                                  " (seen once this run's nodes were up; nothing was stepped)")
         if self.external:
             self.gone_external()  # notes the external nodes in the graph: from now on, leaving it stops the run
 

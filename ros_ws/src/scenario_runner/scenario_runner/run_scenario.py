@@ -8,7 +8,7 @@ time), progress is shown, everything is shut down, and a summary is printed. Wit
 runner drives nodes somebody else started (other PCs; --print-nodes gives their commands): it
 waits for them to announce themselves and records their outputs by subscription. Exit status:
 0 done, 2 invalid scenario, 3 a node died / stopped answering / failed, 4 the ROS domain is
-in use by another run (refused before anything starts), 130 Ctrl-C, 143 SIGTERM (both stop the
+in use by another run (refused before step 0, no recording left), 130 Ctrl-C, 143 SIGTERM (both stop the
 nodes and finalise the recording).
 """
 from __future__ import annotations
@@ -382,7 +382,7 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
     if not args.quiet:
         from tqdm import tqdm
         progress = tqdm(total=plan.steps, unit="step", desc=plan.sc.name, file=sys.stderr, mininterval=0.5)
-    finalise_failed = False
+    finalise_failed = refused = False
     try:
         stats = cd.run(plan.sc, plan.path, plan.log_dir, steps=plan.steps, extra_nodes=[mon] + ([live] if live else []),
                        recorder=recorder,
@@ -402,6 +402,7 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
         if progress:
             progress.close()
         sys.stderr.write(f"run_scenario: refused to start: {exc}\n")
+        refused = True
         return None, 4
     except cd.RunError as exc:
         if progress:
@@ -424,6 +425,9 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
                                  f"finalised: {exc}; it ends readably where the write failed: "
                                  f"{readable_extent(output)}\n")
                 finalise_failed = True
+            if refused:  # no step was run: a file of start-up messages would pass for a recording
+                os.remove(output)
+                sys.stderr.write(f"run_scenario: no recording written ({os.path.abspath(output)} removed)\n")
         mon.destroy_node()
         if live is not None:
             live.destroy_node()
