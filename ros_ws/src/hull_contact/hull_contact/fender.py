@@ -163,13 +163,12 @@ def contact_from_ship_files(spec: FenderSpec, fender_ship: str, fender: str, hul
     outline of hull_ship (each with its ship_overrides merged), and the fender point (body, 3D).
     Raises ValueError naming the file and the attachment when the fender is not there."""
     from sim_math.hull_plan import HullDimensions, waterline_outline
-    from sim_math.input_files import load_yaml
-    from tug_dynamics.ship_file import _deep_merge, load_ship   # the merge load_ship applies
+    from tug_dynamics.ship_file import load_ship, ship_config   # the file and merge load_ship reads
     points = load_ship(fender_ship, overrides=fender_overrides).attachments
     if fender not in points:
         raise ValueError(f"ship file {fender_ship}: no attachment '{fender}' for the fender "
                          f"(it has {sorted(points)})")
     point = np.asarray(points[fender], float)
     load_ship(hull_ship, overrides=hull_overrides)   # the same checks as the vessel node's
-    dims = HullDimensions.from_ship_config(_deep_merge(load_yaml(hull_ship), hull_overrides or {}))
+    dims = HullDimensions.from_ship_config(ship_config(hull_ship, hull_overrides)[1])
     return FenderContact(spec, point[:2], waterline_outline(dims)), point

@@ -18,7 +18,7 @@ import glob
 import math
 import os
 import re
-from typing import Any, List, Optional
+from typing import Any, List, Optional, Tuple
 
 import numpy as np
 from pydantic import ValidationError
@@ -131,15 +131,9 @@ def _check_estimated(src: str, cfg: dict) -> None:
                 raise ShipFileError(f"{src}: key 'estimated.{dotted}': names a key the file does not have")
 
 
-def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[VesselState] = None,
-              *, overrides: Optional[dict] = None) -> Vessel:
-    """Build the vessel a ship file describes.
-
-    path: a file path, or a bare file name looked up in ships_dir().
-    name: vessel name (default: the file's ``name``). initial_state: default at rest at the origin.
-    overrides: nested dict merged over the file before parsing (tests, scenario variants).
-    Raises ShipFileError naming the file and the key (also for planing-hull files).
-    """
+def ship_config(path: str, overrides: Optional[dict] = None) -> Tuple[str, dict]:
+    """(absolute path, the file's mapping with `overrides` merged in) of a ship file: a path, or
+    a bare file name looked up in ships_dir(). ShipFileError naming the file otherwise."""
     if not os.path.exists(path) and not os.path.isabs(path):
         cand = os.path.join(ships_dir(), path)
         if os.path.exists(cand):
@@ -152,6 +146,19 @@ def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[Ves
         if not isinstance(overrides, dict):
             raise ShipFileError(f"{src}: overrides must be a mapping, got {type(overrides).__name__}")
         cfg = _deep_merge(cfg, overrides)
+    return src, cfg
+
+
+def load_ship(path: str, name: Optional[str] = None, initial_state: Optional[VesselState] = None,
+              *, overrides: Optional[dict] = None) -> Vessel:
+    """Build the vessel a ship file describes.
+
+    path: a file path, or a bare file name looked up in ships_dir().
+    name: vessel name (default: the file's ``name``). initial_state: default at rest at the origin.
+    overrides: nested dict merged over the file before parsing (tests, scenario variants).
+    Raises ShipFileError naming the file and the key (also for planing-hull files).
+    """
+    src, cfg = ship_config(path, overrides)
     model = cfg.get("model")
     if model is None:
         raise ShipFileError(f"{src}: key 'model': required key is missing (displacement | planing_6dof)")

@@ -51,14 +51,6 @@ _STILL_DEEP = EnvironmentStatus()   # what status reports without an environment
 THRUSTER_COMMAND = "thruster_command"   # the per-thruster order input (tug_msgs/ThrusterCommand)
 
 
-def _merged(base: dict, over: Optional[dict]) -> dict:
-    """base with the mapping over merged in (nested mappings merged key by key)."""
-    out = dict(base)
-    for key, value in (over or {}).items():
-        out[key] = _merged(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
-    return out
-
-
 class VesselNode(SteppedNode):
     LIVE_PARAMETERS = ("marker_rate", "marker_force_scale")  # the scene only: no effect on the physics
 
@@ -119,7 +111,7 @@ class VesselNode(SteppedNode):
                                       self.get_parameter("initial_yaw").value)
         initial.linear_velocity_body[0] = self.get_parameter("initial_speed").value
 
-        from tug_dynamics.ship_file import load_ship
+        from tug_dynamics.ship_file import load_ship, ship_config
         overrides_text = self.get_parameter("ship_overrides").value
         overrides = yaml.safe_load(overrides_text) if overrides_text else None
         if overrides is not None and not isinstance(overrides, dict):
@@ -162,8 +154,7 @@ class VesselNode(SteppedNode):
         self.tf_pub = self.create_fed_publisher(TFMessage, rc.TF_TOPIC, rc.TF_QOS)
         self.tf_static_pub = self.create_fed_publisher(TFMessage, rc.TF_STATIC_TOPIC, rc.TF_STATIC_QOS)
         self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
-        with open(path) as f:  # checked by load_ship above
-            ship_cfg = _merged(yaml.safe_load(f), overrides)
+        ship_cfg = ship_config(path, overrides)[1]  # checked by load_ship above
         self.scene = VesselScene(self.vessel_name, HullDimensions.from_ship_config(ship_cfg), self.model.attachments)
         self._rope_forces = {}  # wrench topic -> (attachment point, force in body axes) of the last step
         self.attach_pub = self.create_fed_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
