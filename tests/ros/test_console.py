@@ -123,7 +123,7 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain, cap
             if run.poll() is None:
                 run.kill()
     assert run.returncode == 0, stderr
-    rec = decoded(str(out))
+    rec = decoded(str(out), ["/tug/command", "/tug/status"])
     cmds = rec["/tug/command"]
     t = lambda m: m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
     ns = lambda m: m.header.stamp.sec * 10**9 + m.header.stamp.nanosec

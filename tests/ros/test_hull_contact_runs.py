@@ -53,7 +53,9 @@ def runs(tmp_path_factory):
         os.environ["ROS_DOMAIN_ID"] = str(did)
         for name, extra in (("first", ()), ("one_process", ("--layout", "one_process"))):
             _run(base / f"{name}.mcap", *extra)
-            out[name] = _decoded(base / f"{name}.mcap")
+            out[name] = _decoded(base / f"{name}.mcap", [f"/{v}/{t}" for v in ("ship", "bow_tug", "stern_tug")
+                                                          for t in ("odom", "status")]
+                                 + ["/push_aft/state", "/bow_line/state", "/scenario/events"])
     return out
 
 

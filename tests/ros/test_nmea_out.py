@@ -145,7 +145,8 @@ def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
     # bad destinations: each reported exactly once, the run went on (every step recorded)
     assert log.count("'bad host!'") == 1 and "is invalid" in log, log
     assert log.count("255.255.255.255:10110 for 'tug' refuses") == 1, log
-    rec = decoded(str(out))
+    rec = decoded(str(out), [f"/{v}/{t}" for v in ("tug", "barge") for t in ("odom", "status")]
+                  + ["/towline/state"])
     n_steps = int(DURATION * 50)
     assert len(rec["/tug/odom"]) == n_steps + 1
 

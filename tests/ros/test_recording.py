@@ -26,20 +26,24 @@ def run(out, *extra):
     return proc
 
 
-def decoded(path):
-    """topic -> list of decoded messages, with mcap-ros2-support."""
+def decoded(path, topics=None, until_s=None):
+    """topic -> list of decoded messages (of `topics`, or all; with until_s those logged before
+    that simulated time: the recorder logs at simulated time from 0), with mcap-ros2-support.
+    Its decoder is pure Python: asking only for what a test reads saves most of the time."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
     out = defaultdict(list)
+    end = None if until_s is None else int(until_s * 1e9)
     with open(path, "rb") as f:
-        for _schema, channel, _message, msg in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=topics, ending_before=end):
             out[channel.topic].append(msg)
     return out
 
 
 def physics(path):
     """The decoded vessel and rope states as arrays, keyed by topic and step."""
-    msgs = decoded(path)
+    msgs = decoded(path, ["/tug/odom", "/barge/odom", "/towline/state"])
     values = {}
     for v in ("tug", "barge"):
         values[v] = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.orientation.z,

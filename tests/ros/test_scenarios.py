@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 from conftest import executable_path
+from test_recording import decoded
 
 pytestmark = [pytest.mark.ros]
 
@@ -51,17 +52,10 @@ def _yaw(q):
 
 
 def _decoded(path, topics, until_s=None):
-    """topic -> decoded messages in stamp order, for the topics asked only (mcap-ros2-support);
-    with until_s only those logged before that simulated time (the recorder logs at simulated
-    time from 0: decoding is most of this test's time, a whole run's several times its start)."""
-    from mcap.reader import make_reader
-    from mcap_ros2.decoder import DecoderFactory
-    out = {t: [] for t in topics}
-    end = None if until_s is None else int(until_s * 1e9)
-    with open(path, "rb") as f:
-        reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=list(topics), ending_before=end):
-            out[channel.topic].append(msg)
+    """topic -> decoded messages in stamp order, for the topics asked only; with until_s only
+    those before that simulated time (decoding is most of this test's time)."""
+    found = decoded(path, list(topics), until_s)
+    out = {t: found.get(t, []) for t in topics}
     return {t: sorted(m, key=_stamp) for t, m in out.items()}
 
 
