@@ -150,6 +150,15 @@ def rclpy_context(ros_domain):
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=ros_domain)
     yield ctx
+    # a failed test's traceback holds its nodes: destroyed here, or they would stay in the graph
+    # of the domain, which a later test reuses (seen: a later `ros2 param list` asked them)
+    import gc
+    from rclpy.node import Node
+    for node in [o for o in gc.get_objects() if isinstance(o, Node) and o.context is ctx]:
+        try:
+            node.destroy_node()
+        except Exception:  # noqa: BLE001 - destroyed already
+            pass
     rclpy.try_shutdown(context=ctx)
 
 
