@@ -50,13 +50,13 @@ def _wait_until_stepping(domain, log_dir, timeout=120):
     from rosgraph_msgs.msg import Clock
     ctx = rclpy.Context()
     rclpy.init(context=ctx, domain_id=domain)
+    node = Node("stepping_watch", context=ctx)
     try:
-        node = Node("stepping_watch", context=ctx)
         seen = []
         node.create_subscription(Clock, "/clock", lambda m: seen.append(m.clock.sec * 10**9 + m.clock.nanosec), 10)
         assert spin_until(node, lambda: any(t > 0 for t in seen), timeout), f"no step past 0 (logs: {log_dir})"
-        node.destroy_node()
     finally:
+        node.destroy_node()
         rclpy.try_shutdown(context=ctx)
 
 
