@@ -154,7 +154,8 @@ def rclpy_context(ros_domain):
     # of the domain, which a later test reuses (seen: a later `ros2 param list` asked them)
     import gc
     from rclpy.node import Node
-    for node in [o for o in gc.get_objects() if isinstance(o, Node) and o.context is ctx]:
+    # type(), not isinstance(): the heap holds weak proxies, and isinstance() of a dead one raises
+    for node in [o for o in gc.get_objects() if issubclass(type(o), Node) and o.context is ctx]:
         try:
             node.destroy_node()
         except Exception:  # noqa: BLE001 - destroyed already
