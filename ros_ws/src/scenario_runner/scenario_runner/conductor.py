@@ -20,7 +20,7 @@ import signal
 import subprocess
 import sys
 import time
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 import rclpy
@@ -474,39 +474,24 @@ class Conductor(Node):
         answered.add(msg.node)
         self.compute_times[msg.node].append(msg.compute_time)
 
-    def foreign_participants(self) -> List[str]:
-        """Other step-protocol participants on this domain: a runner publishing /sim/step, or
-        nodes taking it or answering /sim/step_done (a run in progress, or nodes a killed run
-        left behind). Their triggers, answers and latched outputs would mix with this run's."""
+    def participants_beyond(self, own: Iterable[str]) -> List[str]:
+        """Step-protocol participants on this domain beyond this runner and one of each `own`
+        node: another runner publishing /sim/step, nodes taking it or answering /sim/step_done
+        that are not `own`, and a second node under an `own` name. Before the start `own` is the
+        run's external nodes (anything else is a run in progress, or nodes a killed run left);
+        once this run's nodes are up, all of them (a stranger the first look missed: discovery
+        can take seconds). Their triggers, answers and latched outputs would mix with this run's."""
         me = self.get_fully_qualified_name()
-        found = set()
-        for info in self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC):
-            found.add(f"scenario runner {_node_of(info)} (publishes {rc.SIM_STEP_TOPIC})")
-        for info in self.get_subscriptions_info_by_topic(rc.SIM_STEP_TOPIC):
-            if _node_of(info) not in self.external:  # this run's external nodes are expected
-                found.add(f"node {_node_of(info)} (takes {rc.SIM_STEP_TOPIC})")
-        for info in self.get_publishers_info_by_topic(rc.STEP_DONE_TOPIC):
-            if _node_of(info) not in self.external:
-                found.add(f"node {_node_of(info)} (answers on {rc.STEP_DONE_TOPIC})")
-        own_pub = f"scenario runner {me} (publishes {rc.SIM_STEP_TOPIC})"
-        if sum(1 for i in self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC) if _node_of(i) == me) <= 1:
-            found.discard(own_pub)
-        return sorted(found)
-
-    def unexpected_participants(self, local: Sequence[str]) -> List[str]:
-        """Once this run's nodes are up: step-protocol endpoints beyond one per node of the run
-        (`local`: the names of this process's other nodes). A node of another run under one of
-        this run's names, or any the look before the start missed (discovery can take seconds)."""
-        me = self.get_fully_qualified_name()
-        own = self.expected | set(local)
+        own = set(own)
         found = []
         for topic, kind, infos, allowed in (
                 (rc.SIM_STEP_TOPIC, "publishes", self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC), {me}),
                 (rc.SIM_STEP_TOPIC, "takes", self.get_subscriptions_info_by_topic(rc.SIM_STEP_TOPIC), own),
                 (rc.STEP_DONE_TOPIC, "answers on", self.get_publishers_info_by_topic(rc.STEP_DONE_TOPIC), own)):
+            what = "scenario runner" if kind == "publishes" else "node"
             for node, count in sorted(collections.Counter(_node_of(i) for i in infos).items()):
                 if node not in allowed:
-                    found.append(f"node {node} ({kind} {topic})")
+                    found.append(f"{what} {node} ({kind} {topic})")
                 elif count > 1:
                     found.append(f"{count} nodes named {node} ({kind} {topic}): one is not this run's")
         return found
@@ -517,7 +502,7 @@ class Conductor(Node):
         wait = domain_discovery_wait() if wait is None else wait
         while time.monotonic() < self.created + wait:
             executor.spin_once(timeout_sec=0.02)
-        self.refuse_if_found(executor, self.foreign_participants)
+        self.refuse_if_found(executor, lambda: self.participants_beyond(self.external))
 
     def refuse_if_found(self, executor, look: Callable[[], List[str]], when: str = "") -> None:
         """DomainInUse naming what look() finds (after a moment for names still unknown)."""
@@ -809,9 +794,9 @@ class _Session:
         self._wait_for_matches(ready_timeout)
         # a stranger seen only now (the look before the start is one discovery window) is refused
         # before step 0, so nothing of it can mix into the run
-        local = [n.get_fully_qualified_name() for n in extra_nodes + ([recorder] if recorder else [])
-                 + self.local_nodes]
-        conductor.refuse_if_found(self.executor, lambda: conductor.unexpected_participants(local),
+        own = conductor.expected | {n.get_fully_qualified_name() for n in extra_nodes + self.local_nodes
+                                    + ([recorder] if recorder else [])}
+        conductor.refuse_if_found(self.executor, lambda: conductor.participants_beyond(own),
                                   " (seen once this run's nodes were up; nothing was stepped)")
         if self.external:
             self.gone_external()  # notes the external nodes in the graph: from now on, leaving it stops the run
