@@ -129,9 +129,13 @@ _ensure_chromium() {
         return 0
     fi
     _say "installing Debian's chromium for the browser test (apt-get install chromium)"
-    { DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null 2>&1 ||
-      { apt-get update -qq >/dev/null 2>&1 && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null 2>&1; }; } ||
-        _say "apt-get install chromium failed: the browser test will be skipped"
+    # Another apt-get (an unattended upgrade, a second set-up) may hold the locks: wait for them
+    # (up to 10 min) instead of failing at once.
+    local apt=(apt-get -o DPkg::Lock::Timeout=600 -o Acquire::Retries=3)
+    { DEBIAN_FRONTEND=noninteractive "${apt[@]}" install -y -qq chromium >/dev/null 2>&1 ||
+      { "${apt[@]}" update -qq >/dev/null 2>&1 &&
+        DEBIAN_FRONTEND=noninteractive "${apt[@]}" install -y -qq chromium >/dev/null 2>&1; }; } ||
+        _say "apt-get install chromium failed: the browser test will fail naming it (apt-get install chromium)"
     return 0
 }
 

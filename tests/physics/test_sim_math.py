@@ -121,7 +121,10 @@ def _lu_solved(M, b):
 def test_lu_solve_agrees_with_numpy_on_random_well_conditioned_matrices(n):
     """Gaussian random matrices with condition number <= 1e3 (they need row interchanges):
     relative error <= 1e-12 against LAPACK (the bound is about cond * eps = 2e-13); the
-    matrix right-hand side gives every column bit-identical to the vector solve."""
+    matrix right-hand side gives every column the vector solve's answer to rounding (1e-14 of
+    its norm). Not bit for bit: the two are different compiled loops, which a host's code
+    generation may vectorise differently, and no result relies on their bitwise identity (a
+    layout's identity across processes runs one and the same loop)."""
     rng = np.random.default_rng(n)
     for _ in range(20):
         M = rng.normal(size=(n, n))
@@ -134,7 +137,7 @@ def test_lu_solve_agrees_with_numpy_on_random_well_conditioned_matrices(n):
         assert np.linalg.norm(X - X_ref) <= 1e-12 * np.linalg.norm(X_ref)
         for c in range(3):
             ok_c, x, _ = _lu_solved(M, B[:, c])
-            assert ok_c and np.array_equal(x, X[:, c])  # bit-identical
+            assert ok_c and np.linalg.norm(x - X[:, c]) <= 1e-14 * np.linalg.norm(x)
 
 
 def test_lu_solve_columns_solves_only_the_first_m_columns():

@@ -28,6 +28,8 @@ from test_recording import decoded
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
 
 DURATION = 12.0
+WATCH_UNTIL_S = DURATION - 2.0  # the viewers watch the run's first 10 s of sim time
+LIVE_RATE_HZ = 20.0  # the live view's default sender rate (live_view_node parameter `rate`)
 FLOOD = 10_000
 
 
@@ -87,6 +89,18 @@ class Observer:
         self.node.destroy_node()
 
 
+def _odom_log_times_s(viewer):
+    return [t * 1e-9 for t, _ in viewer.messages.get("/tug/odom", [])]
+
+
+async def _watch_until_sim_time(viewer, until_s, timeout):
+    """Read until the viewer has seen the run's odometry at sim time until_s (or timeout s)."""
+    loop = asyncio.get_running_loop()
+    end = loop.time() + timeout
+    while loop.time() < end and max(_odom_log_times_s(viewer), default=-1.0) < until_s:
+        await viewer.receive(max(0.001, min(0.1, end - loop.time())))
+
+
 async def _clients(port, expected, report):
     from rclpy.serialization import serialize_message
     from live_view.probe import Probe
@@ -98,8 +112,9 @@ async def _clients(port, expected, report):
     for v in viewers:
         await v.wait_for_topics(expected, timeout=60)
         await v.subscribe_all()
-    # the viewers read all along, as a browser does, while a client misbehaves
-    watching = [asyncio.create_task(v.run_for(DURATION - 2.0)) for v in viewers]
+    # the viewers read all along, as a browser does, while a client misbehaves: until the run's
+    # own clock reaches WATCH_UNTIL_S (its start-up after the server listens varies by host)
+    watching = [asyncio.create_task(_watch_until_sim_time(v, WATCH_UNTIL_S, timeout=150.0)) for v in viewers]
     attacker = Probe(url)
     await attacker.connect()
     await attacker.advertise(1, "/tug/command", "cdr", "tug_msgs/msg/VesselCommand")
@@ -182,8 +197,16 @@ def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context, full_doma
         cls = _msg_class(channels[topic]["schemaName"])
         for _, payload in viewers[0].messages[topic]:
             deserialize_message(payload, cls)
-    times = [t for t, _ in viewers[0].messages["/tug/odom"]]
-    assert times == sorted(times) and len(times) >= 20  # sampled, at most the rate
+    # sampled: in order, new steps only after step 0 (whose state is sent at start-up and again
+    # when stepped), at most one a step; the count judged against the run's own span and the
+    # sender's rate (paced: sim time runs with the wall clock), with a factor 4 of margin for ten
+    # clients sharing two cores with the run
+    times = _odom_log_times_s(viewers[0])
+    stepped = [t for t in times if t > 0.0]
+    assert times[-1] >= WATCH_UNTIL_S and times == sorted(times), times
+    assert all(b > a for a, b in zip(stepped, stepped[1:])), stepped
+    span = stepped[-1] - stepped[0]
+    assert span * LIVE_RATE_HZ / 4 <= len(stepped) - 1 <= span * sc["exchange_rate"] + 1e-9, (len(stepped), span)
 
     # frames: /tf equals the odometry of its step, exactly; /tf_static holds every attachment
     steps = int(round(DURATION * sc["exchange_rate"]))
