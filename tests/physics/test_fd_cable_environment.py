@@ -49,7 +49,9 @@ def test_a_uniform_current_sampled_at_every_node_changes_nothing():
         sampled.set_environment(current=np.tile(current, (len(sampled.element_centres()), 1)))
         plain.step(0.5)
         sampled.step(0.5)
-    np.testing.assert_array_equal(plain.cable.positions, sampled.cable.positions)
+    # to rounding: the cable takes the mean of the sampled currents, and the mean of equal
+    # numbers need not be that number to the last bit
+    np.testing.assert_allclose(sampled.cable.positions, plain.cable.positions, rtol=0, atol=1e-9)
 
 
 def test_a_sheared_current_acts_as_its_mean_and_the_seabed_stops_the_run():

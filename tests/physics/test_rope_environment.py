@@ -95,7 +95,8 @@ def test_floating_rope_moves_with_a_uniform_current():
         rope.set_environment(current=c, wind=c)
         rope.step(DT)
     assert np.abs(rope.velocities - c).max() < bound
-    # a (3,) current and the same current given per element are one and the same
+    # a (3,) current and the same current given per element are one and the same (bit for bit:
+    # the (3,) form is broadcast to the elements, then one and the same compiled step runs)
     assert np.array_equal(ropes[0].positions, ropes[1].positions)
     # the uniform form is the old `current` property
     assert np.array_equal(ropes[0].current, c)
