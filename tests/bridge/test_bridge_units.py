@@ -5,8 +5,10 @@ import math
 
 import pytest
 
-from bridge_instruments import controls, geo
+from bridge_instruments import controls
 from bridge_instruments import sentences as S
+from sim_contract import geo
+from sim_contract.equipment import parse_utc
 
 
 def test_enu_geodetic_round_trip_and_scale():
@@ -34,7 +36,7 @@ def test_headings_and_knots():
 
 def test_sentences_parse_with_pynmea2():
     import pynmea2
-    u = S.parse_utc("2026-06-01T23:59:59.98Z")
+    u = parse_utc("2026-06-01T23:59:59.98Z")
     own = S.OwnShip(0.0, -33.5, -70.25, 12.345, 359.999, 0.0, 30.0, -20.0, -150.0, -750.0, (("tow", 1234.5),))
     lines = S.own_ship_sentences(own, u)
     msgs = [pynmea2.parse(line, check=True) for line in lines]
@@ -49,7 +51,7 @@ def test_sentences_parse_with_pynmea2():
 def test_ais_target_round_trip():
     import pyais
     tg = S.Target(244990002, 51.98, 4.05, 200.0, 10.0, 359.7, -5000.0)
-    d = pyais.decode(*S.position_report(tg, 3.0, S.parse_utc("2026-06-01T08:00:00Z"))).asdict()
+    d = pyais.decode(*S.position_report(tg, 3.0, parse_utc("2026-06-01T08:00:00Z"))).asdict()
     assert d["speed"] == 102.2 and d["heading"] == 0 and d["second"] == 3  # clipped / wrapped
     assert d["turn"] < 0 and abs(d["lat"] - 51.98) < 1e-5
     s = pyais.decode(*S.static_report(S.Particulars(244990002, "barge", 45.4, 12.6, 2.0))).asdict()
@@ -88,7 +90,7 @@ def test_warnings_near_limits():
 
 
 def test_scenario_human_units(tmp_path):
-    from scenario_runner.scenario import ScenarioError, load_scenario
+    from sim_contract.scenario import ScenarioError, load_scenario
     text = """
 name: h
 duration: 1.0
@@ -124,7 +126,7 @@ def test_ais_dimensions_honour_the_scenarios_ship_overrides(tmp_path):
     gives the overridden length and beam, the tug (no overrides) its ship file's."""
     import pyais
     import yaml
-    from bridge_instruments.ship_particulars import hull_dimensions, scenario_ships
+    from sim_contract.particulars import hull_dimensions, scenario_ships
     from tug_dynamics.ship_file import ships_dir
     barge_file = yaml.safe_load(open(f"{ships_dir()}/barge_002_full.yaml"))["hull"]
     tug_file = yaml.safe_load(open(f"{ships_dir()}/harbour_tug.yaml"))["hull"]

@@ -45,3 +45,102 @@ def test_physics_modules_import_no_ros(package):
     offenders = [(os.path.basename(p), m) for p in _modules(package) if os.path.basename(p) not in NODE_MODULES
                  for m in _imports(p) if m in ROS_MODULES]
     assert offenders == []
+
+
+# The packages in layers, lowest first: a package imports only from lower layers (its own modules
+# aside). The contract (sim_contract: scenario format, particulars, units) stands on the physics
+# it validates against and under everything that describes or drives a run.
+LAYERS = [
+    {"sim_math", "sea_environment"},                # numerics, the sea (ROS-free)
+    {"sim_plumbing"},                               # the step protocol, CDR, a node's main()
+    {"tug_dynamics", "rope_model"},                 # vessel and rope models and their nodes
+    {"hull_contact"},                               # contact between hulls (knows both)
+    {"sim_contract"},                               # what describes a run (ROS-free)
+    {"bridge_instruments", "live_view"},            # the human edge: console, NMEA/AIS, the page
+    {"scenario_runner"},                            # runs, records, replays, analyses
+]
+_LAYER = {p: i for i, layer in enumerate(LAYERS) for p in layer}
+
+
+def _python_packages():
+    return sorted(d for d in os.listdir(SRC) if os.path.isfile(os.path.join(SRC, d, d, "__init__.py")))
+
+
+def _module_imports(path, package):
+    """(imported first-party module, line) of a file: every import, also inside functions."""
+    tree = ast.parse(open(path).read(), path)
+    for node in ast.walk(tree):
+        names = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                names = [f"{package}.{node.module}" if node.module else package]
+            elif node.module:
+                names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+        for name in names:
+            if name.split(".")[0] in _LAYER:
+                yield name, node.lineno
+
+
+def test_every_package_has_a_layer():
+    assert set(_python_packages()) == set(_LAYER)
+
+
+def test_packages_import_only_downward():
+    upward = []
+    for package in _python_packages():
+        for path in _modules(package):
+            for name, line in _module_imports(path, package):
+                other = name.split(".")[0]
+                if other != package and _LAYER[other] >= _LAYER[package]:
+                    upward.append(f"{package}/{os.path.basename(path)}:{line} imports {name}")
+    assert upward == []
+
+
+def test_no_module_imports_itself_back():
+    """No cycle of modules (strongly connected component of the import graph, function-level
+    imports included)."""
+    modules = {f"{p}.{os.path.basename(f)[:-3]}": (f, p) for p in _python_packages() for f in _modules(p)}
+    graph = {m: set() for m in modules}
+    for m, (path, package) in modules.items():
+        for name, _ in _module_imports(path, package):
+            while name and name not in modules:
+                name = name.rpartition(".")[0]
+            if name and name != m and not name.endswith(".__init__"):
+                graph[m].add(name)
+    # Tarjan's strongly connected components
+    index, low, stack, on, cycles, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    assert cycles == []
+
+
+def test_the_contract_is_ros_free():
+    offenders = [(os.path.basename(p), m) for p in _modules("sim_contract") for m in _imports(p)
+                 if m in ROS_MODULES | {"ament_index_python"}]
+    assert offenders == []

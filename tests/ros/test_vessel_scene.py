@@ -49,7 +49,8 @@ def test_tf_message_bytes_decode_with_rclpy():
 def test_scene_is_the_ship_file(ship):
     from rclpy.serialization import deserialize_message
     from visualization_msgs.msg import Marker, MarkerArray
-    from sim_plumbing.scene import HullDimensions, VesselScene
+    from sim_math.hull_plan import HullDimensions
+    from sim_plumbing.scene import VesselScene
     cfg = yaml.safe_load(open(ship))
     hull = cfg["hull"]
     length = hull.get("length", hull.get("length_overall"))

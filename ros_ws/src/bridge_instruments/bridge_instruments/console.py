@@ -25,7 +25,10 @@ from typing import Dict, List, Optional, Tuple
 import rclpy
 from rclpy.node import Node
 
-from bridge_instruments import controls, geo
+from bridge_instruments import controls
+from sim_contract import geo
+from sim_contract.particulars import breaking_loads, particulars, scenario_path
+from sim_contract.scenario import load_scenario
 from sim_math.rotations import yaw_from_quaternion
 
 ANCHOR = {"let_go": 1, "heave_up": 2}
@@ -190,8 +193,6 @@ def _rope_setup(vessel: str, scenario: Optional[str]):
     """(ropes at the vessel as (name, end, has winch), breaking loads) from a scenario."""
     if not scenario:
         return [], {}
-    from scenario_runner.run_scenario import particulars, scenario_path
-    from scenario_runner.scenario import load_scenario
     path = scenario_path(scenario)
     sc = load_scenario(path)
     ropes = []
@@ -199,7 +200,7 @@ def _rope_setup(vessel: str, scenario: Optional[str]):
         for end in "ab":
             if getattr(r, f"end_{end}").split("/")[0] == vessel:
                 ropes.append((r.name, end, end == "a" and r.layout == "winch"))
-    loads = {n: p.get("breaking_load") for n, p in particulars(path, sc)["ropes"].items()}
+    loads = breaking_loads(particulars(path, sc))
     return ropes, loads
 
 

@@ -8,7 +8,7 @@ sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one
 with an end on the vessel (its tension), and for every other vessel of the run an AIS VDM
 position report (type 1) and, the first time and every `static_every`-th time, its static data
 (type 5, length and beam from its ship file, with the `ship_overrides` of the scenario named by
-the parameter `scenario` merged over it: bridge_instruments/ship_particulars.py). Sentence
+the parameter `scenario` merged over it: sim_contract/particulars.py). Sentence
 formats: bridge_instruments/sentences.py.
 
 It reads the topic contract only (/<vessel>/odom, /<vessel>/status, /<rope>/end_<x>/wrench) and
@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import collections
 import math
-import os
 import re
 import socket
 import sys
@@ -41,8 +40,10 @@ from rcl_interfaces.msg import ParameterDescriptor
 from sim_math.rotations import matrix_from_quaternion, rpy_from_quaternion
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
-from bridge_instruments import geo
 from bridge_instruments import sentences as S
+from sim_contract import geo
+from sim_contract.equipment import check_mmsi, parse_utc
+from sim_contract.particulars import hull_dimensions, scenario_path, scenario_ships
 
 DEFAULT_PORT = 10110  # the port IEC 61162-450-less NMEA over UDP uses by convention (OpenCPN, gpsd)
 DEFAULT_UTC_START = "2026-06-01T08:00:00Z"
@@ -178,7 +179,7 @@ class NmeaOut(Node):
         if not self.vessels:
             raise ValueError("parameter 'vessels': name the vessels of the run, e.g. [tug, barge]")
         self.origin = geo.Origin(gp("origin_latitude").value, gp("origin_longitude").value, gp("origin_height").value)
-        self.utc_start = S.parse_utc(gp("utc_start").value)
+        self.utc_start = parse_utc(gp("utc_start").value)
         self.tick_ns = max(1, round(1e9 / gp("rate").value))
         self.period_ns = rc.period_ns(gp("exchange_rate").value)
         self.static_every = int(gp("static_every").value)
@@ -193,8 +194,8 @@ class NmeaOut(Node):
         mmsi = {k: int(v) for k, v in _pairs(gp("mmsi").value, "mmsi").items()}
         self.mmsi = {v: mmsi.get(v, S.default_mmsi(i)) for i, v in enumerate(self.vessels)}
         for v, m in self.mmsi.items():
-            if S.check_mmsi(m):
-                raise ValueError(f"parameter 'mmsi': {v}: {S.check_mmsi(m)}")
+            if check_mmsi(m):
+                raise ValueError(f"parameter 'mmsi': {v}: {check_mmsi(m)}")
         self.gear = {k: float(v) for k, v in _pairs(gp("gear_ratios").value, "gear_ratios").items()}
         # rope ends on vessels: vessel -> [(rope, end)]
         self.rope_ends: Dict[str, List[Tuple[str, str]]] = collections.defaultdict(list)
@@ -222,10 +223,9 @@ class NmeaOut(Node):
                  f"origin {self.origin.latitude:.6f}, {self.origin.longitude:.6f}; MMSI {self.mmsi}")
 
     def _particulars(self, files: Dict[str, str], scenario: str, towing: set) -> Dict[str, S.Particulars]:
-        from bridge_instruments.ship_particulars import hull_dimensions, scenario_ships
         ships = {}
         if scenario:
-            ships = scenario_ships(rc.resolve_data_file("scenario_runner", "scenarios", scenario))
+            ships = scenario_ships(scenario_path(scenario))
             strangers = sorted(set(self.vessels) - set(ships))
             if strangers:
                 raise ValueError(f"parameter 'scenario': {scenario} has no vessel {', '.join(strangers)} "
@@ -237,8 +237,6 @@ class NmeaOut(Node):
             if v in ships:
                 path, overrides = path or ships[v][0], ships[v][1]
             if path:
-                if not os.path.isabs(path) and not os.path.isfile(path):
-                    path = rc.resolve_data_file("tug_dynamics", "ships", path)
                 d = hull_dimensions(path, overrides)
                 length, beam, draft = d.length, d.beam, d.draft
             ship_type = 31 if v in towing else (52 if "tug" in v.lower() else 0)  # 31 towing, 52 tug

@@ -24,8 +24,7 @@ other vessels:
 from __future__ import annotations
 
 import datetime as _dt
-import math
-from typing import List, NamedTuple, Optional, Sequence, Tuple
+from typing import List, NamedTuple, Sequence, Tuple
 
 import pyais
 import pynmea2
@@ -77,18 +76,6 @@ def utc_at(utc_start: _dt.datetime, t: float) -> _dt.datetime:
     return utc_start + _dt.timedelta(milliseconds=10 * round(t * 100.0))
 
 
-def parse_utc(text: str) -> _dt.datetime:
-    """An ISO 8601 UTC time ('2026-06-01T08:00:00Z'), whole hundredths of a second."""
-    s = text.strip()
-    if s.endswith("Z") or s.endswith("z"):
-        s = s[:-1] + "+00:00"
-    d = _dt.datetime.fromisoformat(s)
-    if d.tzinfo is None:
-        d = d.replace(tzinfo=_dt.timezone.utc)
-    d = d.astimezone(_dt.timezone.utc)
-    if d.microsecond % 10000:
-        raise ValueError(f"{text!r}: give whole hundredths of a second")
-    return d
 
 
 def _time(d: _dt.datetime) -> str:
@@ -174,8 +161,3 @@ def default_mmsi(index: int) -> int:
     return 244_990_001 + index
 
 
-def check_mmsi(value: int) -> Optional[str]:
-    """Why an MMSI cannot be used (None if it can): nine digits, 100 000 000 .. 999 999 999."""
-    if isinstance(value, bool) or not isinstance(value, int) or not 100_000_000 <= value <= 999_999_999:
-        return f"{value!r} is not a nine-digit MMSI"
-    return None

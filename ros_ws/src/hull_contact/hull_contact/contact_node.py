@@ -25,6 +25,7 @@ from tug_msgs.msg import HullContact, ScenarioEvent
 from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
 from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import cdr
+from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
 
@@ -70,7 +71,7 @@ class ContactNode(SteppedNode):
                 raise ValueError(f"parameter {side}_ship_overrides: not JSON ({exc})") from None
         self.spec = FenderSpec(radius=gp("radius"), stiffness=gp("stiffness"), damping=gp("damping"),
                                friction=gp("friction"))
-        ship = lambda key: rc.resolve_data_file("tug_dynamics", "ships", gp(key))  # noqa: E731
+        ship = lambda key: resolve_data_file("tug_dynamics", "ships", gp(key))  # noqa: E731
         self.contact, self.fender_point = contact_from_ship_files(
             self.spec, ship("fender_ship_file"), self.fender_name, ship("hull_ship_file"),
             overrides["fender"], overrides["hull"])

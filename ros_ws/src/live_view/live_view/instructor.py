@@ -43,13 +43,14 @@ import urllib.parse
 from typing import Deque, Dict, List, Optional, Tuple
 
 from live_view import client_input
+from sim_contract.geo import KNOT, compass_deg
+from sim_contract.particulars import breaking_loads_from
 from sim_math.rotations import rpy_from_quaternion
 
 DEFAULT_HTTP_PORT = 8080
 DEFAULT_HTTP_RATE = 10.0  # Hz: samples, so the page's display period is 100 ms
 HISTORY_SECONDS = 180.0  # s of simulated time kept for the tension plot
 MAX_BODY = client_input.MAX_MESSAGE_BYTES
-KNOT = 1852.0 / 3600.0
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]", "::1")
 ANCHOR_STATES = {0: "none", 1: "stowed", 2: "letting go", 3: "dredging", 4: "heaving up"}
 
@@ -68,11 +69,6 @@ FILES = {
 def _yaw_roll_pitch(q) -> Tuple[float, float, float]:
     roll, pitch, yaw = (float(a) for a in rpy_from_quaternion(q.x, q.y, q.z, q.w))
     return yaw, roll, pitch
-
-
-def heading_deg_true(yaw: float) -> float:
-    """Compass heading (deg true, 0 north, 90 east) of an ENU yaw (rad, 0 east, + to port)."""
-    return (90.0 - math.degrees(yaw)) % 360.0
 
 
 def _clean(obj):
@@ -118,31 +114,6 @@ def rope_polyline(state) -> Tuple[List[List[float]], List[float]]:
     return pts, tensions
 
 
-def breaking_loads_from(path: str) -> Dict[str, Optional[float]]:
-    """Rope name -> breaking load (N) from a scenario file or a recording's 'tugsim' metadata."""
-    if path.endswith(".mcap"):
-        from mcap.reader import make_reader
-        with open(path, "rb") as f:
-            for record in make_reader(f).iter_metadata():
-                if record.name == "tugsim" and "particulars" in record.metadata:
-                    ropes = json.loads(record.metadata["particulars"]).get("ropes", {})
-                    return {name: r.get("breaking_load") for name, r in ropes.items()}
-        return {}
-    import yaml
-    from rope_model.models import load_params
-    from sim_plumbing import ros_common as rc
-    if not os.path.isfile(path):
-        path = rc.resolve_data_file("scenario_runner", "scenarios", path)
-    with open(path) as f:
-        sc = yaml.safe_load(f) or {}
-    out: Dict[str, Optional[float]] = {}
-    for r in sc.get("ropes") or []:
-        name = os.path.join(os.path.dirname(os.path.abspath(path)), r["rope_file"])
-        if not os.path.isfile(name):
-            name = rc.resolve_data_file("rope_model", "ropes", r["rope_file"])
-        load = getattr(load_params(name), "breaking_load", None)
-        out[str(r["name"])] = float(load) if load is not None and math.isfinite(load) else None
-    return out
 
 
 class InstructorStation:
@@ -305,7 +276,7 @@ class InstructorStation:
             p, q, lin = odom.pose.pose.position, odom.pose.pose.orientation, odom.twist.twist.linear
             yaw, roll, pitch = _yaw_roll_pitch(q)
             d = {"t": stamp, "x": p.x, "y": p.y, "z": p.z, "q": [q.x, q.y, q.z, q.w],
-                 "speed_kn": math.hypot(lin.x, lin.y) / KNOT, "heading_deg": heading_deg_true(yaw),
+                 "speed_kn": math.hypot(lin.x, lin.y) / KNOT, "heading_deg": compass_deg(yaw),
                  "heel_deg": math.degrees(roll), "trim_deg": math.degrees(pitch),
                  "has_command": f"/{v}/command" in self.node.input_topics()}
             if status is not None:

@@ -32,8 +32,10 @@ from sea_environment.environment import Environment
 from rope_model.state_cdr import rope_state_cdr
 from sim_plumbing import cdr
 from sim_math.rotations import matrix_from_quaternion
+from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
-from sim_plumbing.stepping import ModelDiverged, SteppedNode, StepInput
+from sim_plumbing.ros_common import ModelDiverged
+from sim_plumbing.stepping import SteppedNode, StepInput
 
 LAYOUTS = ("straight", "slack", "winch")
 
@@ -93,7 +95,7 @@ class RopeNode(SteppedNode):
         gp = self.get_parameter
 
         rope_file = gp("rope_file").value
-        path = rc.resolve_data_file("rope_model", "ropes", rope_file)
+        path = resolve_data_file("rope_model", "ropes", rope_file)
         if not os.path.isfile(path):
             raise FileNotFoundError(f"rope file '{path}' not found (parameter rope_file:={rope_file})")
         rope_file_model(path)  # validates the model key early

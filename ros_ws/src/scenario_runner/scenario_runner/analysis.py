@@ -49,6 +49,7 @@ from sim_math.rotations import rpy_from_quaternion
 from sim_math import trials
 from sim_math.turning import turning_measures
 from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
+from sim_contract.particulars import particulars_from_metadata
 
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
 EPOCH_LIKE = 1e8  # s: stamps beyond ~3 years are wall-clock (epoch) times, shown relative to the first
@@ -141,20 +142,13 @@ class Recording:
 
     # -- reading --------------------------------------------------------------------------
     def _read_particulars(self) -> dict:
-        """The runner's "tugsim" metadata record (run_scenario.particulars: vessel lengths, rope
-        ends and breaking loads); {} for a recording without one (rosbag2, older files)."""
-        text = self.file.metadata.get("tugsim", {}).get("particulars")
-        if text is None:
-            return {}
+        """The run's particulars from the recording (sim_contract.particulars: vessel lengths, rope
+        ends and breaking loads); {} for a recording without them (rosbag2, older files)."""
         try:
-            value = json.loads(text)
-            if not isinstance(value, dict):
-                raise ValueError(f"a JSON {type(value).__name__}, not an object")
+            return particulars_from_metadata(self.file.metadata)
         except ValueError as exc:
-            self.decoder.notes.append(f"metadata 'tugsim' key 'particulars' is not readable ({exc}); "
-                                      "lengths and breaking loads only from --length / --breaking-load")
+            self.decoder.notes.append(f"{exc}; lengths and breaking loads only from --length / --breaking-load")
             return {}
-        return value
 
     def _has_fields(self, ch, msg, fields) -> bool:
         """A channel decoded with the file's own schema (its type does not import here) may be

@@ -47,7 +47,7 @@ from rclpy.parameter import Parameter
 from rcl_interfaces.msg import ParameterDescriptor
 from tug_msgs.msg import VesselCommand, VesselStatus
 
-from bridge_instruments.geo import yaw_from_compass
+from sim_contract.geo import yaw_from_compass
 from scenario_runner.autopilot_law import AutopilotConfig, AutopilotLaw, Measurement, Output, parse_waypoints
 from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import ros_common as rc
@@ -59,7 +59,7 @@ SPEED_SOURCES = ("status", "odom")
 def heading_from_true_deg(heading_true_deg: float) -> float:
     """The ordered heading as the controller takes it (REP-103 yaw, rad: 0 = east, counter-
     clockwise) of a compass heading as a person gives it (deg true: 0 = north, clockwise, 0-360),
-    converted by bridge_instruments.geo; the inverse of sim_math.trials.compass_deg. ValueError
+    converted by sim_contract.geo; the inverse of sim_math.trials.compass_deg. ValueError
     for anything else."""
     if (isinstance(heading_true_deg, bool) or not isinstance(heading_true_deg, (int, float))
             or not math.isfinite(heading_true_deg) or not 0.0 <= heading_true_deg <= 360.0):

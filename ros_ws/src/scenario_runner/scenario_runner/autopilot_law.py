@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 TWO_PI = 2.0 * math.pi
 
@@ -311,3 +311,58 @@ class AutopilotLaw:
         if self.los is not None:
             out.cross_track, out.leg, out.finished = self.los.cross_track, self.los.leg, self.los.finished
         return out
+
+
+# ROS parameters of `scenario_runner autopilot` (autopilot.py declare_parameter): name -> the
+# accepted type and range. The node refuses a value of another type or outside the range, and
+# ignores a parameter it does not declare (so a misspelt one would pass silently).
+_NUMBER = (int, float)
+NODE_PARAMS: Dict[str, tuple] = {
+    "mode": (str, ("heading", "track")), "speed_control": (bool, None), "speed_source": (str, ("status", "odom")),
+    "track": ((list, str), None),
+    "heading": (_NUMBER, (-360.0, 360.0)), "heading_true_deg": (_NUMBER, (0.0, 360.0)), "speed": (_NUMBER, (-10.0, 20.0)), "engine_order": (_NUMBER, (-1.0, 1.0)),
+    "lookahead": (_NUMBER, (1.0, 1e4)), "acceptance_radius": (_NUMBER, (0.0, 1e4)),
+    "heading_kp": (_NUMBER, (0.0, 100.0)), "heading_ki": (_NUMBER, (0.0, 10.0)), "heading_kd": (_NUMBER, (0.0, 1000.0)),
+    "heading_integral_band_deg": (_NUMBER, (0.0, 180.0)), "heading_integral_limit_deg": (_NUMBER, (0.0, 90.0)),
+    "max_steering_deg": (_NUMBER, (0.1, 90.0)), "speed_kp": (_NUMBER, (0.0, 10.0)), "speed_ki": (_NUMBER, (0.0, 10.0)),
+    "speed_full_ahead": (_NUMBER, (0.1, 50.0)), "speed_exponent": (_NUMBER, (0.2, 5.0)),
+    "speed_integral_band": (_NUMBER, (0.0, 50.0)), "speed_integral_limit": (_NUMBER, (0.0, 2.0)),
+    "min_engine_order": (_NUMBER, (-1.0, 1.0)), "max_engine_order": (_NUMBER, (-1.0, 1.0)),
+    "odom_timeout": (_NUMBER, (0.1, 3600.0)), "log_period": (_NUMBER, (0.0, 3600.0)),
+}
+
+
+def check_scenario_params(path: str, i: int, a) -> None:
+    """The parameters a scenario gives the example autopilot (`a`: its AutopilotSpec, the
+    i-th of `autopilots`), checked against NODE_PARAMS and the law's configuration before any
+    node starts. ScenarioError naming the file and the key."""
+    from sim_contract.scenario import ScenarioError
+    if a.package != "scenario_runner" or a.executable != "autopilot":
+        return  # another controller: its parameters are its own
+    for name, value in a.params.items():
+        key = f"autopilots[{i}].params.{name}"
+        if name not in NODE_PARAMS:
+            raise ScenarioError(f"{path}: key '{key}': unknown parameter of scenario_runner/autopilot (misspelt?); "
+                                f"known: {sorted(NODE_PARAMS)}")
+        kind, allowed = NODE_PARAMS[name]
+        if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
+            raise ScenarioError(f"{path}: key '{key}': wrong type, got {value!r}")
+        if kind is _NUMBER and not (math.isfinite(value) and allowed[0] <= value <= allowed[1]):
+            raise ScenarioError(f"{path}: key '{key}': must be in [{allowed[0]:g}, {allowed[1]:g}], got {value!r}")
+        if kind is str and value not in allowed:
+            raise ScenarioError(f"{path}: key '{key}': expected one of {list(allowed)}, got {value!r}")
+    p = a.params
+    try:
+        waypoints = ()
+        if p.get("mode", "heading") == "track":
+            track = p.get("track", "")
+            if isinstance(track, str):
+                track = [float(v) for v in track.strip().strip("[]").replace(",", " ").split()]
+            if not all(isinstance(v, _NUMBER) and not isinstance(v, bool) for v in track):
+                raise ValueError(f"track: expected numbers x1, y1, x2, y2, ..., got {p.get('track')!r}")
+            waypoints = parse_waypoints(track)
+        AutopilotConfig(mode=p.get("mode", "heading"), waypoints=waypoints,
+                        min_engine_order=float(p.get("min_engine_order", 0.0)),
+                        max_engine_order=float(p.get("max_engine_order", 1.0))).check()
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: key 'autopilots[{i}].params': {exc}") from None

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import os
 import signal
@@ -31,38 +30,13 @@ from rclpy.serialization import deserialize_message
 from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
+from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
 from scenario_runner.recorder import McapRecorder, readable_extent
-from scenario_runner.scenario import Scenario, ScenarioError, load_scenario, resolve
+from sim_contract.particulars import recording_metadata, scenario_path
+from sim_contract.scenario import Scenario, ScenarioError, load_scenario
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 
-
-PARTICULARS_METADATA = "tugsim"  # MCAP metadata record: {"particulars": JSON of particulars()}
-
-
-def particulars(path: str, sc: Scenario) -> dict:
-    """What the analysis needs and the topics do not carry: each vessel's ship file and length
-    (the L of the IMO criteria), each rope's file, ends and breaking load (N; None for a model
-    without one). Recorded as MCAP metadata; the files were checked by load_scenario."""
-    from rope_model.models import load_params
-    from tug_dynamics.ship_file import load_ship
-    vessels = {}
-    for v in sc.vessels:
-        ship = resolve("tug_dynamics", "ships", v.ship_file, path)
-        vessels[v.name] = {"ship_file": os.path.basename(ship),
-                           "length": float(load_ship(ship, name=v.name, overrides=v.ship_overrides).length)}
-    ropes = {}
-    for r in sc.ropes:
-        rope = resolve("rope_model", "ropes", r.rope_file, path)
-        load = getattr(load_params(rope), "breaking_load", None)
-        ropes[r.name] = {"rope_file": os.path.basename(rope), "end_a": r.end_a, "end_b": r.end_b,
-                         "breaking_load": None if load is None or not math.isfinite(load) else float(load)}
-    return {"scenario": os.path.basename(path), "vessels": vessels, "ropes": ropes}
-
-
-def scenario_path(name: str) -> str:
-    """A path as given, or a bare name in share/scenario_runner/scenarios."""
-    return rc.resolve_data_file("scenario_runner", "scenarios", name)
 
 
 class Monitor(Node):
@@ -299,8 +273,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc),
                                 fed_topics=cd.fed_topics(plan.sc, plan.external),
                                 by_stamp=cd.external_outputs(plan.sc, plan.external)[0],
-                                metadata={PARTICULARS_METADATA: {"particulars": json.dumps(
-                                    particulars(plan.path, plan.sc))}}) if plan.record else None
+                                metadata=recording_metadata(plan.path, plan.sc)) if plan.record else None
     except OSError as exc:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         rclpy.try_shutdown()
@@ -347,6 +320,8 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
     path = scenario_path(args.scenario)
     try:
         sc = load_scenario(path)
+        for i, a in enumerate(sc.autopilots):
+            check_autopilot_params(path, i, a)
     except ScenarioError as exc:
         sys.stderr.write(f"run_scenario: invalid scenario:\n{exc}\n")
         return None, 2

@@ -74,17 +74,6 @@ def text_param(description: str) -> ParameterDescriptor:
     return ParameterDescriptor(description=description)
 
 
-def resolve_data_file(package: str, subdir: str, name: str) -> str:
-    """A path as given, or a bare file name looked up in share/<package>/<subdir>/."""
-    if os.sep in name or os.path.exists(name):
-        return name
-    from ament_index_python.packages import get_package_share_directory
-    candidate = os.path.join(get_package_share_directory(package), subdir, name)
-    if not candidate.endswith((".yaml", ".yml")) and not os.path.exists(candidate):
-        candidate += ".yaml"
-    return candidate
-
-
 # ---------------------------------------------------------------------------------------
 # Stepping: lockstep participant or free-running node.
 # ---------------------------------------------------------------------------------------
@@ -200,6 +189,11 @@ def die_with_parent() -> None:
     threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
+class ModelDiverged(RuntimeError):
+    """The model's state went non-finite or blew up: numerics, not physics (named with the step).
+    A node's main() (run_node) ends with exit 3 naming it."""
+
+
 def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError, FileNotFoundError),
              failures=()) -> int:
     """main() of a simulator node: construct, spin until Ctrl-C / SIGTERM, clean up.
@@ -211,7 +205,6 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
     import rclpy
     from rclpy.exceptions import ParameterException
 
-    from sim_plumbing.stepping import ModelDiverged
     failures = (*failures, ModelDiverged) if isinstance(failures, tuple) else (failures, ModelDiverged)
     rclpy.init(args=args)
     die_with_parent()

@@ -25,7 +25,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from sim_math.hull_plan import HullDimensions, plan_half_breadth as _plan  # noqa: F401 (HullDimensions re-exported)
+from sim_math.hull_plan import HullDimensions, plan_half_breadth as _plan
 from sim_plumbing import cdr
 
 HULL_COLOR = (0.55, 0.12, 0.10, 1.0)

@@ -51,10 +51,6 @@ REJECTED_ORDER = object()
 RESCUE_AFTER = 0.1  # s without a step before poll() takes what the executor may have missed
 
 
-class ModelDiverged(RuntimeError):
-    """The model's state went non-finite or blew up: numerics, not physics (named with the step)."""
-
-
 class RateLimitedLog:
     """Logs a kind of complaint at most once per `interval` s of wall time, with how many were
     suppressed since; counts every one. Keeps a flood of bad input from costing a log line (and

@@ -34,12 +34,15 @@ from tug_msgs.msg import (AttachmentArray, HullContact, ScenarioEvent, ThrusterC
 
 from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
+from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
-from sim_plumbing.scene import HullDimensions, VesselScene
+from sim_math.hull_plan import HullDimensions
+from sim_plumbing.scene import VesselScene
 from sea_environment.environment import Environment
 from tug_dynamics.environment_loads import EnvironmentStatus, VesselInEnvironment
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
-from sim_plumbing.stepping import REJECTED_ORDER, ModelDiverged, SteppedNode, StepInput
+from sim_plumbing.ros_common import ModelDiverged
+from sim_plumbing.stepping import REJECTED_ORDER, SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, ThrusterOrder, Vessel, VesselState,
                                  check_command, rotation_body_to_world)
 
@@ -102,7 +105,7 @@ class VesselNode(SteppedNode):
         ship_file = self.get_parameter("ship_file").value
         if not ship_file:
             raise ValueError("parameter 'ship_file' is required (a path or a file in share/tug_dynamics/ships)")
-        path = rc.resolve_data_file("tug_dynamics", "ships", ship_file)
+        path = resolve_data_file("tug_dynamics", "ships", ship_file)
         if not os.path.isfile(path):
             raise FileNotFoundError(f"ship file '{path}' not found (parameter ship_file:={ship_file})")
         ns_name = self.get_namespace().strip("/").split("/")[-1]

@@ -43,8 +43,9 @@ from typing import Any, Dict, List, Literal, Optional
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
-from bridge_instruments.geo import DEFAULT_ORIGIN, KNOT
+from sim_contract.geo import DEFAULT_ORIGIN, KNOT
 from sea_environment.environment import DepthGridSpec, EnvironmentSpec
+from sim_math import data_files
 from sim_math.input_files import YamlInputError, load_yaml
 
 
@@ -265,7 +266,7 @@ class AutopilotSpec(_Strict):
 
 class GeoOrigin(_Strict):
     """WGS-84 position of the map origin (x = y = 0) and ellipsoid height of the water there.
-    Default: the Port of Rotterdam, in the Maasmond (bridge_instruments.geo.DEFAULT_ORIGIN)."""
+    Default: the Port of Rotterdam, in the Maasmond (sim_contract.geo.DEFAULT_ORIGIN)."""
     latitude: float = Field(DEFAULT_ORIGIN.latitude, ge=-85.0, le=85.0)  # deg north
     longitude: float = Field(DEFAULT_ORIGIN.longitude, ge=-180.0, le=180.0)  # deg east
     height: float = Field(DEFAULT_ORIGIN.height, ge=-1e3, le=1e4)  # m
@@ -332,7 +333,7 @@ class Scenario(_Strict):
                                                                                     f"{key}.longitude")
                 if not (-85.0 <= lat <= 85.0 and -180.0 <= lon <= 180.0):
                     raise ValueError(f"{key}: latitude {lat!r} / longitude {lon!r} out of range")
-                from bridge_instruments.geo import Origin, geodetic_to_enu
+                from sim_contract.geo import Origin, geodetic_to_enu
                 init["x"], init["y"], _ = geodetic_to_enu(lat, lon, Origin(*origin.model_dump().values()))
                 v = dict(v, initial=init)
             vessels.append(v)
@@ -398,61 +399,16 @@ def load_scenario(path: str, check_files: bool = True) -> Scenario:
     return sc
 
 
-# ROS parameters of `scenario_runner autopilot` (autopilot.py declare_parameter): name -> the
-# accepted type and range. The node refuses a value of another type or outside the range, and
-# ignores a parameter it does not declare (so a misspelt one would pass silently).
-_NUMBER = (int, float)
-AUTOPILOT_PARAMS: Dict[str, tuple] = {
-    "mode": (str, ("heading", "track")), "speed_control": (bool, None), "speed_source": (str, ("status", "odom")),
-    "track": ((list, str), None),
-    "heading": (_NUMBER, (-360.0, 360.0)), "heading_true_deg": (_NUMBER, (0.0, 360.0)), "speed": (_NUMBER, (-10.0, 20.0)), "engine_order": (_NUMBER, (-1.0, 1.0)),
-    "lookahead": (_NUMBER, (1.0, 1e4)), "acceptance_radius": (_NUMBER, (0.0, 1e4)),
-    "heading_kp": (_NUMBER, (0.0, 100.0)), "heading_ki": (_NUMBER, (0.0, 10.0)), "heading_kd": (_NUMBER, (0.0, 1000.0)),
-    "heading_integral_band_deg": (_NUMBER, (0.0, 180.0)), "heading_integral_limit_deg": (_NUMBER, (0.0, 90.0)),
-    "max_steering_deg": (_NUMBER, (0.1, 90.0)), "speed_kp": (_NUMBER, (0.0, 10.0)), "speed_ki": (_NUMBER, (0.0, 10.0)),
-    "speed_full_ahead": (_NUMBER, (0.1, 50.0)), "speed_exponent": (_NUMBER, (0.2, 5.0)),
-    "speed_integral_band": (_NUMBER, (0.0, 50.0)), "speed_integral_limit": (_NUMBER, (0.0, 2.0)),
-    "min_engine_order": (_NUMBER, (-1.0, 1.0)), "max_engine_order": (_NUMBER, (-1.0, 1.0)),
-    "odom_timeout": (_NUMBER, (0.1, 3600.0)), "log_period": (_NUMBER, (0.0, 3600.0)),
-}
 _RUNNER_PARAMS = ("vessel", "exchange_rate", "lockstep", "use_sim_time")  # conductor.node_specs sets these
 
 
-def _check_autopilot_params(path: str, i: int, a: AutopilotSpec) -> None:
-    for name, value in a.params.items():
-        key = f"autopilots[{i}].params.{name}"
+def _check_runner_params(path: str, i: int, a: AutopilotSpec) -> None:
+    """A controller's parameters that the runner sets from the scenario. (The example
+    autopilot's own parameters are checked by its table: scenario_runner.autopilot_law.)"""
+    for name in a.params:
         if name in _RUNNER_PARAMS:
-            raise ScenarioError(f"{path}: key '{key}': set by the runner (from the scenario), not a parameter to give")
-        if a.package != "scenario_runner" or a.executable != "autopilot":
-            continue  # another controller: its parameters are its own
-        if name not in AUTOPILOT_PARAMS:
-            raise ScenarioError(f"{path}: key '{key}': unknown parameter of scenario_runner/autopilot (misspelt?); "
-                                f"known: {sorted(AUTOPILOT_PARAMS)}")
-        kind, allowed = AUTOPILOT_PARAMS[name]
-        if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
-            raise ScenarioError(f"{path}: key '{key}': wrong type, got {value!r}")
-        if kind is _NUMBER and not (math.isfinite(value) and allowed[0] <= value <= allowed[1]):
-            raise ScenarioError(f"{path}: key '{key}': must be in [{allowed[0]:g}, {allowed[1]:g}], got {value!r}")
-        if kind is str and value not in allowed:
-            raise ScenarioError(f"{path}: key '{key}': expected one of {list(allowed)}, got {value!r}")
-    if a.package != "scenario_runner" or a.executable != "autopilot":
-        return
-    from scenario_runner.autopilot_law import AutopilotConfig, parse_waypoints
-    p = a.params
-    try:
-        waypoints = ()
-        if p.get("mode", "heading") == "track":
-            track = p.get("track", "")
-            if isinstance(track, str):
-                track = [float(v) for v in track.strip().strip("[]").replace(",", " ").split()]
-            if not all(isinstance(v, _NUMBER) and not isinstance(v, bool) for v in track):
-                raise ValueError(f"track: expected numbers x1, y1, x2, y2, ..., got {p.get('track')!r}")
-            waypoints = parse_waypoints(track)
-        AutopilotConfig(mode=p.get("mode", "heading"), waypoints=waypoints,
-                        min_engine_order=float(p.get("min_engine_order", 0.0)),
-                        max_engine_order=float(p.get("max_engine_order", 1.0))).check()
-    except ValueError as exc:
-        raise ScenarioError(f"{path}: key 'autopilots[{i}].params': {exc}") from None
+            raise ScenarioError(f"{path}: key 'autopilots[{i}].params.{name}': set by the runner (from the "
+                                "scenario), not a parameter to give")
 
 
 def _check_references(path: str, sc: Scenario) -> None:
@@ -511,7 +467,7 @@ def _check_references(path: str, sc: Scenario) -> None:
         if a.vessel in driven:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' already has an autopilot")
         driven[a.vessel] = a.name
-        _check_autopilot_params(path, i, a)
+        _check_runner_params(path, i, a)
     if sc.nmea is not None:
         for i, o in enumerate(sc.nmea.outputs):
             if o.vessel not in vessels:
@@ -521,7 +477,7 @@ def _check_references(path: str, sc: Scenario) -> None:
             for name in table:
                 if name not in vessels:
                     raise ScenarioError(f"{path}: key 'nmea.{key}.{name}': '{name}' is not in 'vessels' ({vessels})")
-        from bridge_instruments.sentences import check_mmsi, parse_utc
+        from sim_contract.equipment import check_mmsi, parse_utc
         for name, m in sc.nmea.mmsi.items():
             if check_mmsi(m):
                 raise ScenarioError(f"{path}: key 'nmea.mmsi.{name}': {check_mmsi(m)}")
@@ -564,14 +520,8 @@ def _check_references(path: str, sc: Scenario) -> None:
 
 
 def resolve(package: str, subdir: str, name: str, scenario_path: str) -> str:
-    """A data file named in a scenario: relative to the scenario file, else in the package share."""
-    if os.path.isabs(name):
-        return name
-    local = os.path.join(os.path.dirname(os.path.abspath(scenario_path)), name)
-    if os.path.isfile(local):
-        return local
-    from ament_index_python.packages import get_package_share_directory
-    return os.path.join(get_package_share_directory(package), subdir, name)
+    """A data file named in a scenario: relative to the scenario file, else in the package's data."""
+    return data_files.resolve(package, subdir, name, relative_to=scenario_path)
 
 
 def installed_executable(package: str, executable: str) -> Optional[str]:
