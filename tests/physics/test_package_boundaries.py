@@ -52,7 +52,7 @@ def test_physics_modules_import_no_ros(package):
 # it validates against and under everything that describes or drives a run.
 LAYERS = [
     {"sim_math", "sea_environment"},                # numerics, the sea (ROS-free)
-    {"sim_plumbing"},                               # the step protocol, CDR, a node's main()
+    {"sim_plumbing", "ros2cli_standin"},            # the step protocol, CDR, a node's main(); ros2 verbs
     {"tug_dynamics", "rope_model"},                 # vessel and rope models and their nodes
     {"hull_contact"},                               # contact between hulls (knows both)
     {"sim_contract"},                               # what describes a run (ROS-free)

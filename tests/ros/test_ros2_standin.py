@@ -1,4 +1,4 @@
-"""The ros2cli stand-in (scripts/ros2 -> sim_plumbing.ros2cli_standin): `ros2 topic list/info/
+"""The ros2cli stand-in (scripts/ros2 -> ros2cli_standin.graph_verbs): `ros2 topic list/info/
 echo/hz`, `ros2 node list` and `ros2 param list/get/set` against a running vessel node, each run
 as its own process in this test's domain, checked against what an in-test rclpy node sees
 itself (its graph, the messages it receives, its own parameters).
