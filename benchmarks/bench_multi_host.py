@@ -52,7 +52,7 @@ def one_host(scenario, duration, tmp, domain):
 
 def hosts_run(scenario, duration, tmp, domain, loss, delay):
     from scenario_runner import conductor as cd
-    from sim_contract.scenario import load_scenario
+    from scenario_format.scenario import load_scenario
     specs = cd.node_specs(load_scenario(scenario), scenario, "")
     with hosts_harness.Hosts(["runner"] + [s.namespace.strip("/") for s in specs], loss_percent=loss,
                              delay_ms=delay) as hosts:

@@ -90,7 +90,7 @@ def test_warnings_near_limits():
 
 
 def test_scenario_human_units(tmp_path):
-    from sim_contract.scenario import ScenarioError, load_scenario
+    from scenario_format.scenario import ScenarioError, load_scenario
     text = """
 name: h
 duration: 1.0
@@ -126,7 +126,7 @@ def test_ais_dimensions_honour_the_scenarios_ship_overrides(tmp_path):
     gives the overridden length and beam, the tug (no overrides) its ship file's."""
     import pyais
     import yaml
-    from sim_contract.particulars import hull_dimensions, scenario_ships
+    from scenario_format.particulars import hull_dimensions, scenario_ships
     from tug_dynamics.ship_file import ships_dir
     barge_file = yaml.safe_load(open(f"{ships_dir()}/barge_002_full.yaml"))["hull"]
     tug_file = yaml.safe_load(open(f"{ships_dir()}/harbour_tug.yaml"))["hull"]

@@ -48,14 +48,15 @@ def test_physics_modules_import_no_ros(package):
 
 
 # The packages in layers, lowest first: a package imports only from lower layers (its own modules
-# aside). The contract (sim_contract: scenario format, particulars, units) stands on the physics
-# it validates against and under everything that describes or drives a run.
+# aside). The nodes' contract (sim_contract) stands under every node; the scenario format stands
+# on the physics whose files it checks and under everything that describes or drives a run.
 LAYERS = [
     {"sim_math", "sea_environment"},                # numerics, the sea (ROS-free)
+    {"sim_contract"},                               # the nodes' contract: parameter tables, units (ROS-free)
     {"sim_plumbing", "ros2cli_standin"},            # the step protocol, CDR, a node's main(); ros2 verbs
     {"tug_dynamics", "rope_model"},                 # vessel and rope models and their nodes
     {"hull_contact"},                               # contact between hulls (knows both)
-    {"sim_contract"},                               # what describes a run (ROS-free)
+    {"scenario_format"},                            # the scenario format, a run's particulars (ROS-free)
     {"bridge_instruments", "live_view"},            # the human edge: console, NMEA/AIS, the page
     {"scenario_runner"},                            # runs, records, replays, analyses
 ]
@@ -140,7 +141,8 @@ def test_no_module_imports_itself_back():
     assert cycles == []
 
 
-def test_the_contract_is_ros_free():
-    offenders = [(os.path.basename(p), m) for p in _modules("sim_contract") for m in _imports(p)
+@pytest.mark.parametrize("package", ["sim_contract", "scenario_format"])
+def test_the_contract_and_the_scenario_format_are_ros_free(package):
+    offenders = [(os.path.basename(p), m) for p in _modules(package) for m in _imports(p)
                  if m in ROS_MODULES | {"ament_index_python"}]
     assert offenders == []

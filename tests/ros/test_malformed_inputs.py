@@ -269,7 +269,7 @@ def test_corpus_is_large_enough():
 
 def test_base_scenario_is_valid(tmp_path):
     """Each case fails for its own edit: the base itself passes every check."""
-    from sim_contract.scenario import load_scenario
+    from scenario_format.scenario import load_scenario
     path = tmp_path / "base.yaml"
     path.write_text(BASE)
     sc = load_scenario(str(path))

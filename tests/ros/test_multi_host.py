@@ -39,8 +39,8 @@ STALL_TIMEOUT = 5.0
 
 def _specs():
     from scenario_runner import conductor as cd
-    from sim_contract.particulars import scenario_path
-    from sim_contract.scenario import load_scenario
+    from scenario_format.particulars import scenario_path
+    from scenario_format.scenario import load_scenario
     path = scenario_path(SCENARIO)
     return cd.node_specs(load_scenario(path), path, "")  # no run_id: as started by hand on another PC
 
@@ -90,8 +90,8 @@ def one_host(tmp_path_factory):
 
 def test_which_topics_an_external_node_has_recorded_by_subscription():
     from scenario_runner import conductor as cd
-    from sim_contract.particulars import scenario_path
-    from sim_contract.scenario import load_scenario
+    from scenario_format.particulars import scenario_path
+    from scenario_format.scenario import load_scenario
     sc = load_scenario(scenario_path(SCENARIO))
     specs = _specs()
     assert cd.resolve_external(specs, ["all"]) == ["/tug/vessel", "/barge/vessel", "/towline/rope"]

@@ -23,7 +23,7 @@ def _long_scenario():
     """The tow scenario lasting an hour (its own duration caps --duration)."""
     import tempfile
     import yaml
-    from sim_contract.particulars import scenario_path
+    from scenario_format.particulars import scenario_path
     sc = dict(yaml.safe_load(open(scenario_path(SCENARIO))), duration=3600.0)
     path = os.path.join(tempfile.mkdtemp(prefix="tugsim-long-"), "long_tow.yaml")
     with open(path, "w") as f:
@@ -112,8 +112,8 @@ def test_runner_refuses_answers_not_of_this_run_step_or_node(rclpy_context):
     """The runner's bookkeeping without DDS timing: only an answer of this run, from a node of
     the run, for the step now due, once, counts."""
     from scenario_runner.conductor import Conductor
-    from sim_contract.scenario import load_scenario
-    from sim_contract.particulars import scenario_path
+    from scenario_format.scenario import load_scenario
+    from scenario_format.particulars import scenario_path
     from sim_plumbing.cdr import DoneIn
     sc = load_scenario(scenario_path(SCENARIO))
     c = Conductor(sc, ["/tug/vessel", "/towline/rope"], run_id="r1", context=rclpy_context)

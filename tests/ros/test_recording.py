@@ -121,7 +121,7 @@ def _node_pid(pattern, domain):
 def _long_tow(tmp_path):
     """The tow lasting an hour (the scenario's own 120 s cap --duration)."""
     import yaml
-    from sim_contract.particulars import scenario_path
+    from scenario_format.particulars import scenario_path
     path = tmp_path / "seed000_straight_tow_5kn.yaml"
     path.write_text(yaml.safe_dump(dict(yaml.safe_load(open(scenario_path(SCENARIO))), duration=3600.0)))
     return str(path)

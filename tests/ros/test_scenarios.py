@@ -179,7 +179,7 @@ def _trial_variant(path):
 def test_trial_variants_start_as_their_turn_to_port():
     """What makes running only trial_<vessel>_turn_port enough for the first 3 s: every trial of
     a vessel has the same vessels, initial state, rate and first-10-s orders."""
-    from sim_contract.scenario import load_scenario
+    from scenario_format.scenario import load_scenario
     variants = [p for p in _library() if _trial_variant(p)]
     assert len(variants) >= 12
     for path in variants:

@@ -14,7 +14,7 @@ setup(
     zip_safe=True,
     maintainer="Tug simulator maintainers",
     maintainer_email="maintainer@tugsim.example.org",
-    description="ROS-free description of a run: the scenario format, a run's particulars, units, "
-                "geodesy and bridge-equipment identities at the human edge.",
+    description="The nodes' contract, ROS-free: parameter tables, units and geodesy at the human edge, "
+                "bridge-equipment identities.",
     license="Apache-2.0",
 )

@@ -27,8 +27,8 @@ from rclpy.node import Node
 
 from bridge_instruments import controls
 from sim_contract import geo
-from sim_contract.particulars import breaking_loads, particulars, scenario_path
-from sim_contract.scenario import load_scenario
+from scenario_format.particulars import breaking_loads, particulars, scenario_path
+from scenario_format.scenario import load_scenario
 from sim_math.rotations import yaw_from_quaternion
 
 ANCHOR = {"let_go": 1, "heave_up": 2}

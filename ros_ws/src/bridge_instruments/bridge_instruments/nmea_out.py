@@ -8,7 +8,7 @@ sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one
 with an end on the vessel (its tension), and for every other vessel of the run an AIS VDM
 position report (type 1) and, the first time and every `static_every`-th time, its static data
 (type 5, length and beam from its ship file, with the `ship_overrides` of the scenario named by
-the parameter `scenario` merged over it: sim_contract/particulars.py). Sentence
+the parameter `scenario` merged over it: scenario_format/particulars.py). Sentence
 formats: bridge_instruments/sentences.py.
 
 It reads the topic contract only (/<vessel>/odom, /<vessel>/status, /<rope>/end_<x>/wrench) and
@@ -43,7 +43,7 @@ from sim_plumbing import ros_common as rc
 from bridge_instruments import sentences as S
 from sim_contract import geo
 from sim_contract.equipment import check_mmsi, parse_utc
-from sim_contract.particulars import hull_dimensions, scenario_path, scenario_ships
+from scenario_format.particulars import hull_dimensions, scenario_path, scenario_ships
 
 DEFAULT_PORT = 10110  # the port IEC 61162-450-less NMEA over UDP uses by convention (OpenCPN, gpsd)
 DEFAULT_UTC_START = "2026-06-01T08:00:00Z"

@@ -44,7 +44,7 @@ from typing import Deque, Dict, List, Optional, Tuple
 
 from live_view import client_input
 from sim_contract.geo import KNOT, compass_deg
-from sim_contract.particulars import breaking_loads_from
+from scenario_format.particulars import breaking_loads_from
 from sim_math.rotations import rpy_from_quaternion
 
 DEFAULT_HTTP_PORT = 8080

@@ -49,7 +49,7 @@ from sim_math.rotations import rpy_from_quaternion
 from sim_math import trials
 from sim_math.turning import turning_measures
 from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
-from sim_contract.particulars import particulars_from_metadata
+from scenario_format.particulars import particulars_from_metadata
 
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
 EPOCH_LIKE = 1e8  # s: stamps beyond ~3 years are wall-clock (epoch) times, shown relative to the first
@@ -142,7 +142,7 @@ class Recording:
 
     # -- reading --------------------------------------------------------------------------
     def _read_particulars(self) -> dict:
-        """The run's particulars from the recording (sim_contract.particulars: vessel lengths, rope
+        """The run's particulars from the recording (scenario_format.particulars: vessel lengths, rope
         ends and breaking loads); {} for a recording without them (rosbag2, older files)."""
         try:
             return particulars_from_metadata(self.file.metadata)

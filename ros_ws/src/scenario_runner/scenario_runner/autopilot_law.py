@@ -336,7 +336,7 @@ def check_scenario_params(path: str, i: int, a) -> None:
     """The parameters a scenario gives the example autopilot (`a`: its AutopilotSpec, the
     i-th of `autopilots`), checked against NODE_PARAMS and the law's configuration before any
     node starts. ScenarioError naming the file and the key."""
-    from sim_contract.scenario import ScenarioError
+    from scenario_format.scenario import ScenarioError
     if a.package != "scenario_runner" or a.executable != "autopilot":
         return  # another controller: its parameters are its own
     for name, value in a.params.items():

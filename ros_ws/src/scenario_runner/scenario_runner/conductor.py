@@ -30,7 +30,7 @@ from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
 from sim_math.rotations import yaw_from_quaternion
-from sim_contract.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
+from scenario_format.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
                                      resolve)
 from sim_plumbing import cdr
 from sim_plumbing import record_feed

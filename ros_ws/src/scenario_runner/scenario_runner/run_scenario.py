@@ -32,8 +32,8 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 from scenario_runner import conductor as cd
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
 from scenario_runner.recorder import McapRecorder, readable_extent
-from sim_contract.particulars import recording_metadata, scenario_path
-from sim_contract.scenario import Scenario, ScenarioError, load_scenario
+from scenario_format.particulars import recording_metadata, scenario_path
+from scenario_format.scenario import Scenario, ScenarioError, load_scenario
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 

@@ -1,4 +1,3 @@
-"""What describes a run, written once and imported downward (ROS-free): ``scenario`` (the
-scenario format: schema, checks, the files it names), ``particulars`` (ship lengths, hull
-dimensions, breaking loads: from a scenario or a recording), ``geo`` (units and geodesy at the
-human edge: knots, compass degrees, WGS-84) and ``equipment`` (MMSI, UTC of bridge equipment)."""
+"""The contract of the simulator's nodes, written once and imported downward (ROS-free): each
+node's parameter table (``node_params``), units and geodesy at the human edge (``geo``: knots,
+compass degrees, WGS-84) and the identities of bridge equipment (``equipment``: MMSI, UTC)."""

@@ -19,7 +19,7 @@ import os
 from typing import Dict, Optional, Tuple
 
 from rope_model.models import load_params
-from sim_contract.scenario import Scenario, ScenarioError, load_scenario, resolve
+from scenario_format.scenario import Scenario, ScenarioError, load_scenario, resolve
 from sim_math.data_files import resolve as resolve_data_file
 from sim_math.hull_plan import HullDimensions
 from tug_dynamics.ship_file import ShipFileError, load_ship, ship_config
