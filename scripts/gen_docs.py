@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import ast
 import difflib
+import functools
 import inspect
 import io
 import json
@@ -42,6 +43,7 @@ from pydantic_core import PydanticUndefined  # noqa: E402
 # ---------------------------------------------------------------------------------------------
 # Source comments: the schema documents most keys in comments beside or above the field.
 
+@functools.lru_cache(maxsize=None)
 def _field_comments(cls: type) -> Dict[str, str]:
     """{field name: its comments} for the fields a class itself declares: the full-line comments
     directly above the field and the comment at the end of its line(s)."""
