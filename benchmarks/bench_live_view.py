@@ -32,7 +32,7 @@ The configurations run --repeats times, rounds interleaved (the machine's speed 
 minutes); the table gives medians. Before each run the benchmark waits for an idle machine, and
 it runs again (up to --retries times; the last one is kept whatever the load) a run during which
 other processes used more than --max-foreign cores (the machine's busy time from /proc/stat less
-this benchmark's processes); the table gives their load. Prints a markdown table (the README's).
+this benchmark's processes); the table gives their load. Prints a markdown table (as in docs/benchmarks.md).
 """
 import argparse
 import asyncio

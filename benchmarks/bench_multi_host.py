@@ -10,7 +10,7 @@ Every configuration runs --repeats times, the rounds interleaved (the machine's 
 and the table gives the median of each column, with the 1-minute load average around the runs
 (other work on the machine shows up as overruns). Prints a markdown table. Lateness is how far
 behind its wall-clock time a step was sent; an overrun is a step whose answers came after the
-next step's time (README, step protocol). The 1 ms links go through the harness's user-space
+next step's time (docs/step-protocol.md). The 1 ms links go through the harness's user-space
 switch (this kernel has no netem), which adds about 0.5 ms per packet of its own (ping-pong
 round trip over 1 ms links 3.4 ms, over the bridge 0.5 ms).
 """

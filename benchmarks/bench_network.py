@@ -6,8 +6,8 @@ lateness (p99) and overruns.
     source scripts/ensure_env.sh && python benchmarks/bench_network.py [--duration 60] [--repeats 3]
 
 Every configuration runs --repeats times, the rounds interleaved (the machine's speed drifts
-within minutes), and the table gives the median of each column. Prints a markdown table (the
-README's). "CPU per step" is what the runner measures itself: user + system time of the runner
+within minutes), and the table gives the median of each column. Prints a markdown table (as in
+docs/benchmarks.md). "CPU per step" is what the runner measures itself: user + system time of the runner
 and every node process from step 0 to the last step (start-up excluded), divided by the steps.
 """
 import argparse

@@ -40,7 +40,7 @@ held in paced real time at 50 Hz without an overrun.
   executor's C++ spin under its Python caller, the step protocol, the recorder). Samples only:
   that run's timings are not used.
 
-Prints markdown tables (the README's) and the fit; writes the plot (matplotlib) and, with
+Prints markdown tables (those of docs/benchmarks.md) and the fit; writes the plot (matplotlib) and, with
 --json, every number.
 """
 import argparse

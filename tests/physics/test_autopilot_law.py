@@ -2,7 +2,7 @@
 
 Conventions checked: heading error wrapped to [-pi, pi); a positive heading error (ordered
 heading counter-clockwise of the present one) gives positive steering, which turns the vessel
-to port (REP-103, README); saturation and anti-windup of both PI(D) loops; line-of-sight
+to port (REP-103, docs/layout.md); saturation and anti-windup of both PI(D) loops; line-of-sight
 guidance geometry. Closed-loop runs with the ROS-free harbour tug model measure the numbers
 quoted in docs/autopilot.md.
 """

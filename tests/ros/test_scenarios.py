@@ -70,7 +70,7 @@ def _odometry(msgs):
 # ------------------------------------------------------------------ truths written here
 def prescribed_track(motion, t):
     """The prescribed track (x along the initial heading, y to port) and its tangent heading,
-    from the formulas of the scenario format (README, Scenario format)."""
+    from the formulas of the scenario format (docs/scenario-format.md)."""
     kind, U = motion["type"], motion.get("speed", 0.0)
     if kind == "constant_speed":
         x, y, vx, vy = U * t, 0 * t, U + 0 * t, 0 * t
