@@ -32,7 +32,7 @@ PAGE = os.path.join(ROOT, "docs", "reference", "scenario-format.md")
 _SRC = os.path.join(ROOT, "ros_ws", "src")
 sys.path += [os.path.join(_SRC, d) for d in sorted(os.listdir(_SRC)) if os.path.isdir(os.path.join(_SRC, d, d))]
 
-from scenario_runner.scenario import Scenario as SCHEMA  # noqa: E402  the one place that names the schema
+from scenario_format.scenario import Scenario as SCHEMA  # noqa: E402  the one place that names the schema
 
 import annotated_types  # noqa: E402
 from pydantic import BaseModel  # noqa: E402
