@@ -25,6 +25,7 @@ from tug_msgs.msg import HullContact, ScenarioEvent
 from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
 from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import cdr
+from sim_contract.node_params import CONTACT_NODE
 from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
@@ -41,19 +42,7 @@ def _pose(msg: cdr.OdometryIn) -> PlanarPose:
 class ContactNode(SteppedNode):
     def __init__(self, node_name: str = "contact", **kwargs):
         super().__init__(node_name, **kwargs)
-        p = self.declare_parameter
-        p("fender_vessel", "", rc.text_param("Vessel carrying the fender (its namespace)"))
-        p("fender", "bow_fender", rc.text_param("The fender point: an attachment of the fender vessel's ship file"))
-        p("fender_ship_file", "", rc.text_param("Ship file of the fender vessel (path or name in share/tug_dynamics/ships)"))
-        p("fender_ship_overrides", "", rc.text_param("JSON merged over the fender vessel's ship file (as the vessel node's)"))
-        p("hull_vessel", "", rc.text_param("Vessel whose hull is pushed on (its namespace)"))
-        p("hull_ship_file", "", rc.text_param("Ship file of the hull vessel: its length and beam give the outline"))
-        p("hull_ship_overrides", "", rc.text_param("JSON merged over the hull vessel's ship file"))
-        d = FenderSpec()
-        p("radius", d.radius, rc.float_param("Fender thickness: its surface ahead of the fender point", 0.0, 10.0, "m"))
-        p("stiffness", d.stiffness, rc.float_param("Fender stiffness (linearised reaction)", 1e3, 1e10, "N/m"))
-        p("damping", d.damping, rc.float_param("Fender damping", 0.0, 1e10, "N s/m"))
-        p("friction", d.friction, rc.float_param("Coulomb friction coefficient, fender on hull", 0.0, 2.0, ""))
+        rc.declare_table(self, CONTACT_NODE)
         gp = lambda name: self.get_parameter(name).value  # noqa: E731
         self.fender_vessel, self.hull_vessel, self.fender_name = gp("fender_vessel"), gp("hull_vessel"), gp("fender")
         for key in ("fender_vessel", "hull_vessel", "fender_ship_file", "hull_ship_file"):

@@ -32,15 +32,18 @@ from typing import Optional, Tuple
 
 import numpy as np
 
+from sim_contract.node_params import CONTACT_NODE
+
 
 @dataclass(frozen=True)
 class FenderSpec:
     """Fender properties (SI). Defaults: a 1 m cylindrical rubber tug fender, reaction about
-    1 MN at 0.5 m compression (linearised 2 MN/m), mu 0.3 (PIANC 2002)."""
-    radius: float = 0.5            # m, fender surface ahead of the fender point
-    stiffness: float = 2.0e6       # N/m
-    damping: float = 4.0e5         # N s/m (0 for the energy test)
-    friction: float = 0.3          # Coulomb coefficient
+    1 MN at 0.5 m compression (linearised 2 MN/m), mu 0.3 (PIANC 2002): the contact node's
+    defaults (sim_contract.node_params.CONTACT_NODE)."""
+    radius: float = CONTACT_NODE["radius"].default        # m, fender surface ahead of the fender point
+    stiffness: float = CONTACT_NODE["stiffness"].default  # N/m
+    damping: float = CONTACT_NODE["damping"].default      # N s/m (0 for the energy test)
+    friction: float = CONTACT_NODE["friction"].default    # Coulomb coefficient
     slip_speed: float = 0.05       # m/s, regularisation of the friction law
     predict_half_step: bool = True
 

@@ -32,6 +32,7 @@ from sea_environment.environment import Environment
 from rope_model.state_cdr import rope_state_cdr
 from sim_plumbing import cdr
 from sim_math.rotations import matrix_from_quaternion
+from sim_contract.node_params import ROPE_NODE
 from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
 from sim_plumbing.ros_common import ModelDiverged
@@ -63,35 +64,11 @@ class RopeEnd:
 
 
 class RopeNode(SteppedNode):
-    LIVE_PARAMETERS = ("marker_rate",)  # no effect on the physics
+    LIVE_PARAMETERS = ROPE_NODE.live  # no effect on the physics
 
     def __init__(self, node_name: str = "rope", **kwargs):
         super().__init__(node_name, **kwargs)
-        p = self.declare_parameter
-        p("rope_file", "table1.yaml", rc.text_param(
-            "Rope file: a path, or a file name in share/rope_model/ropes (default: the example rope of Table 1 of "
-            "Yoon, Lee, Park, Kim, 'Dynamic Modeling and Simulation of a Towing Rope using Multiple Finite "
-            "Element Method')"))
-        p("end_a", "fixed", rc.text_param("End a (tug end, winch end): '<vessel>/<attachment>', 'fixed' or 'free'"))
-        p("end_b", "fixed", rc.text_param("End b (tow end): '<vessel>/<attachment>', 'fixed' or 'free'"))
-        p("end_a_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end a, m, world (map)"))
-        p("end_b_position", [0.0], rc.text_param("Position [x, y, z] of a fixed or free end b, m, world (map)"))
-        p("layout", "straight", rc.text_param("Initial layout: straight, slack (sagging) or winch (wound on end a)"))
-        p("equilibrium", False, rc.text_param(
-            "true: settle the laid-out rope to static equilibrium for the ends' step-0 positions and velocities "
-            "before step 0 (not published); false: start from the layout as laid"))
-        p("deployed_length", 0.0, rc.float_param(
-            "Initial deployed length (slack or winch layouts); 0 = the rope file's length", 0.0, 1e5, "m"))
-        p("n_elements", 0, rc.int_param("Number of elements; 0 = the rope file's", 0, 2000))
-        p("max_substep", 0.0, rc.float_param("Largest internal sub-step; 0 = the library default", 0.0, 1.0, "s"))
-        p("marker_rate", 10.0, rc.float_param(
-            "Rate of the visualization markers (at most the exchange rate)", 0.1, 1000.0, "Hz"))
-        p("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
-        p("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
-        p("environment", "", rc.text_param(
-            "The run's environment as YAML (a scenario's environment section: wind, current, depth; "
-            "sea_environment.environment), sampled at every element each step; '' = current_east / "
-            "current_north, still air, no seabed"))
+        rc.declare_table(self, ROPE_NODE)
         gp = self.get_parameter
 
         rope_file = gp("rope_file").value

@@ -44,6 +44,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 from typing_extensions import Annotated
 
 from sim_contract.geo import DEFAULT_ORIGIN, KNOT
+from sim_contract.node_params import CONTACT_NODE, CURRENT_EAST, ROPE_NODE, VESSEL_NODE
 from sea_environment.environment import DepthGridSpec, EnvironmentSpec
 from sim_math import data_files
 from sim_math.input_files import YamlInputError, load_yaml
@@ -58,10 +59,22 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
-# The nodes' parameter ranges (vessel_node.py, rope_node.py declare_parameter): a value outside
-# them makes the node refuse to start, so the scenario refuses it first.
-MAX_COORD = 1e7       # m, initial_x / initial_y
-MAX_CURRENT = 10.0    # m/s per component, current_east / current_north
+# The nodes' parameter ranges (sim_contract.node_params): a value outside them makes the node
+# refuse to start, so the scenario refuses it first.
+_V, _R, _C = VESSEL_NODE, ROPE_NODE, CONTACT_NODE
+MAX_COORD = _V["initial_x"].hi        # m, initial_x / initial_y
+MAX_CURRENT = CURRENT_EAST.hi         # m/s per component, current_east / current_north
+
+
+def _within(param, default=..., **bounds):
+    """A field whose range is the node parameter's (in the same unit)."""
+    return Field(default, ge=param.lo, le=param.hi, **bounds)
+
+
+def _deg_within(param, default=0.0):
+    """A field in degrees of a node parameter in radians: its range, rounded inwards to 0.01 deg."""
+    return Field(default, ge=math.ceil(math.degrees(param.lo) * 100) / 100,
+                 le=math.floor(math.degrees(param.hi) * 100) / 100)
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD)]
 Point3 = Annotated[List[Coord], Field(min_length=3, max_length=3)]
 
@@ -92,10 +105,10 @@ class InitialState(_Strict):
     x: Coord = 0.0  # m east
     y: Coord = 0.0  # m north
     heading_deg: float = Field(0.0, ge=-360.0, le=360.0)  # 0 = bow east, counter-clockwise positive (REP-103)
-    speed: float = Field(0.0, ge=-30.0, le=40.0)  # m/s surge
+    speed: float = _within(_V["initial_speed"], 0.0)  # m/s surge
     # Orders held from the start with the engine and rudder already there (e.g. "turn from
     # 9 kn at half ahead"); 0 keeps the model's own start.
-    engine_order: float = Field(0.0, ge=-1.0, le=1.0)
+    engine_order: float = _within(_V["initial_engine_order"], 0.0)
     steering_deg: float = Field(0.0, ge=-90.0, le=90.0)
 
     @model_validator(mode="before")
@@ -121,14 +134,14 @@ class Motion(_Strict):
     of section 4 of Yoon, Lee, Park, Kim, "Dynamic Modeling and Simulation of a Towing Rope using
     Multiple Finite Element Method". The vessel starts as the law says at t = 0 (start())."""
     type: Literal["constant_speed", "sinusoidal_sway", "acceleration", "turn"]
-    speed: float = Field(ge=0.0, le=40.0)  # m/s, U or U_max
-    amplitude: float = Field(0.0, ge=0.0, le=1e3)  # m
-    period: float = Field(0.0, ge=0.0, le=1e4)  # s
-    acceleration: float = Field(0.0, ge=0.0, le=10.0)  # m/s^2
+    speed: float = _within(_V["motion_speed"])  # m/s, U or U_max
+    amplitude: float = _within(_V["motion_amplitude"], 0.0)  # m
+    period: float = _within(_V["motion_period"], 0.0)  # s
+    acceleration: float = _within(_V["motion_acceleration"], 0.0)  # m/s^2
     heading: Literal["track", "fixed"] = "track"
-    turn_rate_deg: float = Field(0.0, ge=-57.29, le=57.29)  # deg/s, positive to port (node: +-1 rad/s)
-    turn_start: float = Field(0.0, ge=0.0, le=1e6)  # s
-    turn_duration: float = Field(0.0, ge=0.0, le=1e6)  # s
+    turn_rate_deg: float = _deg_within(_V["motion_turn_rate"])  # deg/s, positive to port
+    turn_start: float = _within(_V["motion_turn_start"], 0.0)  # s
+    turn_duration: float = _within(_V["motion_turn_duration"], 0.0)  # s
 
     @model_validator(mode="after")
     def _complete(self):
@@ -175,20 +188,21 @@ class RopeSpec(_Strict):
     # true: the rope node settles the laid-out rope to static equilibrium for the ends' positions and
     # velocities at t = 0 before step 0 (RopeChain.settle), so the run starts without a spurious load
     equilibrium: bool = False
-    deployed_length: Optional[float] = Field(None, gt=0.0, le=1e5)  # also <= the rope file's length
-    n_elements: Optional[int] = Field(None, ge=1, le=2000)
+    deployed_length: Optional[float] = Field(None, gt=0.0, le=_R["deployed_length"].hi)  # also <= the rope file's
+    n_elements: Optional[int] = Field(None, ge=1, le=_R["n_elements"].hi)  # None: the rope file's
 
 
 class ContactSpec(_Strict):
     """A tug's fender against another vessel's hull (hull_contact: spring-dashpot with friction
-    against the hull's waterline outline from its ship file). Defaults: hull_contact.fender.FenderSpec."""
+    against the hull's waterline outline from its ship file). Defaults and ranges: the contact
+    node's (sim_contract.node_params.CONTACT_NODE)."""
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
     fender: str      # "<vessel>/<attachment>": the pushing vessel and its fender point
     hull: str        # the vessel pushed on
-    radius: float = Field(0.5, ge=0.0, le=10.0)           # m, fender thickness
-    stiffness: float = Field(2.0e6, ge=1e3, le=1e10)      # N/m
-    damping: float = Field(4.0e5, ge=0.0, le=1e10)        # N s/m
-    friction: float = Field(0.3, ge=0.0, le=2.0)
+    radius: float = _within(_C["radius"], _C["radius"].default)           # m, fender thickness
+    stiffness: float = _within(_C["stiffness"], _C["stiffness"].default)  # N/m
+    damping: float = _within(_C["damping"], _C["damping"].default)        # N s/m
+    friction: float = _within(_C["friction"], _C["friction"].default)
 
 
 class Trigger(_Strict):

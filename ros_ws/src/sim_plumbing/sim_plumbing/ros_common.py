@@ -74,6 +74,23 @@ def text_param(description: str) -> ParameterDescriptor:
     return ParameterDescriptor(description=description)
 
 
+def descriptor(param) -> ParameterDescriptor:
+    """The ROS descriptor of a row of a parameter table (sim_contract.node_params.Param): a number
+    with a range gets a range (the unit in its description), anything else its description."""
+    if param.lo is not None and param.ros_type == "double":
+        return float_param(param.description, param.lo, param.hi, param.unit)
+    if param.lo is not None and param.ros_type == "integer":
+        return int_param(param.description, param.lo, param.hi)
+    return text_param(f"{param.description} [{param.unit}]" if param.unit else param.description)
+
+
+def declare_table(node, table) -> None:
+    """Declare every parameter of a node's table (sim_contract.node_params) with its default and
+    descriptor, in the table's order."""
+    for param in table:
+        node.declare_parameter(param.name, param.default, descriptor(param))
+
+
 # ---------------------------------------------------------------------------------------
 # Stepping: lockstep participant or free-running node.
 # ---------------------------------------------------------------------------------------

@@ -37,6 +37,7 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from tug_msgs.msg import SimStep, StepDone
 
+from sim_contract.node_params import STEPPING
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
@@ -111,13 +112,7 @@ class SteppedNode(Node):
     def init_stepping(self, inputs: List[StepInput], ready: bool = True) -> None:
         """Declare exchange_rate and lockstep, subscribe the inputs. ready=False: the node
         sets self.ready_to_step later (e.g. a rope waiting for its ends' first positions)."""
-        self.declare_parameter("exchange_rate", 50.0, rc.float_param(
-            "Exchange steps per simulated second", 1.0, 1000.0, "Hz"))
-        self.declare_parameter("lockstep", False, rc.text_param(
-            "true: step on the scenario runner's /sim/step triggers; false: free-run on a wall-clock timer"))
-        self.declare_parameter("run_id", "", rc.text_param(
-            "Identity of the run (lockstep): triggers of any other run are refused; '' joins the first "
-            "run whose SimStep(0) arrives"))
+        rc.declare_table(self, STEPPING)
         self.period_ns = rc.period_ns(self.get_parameter("exchange_rate").value)
         self.dt = self.period_ns * 1e-9
         self.lockstep = bool(self.get_parameter("lockstep").value)

@@ -34,6 +34,7 @@ from tug_msgs.msg import (AttachmentArray, HullContact, ScenarioEvent, ThrusterC
 
 from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
+from sim_contract.node_params import VESSEL_NODE
 from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
 from sim_math.hull_plan import HullDimensions
@@ -55,52 +56,11 @@ THRUSTER_COMMAND = "thruster_command"   # the per-thruster order input (tug_msgs
 
 
 class VesselNode(SteppedNode):
-    LIVE_PARAMETERS = ("marker_rate", "marker_force_scale")  # the scene only: no effect on the physics
+    LIVE_PARAMETERS = VESSEL_NODE.live  # the scene only: no effect on the physics
 
     def __init__(self, node_name: str = "vessel", **kwargs):
         super().__init__(node_name, **kwargs)
-        self.declare_parameter("ship_file", "", rc.text_param(
-            "Ship file: a path, or a file name in share/tug_dynamics/ships (e.g. harbour_tug.yaml)"))
-        self.declare_parameter("vessel_name", "", rc.text_param(
-            "Vessel name used in frames and messages; default: the node's namespace"))
-        self.declare_parameter("initial_x", 0.0, rc.float_param("Initial east position", -1e7, 1e7, "m"))
-        self.declare_parameter("initial_y", 0.0, rc.float_param("Initial north position", -1e7, 1e7, "m"))
-        self.declare_parameter("initial_yaw", 0.0, rc.float_param(
-            "Initial heading, 0 = bow east, positive counter-clockwise (REP-103)", -2 * math.pi, 2 * math.pi, "rad"))
-        self.declare_parameter("initial_speed", 0.0, rc.float_param("Initial surge speed", -30.0, 40.0, "m/s"))
-        self.declare_parameter("wrench_topics", [""], rc.text_param(
-            "geometry_msgs/WrenchStamped topics of external forces (rope ends) acting on this vessel"))
-        self.declare_parameter("contact_topics", [""], rc.text_param(
-            "tug_msgs/HullContact topics (hull_contact nodes) this vessel takes part in, as fender or hull"))
-        self.declare_parameter("initial_engine_order", 0.0, rc.float_param(
-            "Engine order held from the start, engine already at that rpm (0: the model's own start)", -1.0, 1.0))
-        self.declare_parameter("initial_steering_angle", 0.0, rc.float_param(
-            "Steering angle held from the start, rudder already there (positive to port)", -1.6, 1.6, "rad"))
-        self.declare_parameter("ship_overrides", "", rc.text_param(
-            "YAML mapping merged over the ship file, e.g. \"{towline_simple: {enabled: true}}\""))
-        self.declare_parameter("motion", "", rc.text_param(
-            "Prescribed motion instead of dynamics: '' (none), constant_speed, sinusoidal_sway, acceleration, turn"))
-        self.declare_parameter("motion_speed", 0.0, rc.float_param(
-            "Prescribed speed U (or U_max for acceleration)", 0.0, 40.0, "m/s"))
-        self.declare_parameter("motion_amplitude", 0.0, rc.float_param("Sinusoidal sway amplitude", 0.0, 1e3, "m"))
-        self.declare_parameter("motion_period", 0.0, rc.float_param("Sinusoidal sway period", 0.0, 1e4, "s"))
-        self.declare_parameter("motion_acceleration", 0.0, rc.float_param("Prescribed acceleration", 0.0, 10.0,
-                                                                          "m/s^2"))
-        self.declare_parameter("motion_turn_rate", 0.0, rc.float_param(
-            "Prescribed turn: rate, positive to port", -1.0, 1.0, "rad/s"))
-        self.declare_parameter("motion_turn_start", 0.0, rc.float_param("Prescribed turn: start time", 0.0, 1e6, "s"))
-        self.declare_parameter("motion_turn_duration", 0.0, rc.float_param("Prescribed turn: duration", 0.0, 1e6, "s"))
-        self.declare_parameter("motion_heading", "track", rc.text_param(
-            "Heading of a prescribed motion: track (follows the track tangent) or fixed"))
-        self.declare_parameter("current_east", 0.0, rc.float_param("Uniform current, east component", -10.0, 10.0, "m/s"))
-        self.declare_parameter("current_north", 0.0, rc.float_param("Uniform current, north component", -10.0, 10.0, "m/s"))
-        self.declare_parameter("environment", "", rc.text_param(
-            "The run's environment as YAML (a scenario's environment section: wind, current, depth; "
-            "sea_environment.environment); '' = still air, deep water, current_east / current_north"))
-        self.declare_parameter("marker_rate", 10.0, rc.float_param(
-            "Rate of the scene markers (hull, attachments, force arrows; at most the exchange rate)", 0.1, 1000.0, "Hz"))
-        self.declare_parameter("marker_force_scale", 1e-4, rc.float_param(
-            "Length of the thrust and rope force arrows per newton", 0.0, 1.0, "m/N"))
+        rc.declare_table(self, VESSEL_NODE)
 
         ship_file = self.get_parameter("ship_file").value
         if not ship_file:
