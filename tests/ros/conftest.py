@@ -136,6 +136,61 @@ def start_node(ros_domain, tmp_path, request) -> Callable[..., NodeProcess]:
             print(f"----- log of {' '.join(node.args)} -----\n{node.log()}")
 
 
+def entry_function(package: str, executable: str) -> Callable:
+    """The function the installed console script `executable` of package calls: its
+    console_scripts entry point (setup.py), loaded as the script loads it."""
+    from importlib.metadata import distribution
+    (entry,) = [e for e in distribution(package.replace("_", "-")).entry_points
+                if e.group == "console_scripts" and e.name == executable]
+    return entry.load()
+
+
+class _PastTheChecks(BaseException):
+    """Raised by run_in_process's guard when a call gets as far as initialising rclpy (a
+    BaseException: no `except Exception` of the code under test takes it for its own error)."""
+
+
+@pytest.fixture
+def run_in_process(capfd, monkeypatch):
+    """run_in_process(executable, *args) -> subprocess.CompletedProcess: the scenario_runner
+    command line `executable args` run in this process, through the entry function its console
+    script calls (sys.exit(main())): the exit status is main's return value (or SystemExit's, as
+    argparse raises it), stdout and stderr are what the process would print (file descriptors
+    1 and 2, captured). An exception main lets out fails the test, as the process's traceback would.
+
+    Only for what fails before any node starts (bad arguments, files, output paths): while main
+    runs, initialising an rclpy context (the first thing each tool does once its checks passed,
+    before it makes a node or starts a process) fails the test instead."""
+    from rclpy.context import Context
+
+    def guard(self, *args, **kwargs):
+        raise _PastTheChecks()
+
+    def _run(executable: str, *args) -> subprocess.CompletedProcess:
+        main = entry_function("scenario_runner", executable)
+        argv = [str(a) for a in args]
+        capfd.readouterr()
+        try:
+            with monkeypatch.context() as patch:
+                patch.setattr(Context, "init", guard)
+                status = main(argv)
+        except SystemExit as exc:
+            status = exc.code
+        except _PastTheChecks:
+            err = capfd.readouterr().err
+            pytest.fail(f"{executable} {' '.join(argv)}: got past the checks made before any node starts "
+                        f"(initialised rclpy); stderr:\n{err}")
+        out, err = capfd.readouterr()
+        if status is None:
+            status = 0
+        elif not isinstance(status, int):  # sys.exit("message"): printed, status 1
+            err += f"{status}\n"
+            status = 1
+        return subprocess.CompletedProcess([executable, *argv], status, out, err)
+
+    return _run
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(item, call):
     outcome = yield

@@ -226,12 +226,12 @@ def test_corrupt_recording_is_reported_and_the_rest_analysed(demo_recording, tmp
     assert summary["vessels"]["tug"]["t_end"] == pytest.approx(10.0)  # messages after the damage were read
 
 
-def test_not_an_mcap_file_is_refused_with_its_path(tmp_path):
+def test_not_an_mcap_file_is_refused_with_its_path(tmp_path, run_in_process):
     junk = tmp_path / "junk.mcap"
     junk.write_text("not a recording\n")
-    out = analyze(junk, "-o", tmp_path / "an")
+    out = analyze(junk, "-o", tmp_path / "an")  # the executable's exit status 2
     assert out.returncode == 2 and str(junk) in out.stderr and "not an MCAP file" in out.stderr
-    out = analyze(tmp_path / "missing.mcap")
+    out = run_in_process("analyze", tmp_path / "missing.mcap")  # its entry function, in this process
     assert out.returncode == 2 and "missing.mcap" in out.stderr
 
 

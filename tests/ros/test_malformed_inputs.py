@@ -1,9 +1,12 @@
 """Every input a node would refuse is refused before any node starts.
 
-A corpus of malformed scenarios (and of the ship and rope files they name), each run through
-the real command line `run_scenario <file> --no-record --quiet`. Each must exit 2 with a
-message naming the file and the key, without a traceback, and start nothing (no node log
-directory is created; the runner makes it only when it starts the nodes).
+A corpus of malformed scenarios (and of the ship and rope files they name), each run as the
+command line `run_scenario <file> --no-record --quiet` in this process: the entry function the
+executable calls (run_scenario.main, which refuses in plan_run, before rclpy is initialised),
+with its stdout and stderr captured. Each must exit 2 with a message naming the file and the
+key, without a traceback, and start nothing (no node log directory is created; the runner makes
+it only when it starts the nodes; rclpy is not initialised). One case also goes through the
+real executable, a process of its own, end to end.
 """
 import os
 import subprocess
@@ -276,15 +279,7 @@ def test_base_scenario_is_valid(tmp_path):
     assert [v.name for v in sc.vessels] == ["tug", "barge"] and sc.steps == 100
 
 
-@pytest.mark.timeout(60)
-@pytest.mark.parametrize("case", sorted(CASES))
-def test_malformed_input_refused_before_any_node_starts(case, tmp_path):
-    path = _write(tmp_path, case)
-    logs = tmp_path / "node_logs"
-    t0 = time.monotonic()
-    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--no-record", "--quiet",
-                           "--log-dir", str(logs)], capture_output=True, text=True, timeout=60)
-    wall = time.monotonic() - t0
+def _assert_refused(case, path, logs, proc, wall):
     out = proc.stdout + proc.stderr
     assert proc.returncode == 2, out
     assert "Traceback" not in out, out
@@ -293,3 +288,30 @@ def test_malformed_input_refused_before_any_node_starts(case, tmp_path):
         assert text in proc.stderr, f"expected {text!r} in:\n{proc.stderr}"
     assert not logs.exists(), "a node was started"
     assert wall < 30.0
+
+
+def _args(path, logs):
+    return [str(path), "--no-record", "--quiet", "--log-dir", str(logs)]
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_malformed_input_refused_before_any_node_starts(case, tmp_path, run_in_process):
+    path = _write(tmp_path, case)
+    logs = tmp_path / "node_logs"
+    t0 = time.monotonic()
+    proc = run_in_process("run_scenario", *_args(path, logs))
+    _assert_refused(case, path, logs, proc, time.monotonic() - t0)
+
+
+@pytest.mark.timeout(60)
+def test_malformed_input_refused_by_the_executable(tmp_path):
+    """The same refusal through the installed executable, a process of its own (one case: a
+    ship file the scenario names, refused for its hull mass)."""
+    case = "ship_mass_1e30"
+    path = _write(tmp_path, case)
+    logs = tmp_path / "node_logs"
+    t0 = time.monotonic()
+    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), *_args(path, logs)],
+                          capture_output=True, text=True, timeout=60)
+    _assert_refused(case, path, logs, proc, time.monotonic() - t0)

@@ -9,9 +9,12 @@ from conftest import executable_path
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
 
+ARGS = ["seed000_free_fall_air.yaml", "--duration", "0.1", "--quiet"]
+
+
 def run(*args):
-    return subprocess.run([executable_path("scenario_runner", "run_scenario"), "seed000_free_fall_air.yaml",
-                           "--duration", "0.1", "--quiet", *args], capture_output=True, text=True, timeout=100)
+    return subprocess.run([executable_path("scenario_runner", "run_scenario"), *ARGS, *args], capture_output=True,
+                          text=True, timeout=100)
 
 
 @pytest.mark.parametrize("output, message", [
@@ -19,8 +22,10 @@ def run(*args):
     ("/proc/x.mcap", "/proc/x.mcap"),
     ("/tmp", "is a folder"),
 ])
-def test_unwritable_output_is_refused_before_start(tmp_path, ros_domain, output, message):
-    proc = run("--output", output, "--log-dir", str(tmp_path / "logs"))
+def test_unwritable_output_is_refused_before_start(tmp_path, ros_domain, run_in_process, output, message):
+    """Refused by the runner's own checks before it starts anything: run in this process (the
+    exit status 2 through the executable: test_malformed_inputs)."""
+    proc = run_in_process("run_scenario", *ARGS, "--output", output, "--log-dir", tmp_path / "logs")
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "logs").exists()

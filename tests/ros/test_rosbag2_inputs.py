@@ -8,6 +8,9 @@ DDS-free: bags are written with the rosbags library (an independent rosbag2 writ
   several .mcap files (a split bag) or none is refused with a message saying so;
 - the recorder's QoS YAML (rosbag2 metadata version 9) is read back by rosbags' rosbag2 QoS
   parser as the profile it came from, and its BagMetadata YAML parses back to the same data.
+
+The refusals (exit status 2) run the tools' entry functions in this process; the same exit
+status through the executables: test_analysis and test_replay.
 """
 import os
 import shlex
@@ -53,6 +56,11 @@ def _analyze(*args):
                           capture_output=True, text=True, timeout=120)
 
 
+def _refused(run_in_process, tool, *args):
+    """`tool args` (analyze with --no-figures) through its entry function, in this process."""
+    return run_in_process(tool, *args, *(["--no-figures"] if tool == "analyze" else []))
+
+
 def _assert_refused_with_the_conversion(proc, named):
     assert proc.returncode == 2, proc.stdout + proc.stderr
     err = proc.stderr
@@ -65,11 +73,12 @@ def _assert_refused_with_the_conversion(proc, named):
 
 
 @pytest.mark.parametrize("given", ["db3_file", "bag_directory"])
-def test_a_sqlite3_bag_is_refused_with_a_conversion_that_works(tmp_path, given):
+def test_a_sqlite3_bag_is_refused_with_a_conversion_that_works(tmp_path, run_in_process, given):
     bag = _write_bag(tmp_path / "sq_bag", "sqlite3")
     (db3,) = bag.glob("*.db3")
     target = db3 if given == "db3_file" else bag
-    command = _assert_refused_with_the_conversion(_analyze(target, "-o", tmp_path / "out"), db3)
+    command = _assert_refused_with_the_conversion(_refused(run_in_process, "analyze", target, "-o", tmp_path / "out"),
+                                                  db3)
     assert not (tmp_path / "out").exists()
     # the command given, run as given (rosbags-convert of the pinned rosbags, in this venv)
     argv = shlex.split(command)
@@ -83,13 +92,13 @@ def test_a_sqlite3_bag_is_refused_with_a_conversion_that_works(tmp_path, given):
     assert f"vessel tug: {N} states" in proc.stdout and (tmp_path / "out" / "summary.json").is_file()
 
 
-def test_a_directory_of_loose_db3_files_is_refused_naming_the_file(tmp_path):
+def test_a_directory_of_loose_db3_files_is_refused_naming_the_file(tmp_path, run_in_process):
     bag = _write_bag(tmp_path / "sq_bag", "sqlite3")
     loose = tmp_path / "loose"
     loose.mkdir()
     (db3,) = bag.glob("*.db3")
     os.link(db3, loose / "run.db3")  # no metadata.yaml: the conversion must start from the file
-    command = _assert_refused_with_the_conversion(_analyze(loose), loose / "run.db3")
+    command = _assert_refused_with_the_conversion(_refused(run_in_process, "analyze", loose), loose / "run.db3")
     assert f"--src {loose / 'run.db3'}" in command
 
 
@@ -101,19 +110,19 @@ def test_mcap_bag_directory_is_analysed_through_its_file(tmp_path):
     assert f"reading {mcap}" in proc.stdout and f"vessel tug: {N} states" in proc.stdout
 
 
-def test_split_or_empty_directories_are_refused_saying_why(tmp_path):
+def test_split_or_empty_directories_are_refused_saying_why(tmp_path, run_in_process):
     bag = _write_bag(tmp_path / "mc_bag", "mcap")
     (mcap,) = bag.glob("*.mcap")
     split = tmp_path / "split"
     split.mkdir()
     for k in range(2):
         os.link(mcap, split / f"split_{k}.mcap")
-    proc = _analyze(split)
+    proc = _refused(run_in_process, "analyze", split)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     assert "split" in proc.stderr and "split_0.mcap" in proc.stderr and "rosbags-convert --src" in proc.stderr
     empty = tmp_path / "empty"
     empty.mkdir()
-    proc = _analyze(empty)
+    proc = _refused(run_in_process, "analyze", empty)
     assert proc.returncode == 2 and str(empty) in proc.stderr and "no .mcap" in proc.stderr, proc.stderr
 
 
@@ -159,11 +168,8 @@ def test_bag_metadata_yaml_round_trips():
     assert empty["starting_time"] == {"nanoseconds_since_epoch": 2 ** 63 - 1} and empty["duration"]["nanoseconds"] == 0
 
 
-def test_replay_refuses_a_sqlite3_bag_the_same_way(tmp_path):
+def test_replay_refuses_a_sqlite3_bag_the_same_way(tmp_path, run_in_process):
     """replay opens its input as analyze does: a .db3 is refused before any node is made."""
-    from scenario_runner.conductor import executable_path
     bag = _write_bag(tmp_path / "sq_bag", "sqlite3")
     (db3,) = bag.glob("*.db3")
-    proc = subprocess.run([executable_path("scenario_runner", "replay"), str(bag)], capture_output=True, text=True,
-                          timeout=120)
-    _assert_refused_with_the_conversion(proc, db3)
+    _assert_refused_with_the_conversion(_refused(run_in_process, "replay", bag), db3)

@@ -221,10 +221,12 @@ def test_scenario_runs_and_its_recording_holds_physics(path, ros_domain, tmp_pat
         check_rope(r["name"], r, msgs[f"/{r['name']}/state"], rate, scenario)
 
 
-def _bad(tmp_path, text):
+def _bad(tmp_path, text, run_in_process):
+    """run_scenario of a bad scenario, in this process: refused before anything starts (the exit
+    status 2 through the executable: test_malformed_inputs)."""
     path = tmp_path / "bad.yaml"
     path.write_text(text)
-    return run_scenario(str(path), "--output", str(tmp_path / "x.mcap"), timeout=60)
+    return run_in_process("run_scenario", path, "--output", tmp_path / "x.mcap", "--quiet")
 
 
 GOOD = """name: t
@@ -247,8 +249,8 @@ ropes:
     ("end_a: tug/towing_hook", "end_a: tug/mast_top", "key 'ropes[0].end_a': vessel 'tug' has no attachment"),
     ("end_a: tug/towing_hook", "end_a: barge/bow_bollard", "vessel 'barge' is not in 'vessels'"),
 ])
-def test_bad_scenario_fails_before_any_node_starts(tmp_path, old, new, message):
-    proc = _bad(tmp_path, GOOD.replace(old, new))
+def test_bad_scenario_fails_before_any_node_starts(tmp_path, run_in_process, old, new, message):
+    proc = _bad(tmp_path, GOOD.replace(old, new), run_in_process)
     assert proc.returncode == 2
     assert "bad.yaml" in proc.stderr and message in proc.stderr, proc.stderr
     assert not (tmp_path / "x.mcap").exists()  # nothing started, nothing recorded
