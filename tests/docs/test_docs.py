@@ -28,9 +28,19 @@ def _read(path):
         return f.read()
 
 
-def test_scenario_reference_is_generated_from_the_schema():
+def test_references_are_generated_from_the_schema_and_the_parameter_tables():
     gen = _gen_docs()
-    assert _read(gen.PAGE) == gen.render(), "docs/reference/scenario-format.md is stale: python scripts/gen_docs.py"
+    for page, text in gen.pages().items():
+        assert _read(page) == text, f"{os.path.relpath(page, ROOT)} is stale: python scripts/gen_docs.py"
+
+
+def test_parameter_reference_covers_every_node_parameter():
+    gen = _gen_docs()
+    page = _read(gen.PARAMETERS_PAGE)
+    for table in gen.NODE_PARAMS.NODE_TABLES.values():
+        for p in table:
+            assert f"| `{p.name}` | {p.ros_type} |" in page, (table.node, p.name)
+    assert "| `marker_rate` | double | `10.0` | 0.1 to 1000 | Hz | live |" in page
 
 
 def test_scenario_reference_covers_every_key():
@@ -51,6 +61,7 @@ def test_gen_docs_check_reports_a_stale_page(tmp_path, monkeypatch, capsys):
     stale = tmp_path / "scenario-format.md"
     stale.write_text(gen.render().replace("| `duration` |", "| `duration_s` |"), encoding="utf-8")
     monkeypatch.setattr(gen, "PAGE", str(stale))
+    monkeypatch.setattr(gen, "PARAMETERS_PAGE", str(tmp_path / "node-parameters.md"))
     assert gen.main(["--check"]) == 1
     assert "duration_s" in capsys.readouterr().out
     assert gen.main([]) == 0 and gen.main(["--check"]) == 0

@@ -29,6 +29,7 @@ from rosgraph_msgs.msg import Clock
 from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
+from sim_contract.node_params import NODE_TABLES
 from sim_math.rotations import yaw_from_quaternion
 from scenario_format.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
                                      resolve)
@@ -252,6 +253,9 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         params.update(vessel=a.vessel, exchange_rate=float(sc.exchange_rate), lockstep=True, use_sim_time=True,
                       run_id=run_id)
         specs.append(NodeSpec(f"/{a.name}", "autopilot", a.package, a.executable, params))
+    for spec in specs:  # the mapping sets only parameters the node's table holds (a rename fails here)
+        if spec.executable in NODE_TABLES:
+            NODE_TABLES[spec.executable].check_names(set(spec.params) - {"use_sim_time"})
     return specs
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 from typing import Optional
 
-_SRC = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # ros_ws/src
+_SRC = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))  # ros_ws/src
 
 
 def package_data_dir(package: str, subdir: str) -> str:
