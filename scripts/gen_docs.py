@@ -36,6 +36,7 @@ sys.path += [os.path.join(_SRC, d) for d in sorted(os.listdir(_SRC)) if os.path.
 
 from scenario_format.scenario import Scenario as SCHEMA  # noqa: E402  the one place that names the schema
 import sim_contract.node_params as NODE_PARAMS  # noqa: E402  the nodes' parameter tables
+from scenario_runner.autopilot_law import NODE_TABLE as AUTOPILOT_TABLE  # noqa: E402  the example autopilot's
 
 import annotated_types  # noqa: E402
 from pydantic import BaseModel  # noqa: E402
@@ -333,6 +334,11 @@ def render(top: type = SCHEMA) -> str:
     return "\n".join(lines).rstrip("\n") + "\n"
 
 
+def node_tables():
+    """{executable: its parameter table} of every node with one."""
+    return {**NODE_PARAMS.NODE_TABLES, "autopilot": AUTOPILOT_TABLE + NODE_PARAMS.STEPPING}
+
+
 def render_node_parameters() -> str:
     """The nodes' parameter tables (sim_contract.node_params), one section a node."""
     lines = [
@@ -348,13 +354,14 @@ def render_node_parameters() -> str:
         "A number outside its range is refused by the node, and by the scenario before any node starts.",
         "",
     ]
-    for executable, table in NODE_PARAMS.NODE_TABLES.items():
+    for executable, table in node_tables().items():
         lines += [f"## {_code(table.node)} {{#{executable.replace('_', '-')}}}", "",
                   "| parameter | type | default | range | unit | live | description |",
                   "|---|---|---|---|---|---|---|"]
         for p in table:
-            span = f"{_num(p.lo)} to {_num(p.hi)}" if p.lo is not None else ""
-            lines.append("| " + " | ".join([_code(p.name), p.ros_type, _code(json.dumps(p.default)), span, p.unit,
+            span = (f"{_num(p.lo)} to {_num(p.hi)}" if p.lo is not None else
+                    "one of " + ", ".join(_code(c) for c in p.choices) if p.choices else "")
+            lines.append("| " + " | ".join([_code(p.name), p.ros_type, "none (used when given)" if p.default is None else _code(json.dumps(p.default)), span, p.unit,
                                             "live" if p.live else "", _text(p.description)]) + " |")
         lines.append("")
     return "\n".join(lines).rstrip("\n") + "\n"

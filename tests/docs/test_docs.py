@@ -37,7 +37,7 @@ def test_references_are_generated_from_the_schema_and_the_parameter_tables():
 def test_parameter_reference_covers_every_node_parameter():
     gen = _gen_docs()
     page = _read(gen.PARAMETERS_PAGE)
-    for table in gen.NODE_PARAMS.NODE_TABLES.values():
+    for table in gen.node_tables().values():
         for p in table:
             assert f"| `{p.name}` | {p.ros_type} |" in page, (table.node, p.name)
     assert "| `marker_rate` | double | `10.0` | 0.1 to 1000 | Hz | live |" in page

@@ -18,6 +18,7 @@ NODES = [
     ("hull_contact", "contact_node", "/push/contact", {
         "fender_vessel": "tug", "hull_vessel": "ship", "fender_ship_file": "asd_tug.yaml",
         "hull_ship_file": "s175_003.yaml"}),
+    ("scenario_runner", "autopilot", "/pilot/autopilot", {"vessel": "tug"}),
 ]
 
 
@@ -41,8 +42,9 @@ def test_a_running_node_declares_exactly_its_table(package, executable, name, gi
     from rclpy.node import Node
     from rclpy.parameter import Parameter, parameter_value_to_python
     from rclpy.parameter_client import AsyncParameterClient
-    from sim_contract.node_params import NODE_TABLES
-    table = NODE_TABLES[executable]
+    from scenario_runner.autopilot_law import NODE_TABLE as AUTOPILOT_TABLE
+    from sim_contract.node_params import NODE_TABLES, STEPPING
+    table = {**NODE_TABLES, "autopilot": AUTOPILOT_TABLE + STEPPING}[executable]
     types = {"bool": ParameterType.PARAMETER_BOOL, "integer": ParameterType.PARAMETER_INTEGER,
              "double": ParameterType.PARAMETER_DOUBLE, "string": ParameterType.PARAMETER_STRING,
              "string array": ParameterType.PARAMETER_STRING_ARRAY,
@@ -59,7 +61,7 @@ def test_a_running_node_declares_exactly_its_table(package, executable, name, gi
     values = _call(asker, client.get_parameters(list(table.names)), "get").values
     for p, d, v in zip(table, described, values):
         assert d.name == p.name and d.type == types[p.ros_type], p.name
-        assert v.type == types[p.ros_type], p.name
+        assert v.type == (ParameterType.PARAMETER_NOT_SET if p.default is None else types[p.ros_type]), p.name
         if p.ros_type == "double" and p.lo is not None:
             (r,) = d.floating_point_range
             assert (r.from_value, r.to_value) == (p.lo, p.hi), p.name
@@ -68,11 +70,12 @@ def test_a_running_node_declares_exactly_its_table(package, executable, name, gi
             (r,) = d.integer_range
             assert (r.from_value, r.to_value) == (p.lo, p.hi), p.name
         else:
+            assert d.dynamic_typing == p.dynamic, p.name
             assert not d.floating_point_range and not d.integer_range, p.name
         assert parameter_value_to_python(v) == given.get(p.name, p.default), p.name
 
     # while running: a live parameter changes, a fixed one is refused naming the live ones
-    fixed = next(p for p in table if not p.live and p.ros_type == "double")
+    fixed = next(p for p in table if not p.live)
     changes = [Parameter(fixed.name, value=fixed.default)]
     if table.live:
         live = table[table.live[0]]

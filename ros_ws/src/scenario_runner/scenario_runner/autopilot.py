@@ -44,16 +44,15 @@ from typing import List, Optional
 from nav_msgs.msg import Odometry
 from rclpy.duration import Duration
 from rclpy.parameter import Parameter
-from rcl_interfaces.msg import ParameterDescriptor
 from tug_msgs.msg import VesselCommand, VesselStatus
 
 from sim_contract.geo import yaw_from_compass
-from scenario_runner.autopilot_law import AutopilotConfig, AutopilotLaw, Measurement, Output, parse_waypoints
+from scenario_runner.autopilot_law import (NODE_TABLE, SPEED_SOURCES, AutopilotConfig, AutopilotLaw, Measurement,
+                                           Output, parse_waypoints)
 from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
 
-SPEED_SOURCES = ("status", "odom")
 
 
 def heading_from_true_deg(heading_true_deg: float) -> float:
@@ -89,59 +88,11 @@ _LIVE_CONFIG = {
 
 
 class AutopilotNode(SteppedNode):
-    LIVE_PARAMETERS = tuple(_LIVE_CONFIG) + ("odom_timeout", "log_period")
+    LIVE_PARAMETERS = NODE_TABLE.live
+
     def __init__(self, node_name: str = "autopilot", **kwargs):
         super().__init__(node_name, **kwargs)
-        d = AutopilotConfig()
-        p = self.declare_parameter
-        p("vessel", "tug", rc.text_param("Name (ROS namespace) of the vessel this autopilot drives"))
-        p("mode", d.mode, rc.text_param("Steering: heading (keep parameter heading) or track (follow parameter track)"))
-        p("heading", 0.0, rc.float_param(
-            "Ordered heading (mode heading), 0 = east, positive counter-clockwise (REP-103)", -360.0, 360.0, "deg"))
-        # the same order as a person gives it: no default, so that it is used only when given
-        p("heading_true_deg", Parameter.Type.DOUBLE, rc.float_param(
-            "Ordered heading as a compass heading (mode heading), 0 = north, clockwise; instead of heading",
-            0.0, 360.0, "deg true"))
-        p("speed_control", d.speed_control, rc.text_param(
-            "true: PI control of the speed through the water to parameter speed; false: fixed engine_order"))
-        p("speed", d.speed, rc.float_param("Ordered speed through the water", -10.0, 20.0, "m/s"))
-        p("engine_order", d.engine_order, rc.float_param(
-            "Fixed engine order when speed_control is false", -1.0, 1.0))
-        p("track", "", ParameterDescriptor(
-            description="Waypoints [x1, y1, x2, y2, ...] in map (ENU), m, for mode track (a list of numbers, "
-                        "or the same as a comma-separated string)", dynamic_typing=True))
-        p("lookahead", d.lookahead, rc.float_param("Line-of-sight lookahead distance", 1.0, 10000.0, "m"))
-        p("acceptance_radius", d.acceptance_radius, rc.float_param(
-            "The next leg starts this far before a waypoint", 0.0, 10000.0, "m"))
-        p("heading_kp", d.heading_kp, rc.float_param("Heading PID: steering per heading error", 0.0, 100.0, "rad/rad"))
-        p("heading_ki", d.heading_ki, rc.float_param("Heading PID: steering per integrated error", 0.0, 10.0,
-                                                      "rad/(rad s)"))
-        p("heading_kd", d.heading_kd, rc.float_param("Heading PID: steering per yaw rate (damping)", 0.0, 1000.0,
-                                                      "rad/(rad/s)"))
-        p("heading_integral_band_deg", math.degrees(d.heading_integral_band), rc.float_param(
-            "Heading error below which the integral acts", 0.0, 180.0, "deg"))
-        p("heading_integral_limit_deg", math.degrees(d.heading_integral_limit), rc.float_param(
-            "Largest steering from the integral term", 0.0, 90.0, "deg"))
-        p("max_steering_deg", math.degrees(d.max_steering), rc.float_param(
-            "Largest steering angle ordered (harbour tug: 35)", 0.1, 90.0, "deg"))
-        p("speed_kp", d.speed_kp, rc.float_param("Speed PI: engine order per speed error", 0.0, 10.0, "1/(m/s)"))
-        p("speed_ki", d.speed_ki, rc.float_param("Speed PI: engine order per integrated error", 0.0, 10.0, "1/m"))
-        p("speed_full_ahead", d.speed_full_ahead, rc.float_param(
-            "Speed at engine order 1 (feed-forward; harbour tug: 12 kn)", 0.1, 50.0, "m/s"))
-        p("speed_exponent", d.speed_exponent, rc.float_param(
-            "Feed-forward engine order = (speed / speed_full_ahead)^speed_exponent", 0.2, 5.0))
-        p("speed_integral_band", d.speed_integral_band, rc.float_param(
-            "Speed error below which the integral acts", 0.0, 50.0, "m/s"))
-        p("speed_integral_limit", d.speed_integral_limit, rc.float_param(
-            "Largest engine order from the integral term", 0.0, 2.0))
-        p("min_engine_order", d.min_engine_order, rc.float_param("Lowest engine order ordered", -1.0, 1.0))
-        p("max_engine_order", d.max_engine_order, rc.float_param("Highest engine order ordered", -1.0, 1.0))
-        p("speed_source", "status", rc.text_param(
-            "status: speed through the water from /<vessel>/status; odom: speed over ground from odometry"))
-        p("odom_timeout", 2.0, rc.float_param(
-            "Free-running: stop commanding when the latest odometry is older than this (wall time)", 0.1, 3600.0, "s"))
-        p("log_period", 5.0, rc.float_param("Simulated seconds between progress log lines; 0: none", 0.0, 3600.0,
-                                            "s"))
+        rc.declare_table(self, NODE_TABLE)
         g = lambda name: self.get_parameter(name).value  # noqa: E731
 
         self.vessel = str(g("vessel")).strip("/")

@@ -34,6 +34,8 @@ import dataclasses
 import math
 from typing import Dict, List, Optional, Sequence, Tuple
 
+from sim_contract.node_params import Param, ParamTable
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -313,23 +315,75 @@ class AutopilotLaw:
         return out
 
 
-# ROS parameters of `scenario_runner autopilot` (autopilot.py declare_parameter): name -> the
-# accepted type and range. The node refuses a value of another type or outside the range, and
-# ignores a parameter it does not declare (so a misspelt one would pass silently).
+SPEED_SOURCES = ("status", "odom")
+_D = AutopilotConfig()
+# The example autopilot's ROS parameters (autopilot.py declares them from this table; the
+# scenario's `autopilots[].params` are checked against it before any node starts). Orders, gains
+# and limits change while running.
+NODE_TABLE = ParamTable(
+    "scenario_runner/autopilot",
+    Param("vessel", "tug", "Name (ROS namespace) of the vessel this autopilot drives"),
+    Param("mode", _D.mode, "Steering: heading (keep parameter heading) or track (follow parameter track)",
+          choices=AutopilotConfig.MODES),
+    Param("heading", 0.0, "Ordered heading (mode heading), 0 = east, positive counter-clockwise (REP-103)",
+          -360.0, 360.0, "deg", live=True),
+    # the same order as a person gives it: no default, so that it is used only when given
+    Param("heading_true_deg", None, "Ordered heading as a compass heading (mode heading), 0 = north, clockwise; "
+          "instead of heading", 0.0, 360.0, "deg true", live=True, kind="double"),
+    Param("speed_control", _D.speed_control, "true: PI control of the speed through the water to parameter speed; "
+          "false: fixed engine_order"),
+    Param("speed", _D.speed, "Ordered speed through the water", -10.0, 20.0, "m/s", live=True),
+    Param("engine_order", _D.engine_order, "Fixed engine order when speed_control is false", -1.0, 1.0, live=True),
+    Param("track", "", "Waypoints [x1, y1, x2, y2, ...] in map (ENU), m, for mode track (a list of numbers, or the "
+          "same as a comma-separated string)", dynamic=True),
+    Param("lookahead", _D.lookahead, "Line-of-sight lookahead distance", 1.0, 10000.0, "m", live=True),
+    Param("acceptance_radius", _D.acceptance_radius, "The next leg starts this far before a waypoint", 0.0, 10000.0,
+          "m", live=True),
+    Param("heading_kp", _D.heading_kp, "Heading PID: steering per heading error", 0.0, 100.0, "rad/rad", live=True),
+    Param("heading_ki", _D.heading_ki, "Heading PID: steering per integrated error", 0.0, 10.0, "rad/(rad s)",
+          live=True),
+    Param("heading_kd", _D.heading_kd, "Heading PID: steering per yaw rate (damping)", 0.0, 1000.0, "rad/(rad/s)",
+          live=True),
+    Param("heading_integral_band_deg", math.degrees(_D.heading_integral_band),
+          "Heading error below which the integral acts", 0.0, 180.0, "deg", live=True),
+    Param("heading_integral_limit_deg", math.degrees(_D.heading_integral_limit),
+          "Largest steering from the integral term", 0.0, 90.0, "deg", live=True),
+    Param("max_steering_deg", math.degrees(_D.max_steering), "Largest steering angle ordered (harbour tug: 35)",
+          0.1, 90.0, "deg", live=True),
+    Param("speed_kp", _D.speed_kp, "Speed PI: engine order per speed error", 0.0, 10.0, "1/(m/s)", live=True),
+    Param("speed_ki", _D.speed_ki, "Speed PI: engine order per integrated error", 0.0, 10.0, "1/m", live=True),
+    Param("speed_full_ahead", _D.speed_full_ahead, "Speed at engine order 1 (feed-forward; harbour tug: 12 kn)",
+          0.1, 50.0, "m/s", live=True),
+    Param("speed_exponent", _D.speed_exponent,
+          "Feed-forward engine order = (speed / speed_full_ahead)^speed_exponent", 0.2, 5.0, live=True),
+    Param("speed_integral_band", _D.speed_integral_band, "Speed error below which the integral acts", 0.0, 50.0,
+          "m/s", live=True),
+    Param("speed_integral_limit", _D.speed_integral_limit, "Largest engine order from the integral term", 0.0, 2.0,
+          live=True),
+    Param("min_engine_order", _D.min_engine_order, "Lowest engine order ordered", -1.0, 1.0, live=True),
+    Param("max_engine_order", _D.max_engine_order, "Highest engine order ordered", -1.0, 1.0, live=True),
+    Param("speed_source", "status", "status: speed through the water from /<vessel>/status; odom: speed over ground "
+          "from odometry", choices=SPEED_SOURCES),
+    Param("odom_timeout", 2.0, "Free-running: stop commanding when the latest odometry is older than this (wall "
+          "time)", 0.1, 3600.0, "s", live=True),
+    Param("log_period", 5.0, "Simulated seconds between progress log lines; 0: none", 0.0, 3600.0, "s", live=True),
+)
 _NUMBER = (int, float)
-NODE_PARAMS: Dict[str, tuple] = {
-    "mode": (str, ("heading", "track")), "speed_control": (bool, None), "speed_source": (str, ("status", "odom")),
-    "track": ((list, str), None),
-    "heading": (_NUMBER, (-360.0, 360.0)), "heading_true_deg": (_NUMBER, (0.0, 360.0)), "speed": (_NUMBER, (-10.0, 20.0)), "engine_order": (_NUMBER, (-1.0, 1.0)),
-    "lookahead": (_NUMBER, (1.0, 1e4)), "acceptance_radius": (_NUMBER, (0.0, 1e4)),
-    "heading_kp": (_NUMBER, (0.0, 100.0)), "heading_ki": (_NUMBER, (0.0, 10.0)), "heading_kd": (_NUMBER, (0.0, 1000.0)),
-    "heading_integral_band_deg": (_NUMBER, (0.0, 180.0)), "heading_integral_limit_deg": (_NUMBER, (0.0, 90.0)),
-    "max_steering_deg": (_NUMBER, (0.1, 90.0)), "speed_kp": (_NUMBER, (0.0, 10.0)), "speed_ki": (_NUMBER, (0.0, 10.0)),
-    "speed_full_ahead": (_NUMBER, (0.1, 50.0)), "speed_exponent": (_NUMBER, (0.2, 5.0)),
-    "speed_integral_band": (_NUMBER, (0.0, 50.0)), "speed_integral_limit": (_NUMBER, (0.0, 2.0)),
-    "min_engine_order": (_NUMBER, (-1.0, 1.0)), "max_engine_order": (_NUMBER, (-1.0, 1.0)),
-    "odom_timeout": (_NUMBER, (0.1, 3600.0)), "log_period": (_NUMBER, (0.0, 3600.0)),
-}
+
+
+def _scenario_kind(p: Param):
+    """(accepted Python type(s), range or choices) of a parameter as a scenario gives it."""
+    if p.dynamic:
+        return (list, str), None
+    if p.ros_type == "bool":
+        return bool, None
+    if p.ros_type == "string":
+        return str, p.choices
+    return _NUMBER, (p.lo, p.hi)
+
+
+# what a scenario may give (the runner sets `vessel` from the scenario's own key)
+NODE_PARAMS: Dict[str, tuple] = {p.name: _scenario_kind(p) for p in NODE_TABLE if p.name != "vessel"}
 
 
 def check_scenario_params(path: str, i: int, a) -> None:

@@ -23,11 +23,16 @@ class Param:
     hi: Optional[float] = None
     unit: str = ""
     live: bool = False  # settable while the node runs (ros2 param set); else fixed at start-up
+    choices: Tuple[str, ...] = ()  # the values a string may take (checked by the node and the scenario)
+    dynamic: bool = False  # any type (e.g. a list of numbers or the same as a string)
+    kind: str = ""  # the ROS type of a parameter without a default (default None: used only when given)
 
     @property
     def ros_type(self) -> str:
         """The ROS parameter type of the default, as `ros2 param describe` names it."""
         d = self.default
+        if d is None and self.kind:
+            return self.kind
         if isinstance(d, bool):
             return "bool"
         if isinstance(d, int):
@@ -54,7 +59,8 @@ class ParamTable:
             raise ValueError(f"{node}: a parameter is listed twice")
         for p in params:
             p.ros_type  # noqa: B018 - every default has a ROS type
-            if (p.lo is None) != (p.hi is None) or (p.lo is not None and not p.lo <= p.default <= p.hi):
+            if (p.lo is None) != (p.hi is None) or (p.lo is not None and p.default is not None
+                                                    and not p.lo <= p.default <= p.hi):
                 raise ValueError(f"{node}: parameter {p.name}: default {p.default!r} outside [{p.lo}, {p.hi}]")
 
     def __getitem__(self, name: str) -> Param:

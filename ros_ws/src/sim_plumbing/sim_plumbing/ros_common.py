@@ -12,6 +12,7 @@ from typing import Callable, Optional
 
 from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 WORLD_FRAME = "map"  # REP-105 world-fixed frame, ENU (REP-103), still-water surface at z = 0
@@ -77,6 +78,8 @@ def text_param(description: str) -> ParameterDescriptor:
 def descriptor(param) -> ParameterDescriptor:
     """The ROS descriptor of a row of a parameter table (sim_contract.node_params.Param): a number
     with a range gets a range (the unit in its description), anything else its description."""
+    if param.dynamic:
+        return ParameterDescriptor(description=param.description, dynamic_typing=True)
     if param.lo is not None and param.ros_type == "double":
         return float_param(param.description, param.lo, param.hi, param.unit)
     if param.lo is not None and param.ros_type == "integer":
@@ -87,8 +90,11 @@ def descriptor(param) -> ParameterDescriptor:
 def declare_table(node, table) -> None:
     """Declare every parameter of a node's table (sim_contract.node_params) with its default and
     descriptor, in the table's order."""
+    without_default = {"double": Parameter.Type.DOUBLE, "integer": Parameter.Type.INTEGER,
+                       "string": Parameter.Type.STRING, "bool": Parameter.Type.BOOL}
     for param in table:
-        node.declare_parameter(param.name, param.default, descriptor(param))
+        value = without_default[param.kind] if param.default is None else param.default
+        node.declare_parameter(param.name, value, descriptor(param))
 
 
 # ---------------------------------------------------------------------------------------
