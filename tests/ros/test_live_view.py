@@ -14,7 +14,6 @@ import asyncio
 import math
 import re
 import socket
-import struct
 import subprocess
 import threading
 import time
@@ -148,6 +147,42 @@ async def _clients(port, expected, report):
         await p.close()
 
 
+def _check_sampled(viewer, exchange_rate):
+    """In order, new steps only after step 0 (whose state is sent at start-up and again when
+    stepped), at most one a step; the count judged against the run's own span and the sender's
+    rate (paced: sim time runs with the wall clock), with a factor 4 of margin for ten clients
+    sharing two cores with the run."""
+    times = _odom_log_times_s(viewer)
+    stepped = [t for t in times if t > 0.0]
+    assert times[-1] >= WATCH_UNTIL_S and times == sorted(times), times
+    assert all(b > a for a, b in zip(stepped, stepped[1:])), stepped
+    span = stepped[-1] - stepped[0]
+    assert span * LIVE_RATE_HZ / 4 <= len(stepped) - 1 <= span * exchange_rate + 1e-9, (len(stepped), span)
+
+
+def _check_frames(observer, sc, vessels, steps):
+    """/tf equals the odometry of its step, exactly; /tf_static holds every attachment."""
+    from ament_index_python.packages import get_package_share_directory
+    for v in vessels:
+        odom = {(m.header.stamp.sec, m.header.stamp.nanosec): m.pose.pose for m in observer.odom[v]}
+        assert len(odom) == steps + 1
+        tf = {(t.header.stamp.sec, t.header.stamp.nanosec): t for m in observer.tf for t in m.transforms
+              if t.child_frame_id == f"{v}/base_link"}
+        assert len(tf) >= steps  # every step (step 0 may go out before the observer matched)
+        for stamp, t in tf.items():
+            assert t.header.frame_id == "map"
+            p, q = odom[stamp].position, odom[stamp].orientation
+            tr, rot = t.transform.translation, t.transform.rotation
+            assert (tr.x, tr.y, tr.z, rot.x, rot.y, rot.z, rot.w) == (p.x, p.y, p.z, q.x, q.y, q.z, q.w)
+    ship_dir = get_package_share_directory("tug_dynamics") + "/ships/"
+    static = {(t.header.frame_id, t.child_frame_id): t.transform for m in observer.tf_static for t in m.transforms}
+    for v in sc["vessels"]:
+        for name, xyz in yaml.safe_load(open(ship_dir + v["ship_file"]))["attachments"].items():
+            tr = static[(f"{v['name']}/base_link", f"{v['name']}/{name}")]
+            assert (tr.translation.x, tr.translation.y, tr.translation.z) == tuple(float(c) for c in xyz)
+            assert (tr.rotation.x, tr.rotation.y, tr.rotation.z, tr.rotation.w) == (0.0, 0.0, 0.0, 1.0)
+
+
 def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context, full_domain_check):
     # full_domain_check: the runner's 3 s of discovery before its nodes start is what lets this
     # test's own observer match them before step 0 (it checks every step's odometry)
@@ -197,37 +232,10 @@ def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context, full_doma
         cls = _msg_class(channels[topic]["schemaName"])
         for _, payload in viewers[0].messages[topic]:
             deserialize_message(payload, cls)
-    # sampled: in order, new steps only after step 0 (whose state is sent at start-up and again
-    # when stepped), at most one a step; the count judged against the run's own span and the
-    # sender's rate (paced: sim time runs with the wall clock), with a factor 4 of margin for ten
-    # clients sharing two cores with the run
-    times = _odom_log_times_s(viewers[0])
-    stepped = [t for t in times if t > 0.0]
-    assert times[-1] >= WATCH_UNTIL_S and times == sorted(times), times
-    assert all(b > a for a, b in zip(stepped, stepped[1:])), stepped
-    span = stepped[-1] - stepped[0]
-    assert span * LIVE_RATE_HZ / 4 <= len(stepped) - 1 <= span * sc["exchange_rate"] + 1e-9, (len(stepped), span)
+    _check_sampled(viewers[0], sc["exchange_rate"])
 
-    # frames: /tf equals the odometry of its step, exactly; /tf_static holds every attachment
     steps = int(round(DURATION * sc["exchange_rate"]))
-    for v in vessels:
-        odom = {(m.header.stamp.sec, m.header.stamp.nanosec): m.pose.pose for m in observer.odom[v]}
-        assert len(odom) == steps + 1
-        tf = {(t.header.stamp.sec, t.header.stamp.nanosec): t for m in observer.tf for t in m.transforms
-              if t.child_frame_id == f"{v}/base_link"}
-        assert len(tf) >= steps  # every step (step 0 may go out before the observer matched)
-        for stamp, t in tf.items():
-            assert t.header.frame_id == "map"
-            p, q = odom[stamp].position, odom[stamp].orientation
-            tr, rot = t.transform.translation, t.transform.rotation
-            assert (tr.x, tr.y, tr.z, rot.x, rot.y, rot.z, rot.w) == (p.x, p.y, p.z, q.x, q.y, q.z, q.w)
-    ship_dir = get_package_share_directory("tug_dynamics") + "/ships/"
-    static = {(t.header.frame_id, t.child_frame_id): t.transform for m in observer.tf_static for t in m.transforms}
-    for v in sc["vessels"]:
-        for name, xyz in yaml.safe_load(open(ship_dir + v["ship_file"]))["attachments"].items():
-            tr = static[(f"{v['name']}/base_link", f"{v['name']}/{name}")]
-            assert (tr.translation.x, tr.translation.y, tr.translation.z) == tuple(float(c) for c in xyz)
-            assert (tr.rotation.x, tr.rotation.y, tr.rotation.z, tr.rotation.w) == (0.0, 0.0, 0.0, 1.0)
+    _check_frames(observer, sc, vessels, steps)
 
     # bad input refused or clamped, logged; the run lost nothing
     log = stdout + stderr

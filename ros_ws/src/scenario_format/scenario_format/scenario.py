@@ -43,6 +43,7 @@ from typing import Any, Dict, List, Literal, Optional
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
+from sim_contract.equipment import check_mmsi, parse_utc
 from sim_contract.geo import DEFAULT_ORIGIN, KNOT
 from sim_contract.node_params import CONTACT_NODE, CURRENT_EAST, ROPE_NODE, VESSEL_NODE
 from sea_environment.environment import DepthGridSpec, EnvironmentSpec
@@ -426,7 +427,29 @@ def _check_runner_params(path: str, i: int, a: AutopilotSpec) -> None:
 
 
 def _check_references(path: str, sc: Scenario) -> None:
+    """Names unique, and every name a key refers to defined (the order of the checks is the order
+    of the messages a scenario with several faults gets: the first)."""
     vessels = [v.name for v in sc.vessels]
+    _check_names(path, sc, vessels)
+    _check_contacts(path, sc, vessels)
+    _check_rope_ends(path, sc, vessels)
+    _check_prescribed_starts(path, sc)
+    driven = _check_autopilots(path, sc, vessels)
+    if sc.nmea is not None:
+        _check_nmea(path, sc.nmea, vessels)
+    if sc.steps < 1:
+        raise ScenarioError(f"{path}: key 'duration': {sc.duration} s is less than one step at "
+                            f"{sc.exchange_rate:g} Hz (exchange_rate)")
+    for i, r in enumerate(sc.ropes):
+        if r.deployed_length is not None and r.layout == "straight":
+            # the node ignores it: a straight rope is laid with the rope file's length
+            raise ScenarioError(f"{path}: key 'ropes[{i}].deployed_length': only for layout slack or winch "
+                                f"(layout is straight: the rope file's length is laid out)")
+    _check_events(path, sc, vessels, driven)
+
+
+def _check_names(path: str, sc: Scenario, vessels: List[str]) -> None:
+    """Vessels, ropes, contacts and autopilots are ROS namespaces: each name once."""
     ropes = [r.name for r in sc.ropes]
     for kind, names in (("vessels", vessels), ("ropes", ropes)):
         dup = {n for n in names if names.count(n) > 1}
@@ -441,6 +464,9 @@ def _check_references(path: str, sc: Scenario) -> None:
     if clash or len(set(contacts)) != len(contacts):
         raise ScenarioError(f"{path}: names {sorted(clash or {n for n in contacts if contacts.count(n) > 1})} are "
                             "used twice among vessels, ropes, contacts and autopilots (namespaces must differ)")
+
+
+def _check_contacts(path: str, sc: Scenario, vessels: List[str]) -> None:
     for i, c in enumerate(sc.contacts):
         parts = c.fender.split("/")
         if len(parts) != 2 or not all(parts):
@@ -450,6 +476,9 @@ def _check_references(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key 'contacts[{i}].{key}': vessel '{vessel}' is not in 'vessels' ({vessels})")
         if parts[0] == c.hull:
             raise ScenarioError(f"{path}: key 'contacts[{i}].hull': '{c.hull}' carries the fender itself")
+
+
+def _check_rope_ends(path: str, sc: Scenario, vessels: List[str]) -> None:
     for i, r in enumerate(sc.ropes):
         for end in ("a", "b"):
             spec = getattr(r, f"end_{end}")
@@ -466,15 +495,22 @@ def _check_references(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key '{key}': vessel '{parts[0]}' is not in 'vessels' ({vessels})")
         if r.layout == "winch" and r.end_a == "free":
             raise ScenarioError(f"{path}: key 'ropes[{i}].layout': a winch layout needs end a attached")
+
+
+def _check_prescribed_starts(path: str, sc: Scenario) -> None:
+    """A prescribed vessel starts as its law says: an initial speed that says otherwise is refused."""
     for i, v in enumerate(sc.vessels):
-        # a prescribed vessel starts as its law says: an initial speed that says otherwise is refused
         if v.motion is not None and "speed" in v.initial.model_fields_set:
             surge = v.motion.start()[0]
             if abs(v.initial.speed - surge) > 1e-3:
                 raise ScenarioError(f"{path}: key 'vessels[{i}].initial.speed': {v.initial.speed:g} m/s contradicts "
                                     f"the prescribed motion ({v.motion.type}), which starts at {surge:.4f} m/s; "
                                     f"give {surge:.4f} or leave the key out")
-    driven = {}
+
+
+def _check_autopilots(path: str, sc: Scenario, vessels: List[str]) -> Dict[str, str]:
+    """{vessel: its autopilot}: one autopilot a vessel at most."""
+    driven: Dict[str, str] = {}
     for i, a in enumerate(sc.autopilots):
         if a.vessel not in vessels:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' is not in 'vessels' ({vessels})")
@@ -482,34 +518,32 @@ def _check_references(path: str, sc: Scenario) -> None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' already has an autopilot")
         driven[a.vessel] = a.name
         _check_runner_params(path, i, a)
-    if sc.nmea is not None:
-        for i, o in enumerate(sc.nmea.outputs):
-            if o.vessel not in vessels:
-                raise ScenarioError(f"{path}: key 'nmea.outputs[{i}].vessel': '{o.vessel}' is not in 'vessels' "
-                                    f"({vessels})")
-        for key, table in (("mmsi", sc.nmea.mmsi), ("gear_ratios", sc.nmea.gear_ratios)):
-            for name in table:
-                if name not in vessels:
-                    raise ScenarioError(f"{path}: key 'nmea.{key}.{name}': '{name}' is not in 'vessels' ({vessels})")
-        from sim_contract.equipment import check_mmsi, parse_utc
-        for name, m in sc.nmea.mmsi.items():
-            if check_mmsi(m):
-                raise ScenarioError(f"{path}: key 'nmea.mmsi.{name}': {check_mmsi(m)}")
-        if len(set(sc.nmea.mmsi.values())) != len(sc.nmea.mmsi):
-            raise ScenarioError(f"{path}: key 'nmea.mmsi': two vessels with one MMSI")
-        try:
-            parse_utc(sc.nmea.utc_start)
-        except ValueError as exc:
-            raise ScenarioError(f"{path}: key 'nmea.utc_start': expected an ISO 8601 UTC time such as "
-                                f"2026-06-01T08:00:00Z: {exc}") from None
-    if sc.steps < 1:
-        raise ScenarioError(f"{path}: key 'duration': {sc.duration} s is less than one step at "
-                            f"{sc.exchange_rate:g} Hz (exchange_rate)")
-    for i, r in enumerate(sc.ropes):
-        if r.deployed_length is not None and r.layout == "straight":
-            # the node ignores it: a straight rope is laid with the rope file's length
-            raise ScenarioError(f"{path}: key 'ropes[{i}].deployed_length': only for layout slack or winch "
-                                f"(layout is straight: the rope file's length is laid out)")
+    return driven
+
+
+def _check_nmea(path: str, nmea: "NmeaSpec", vessels: List[str]) -> None:
+    for i, o in enumerate(nmea.outputs):
+        if o.vessel not in vessels:
+            raise ScenarioError(f"{path}: key 'nmea.outputs[{i}].vessel': '{o.vessel}' is not in 'vessels' "
+                                f"({vessels})")
+    for key, table in (("mmsi", nmea.mmsi), ("gear_ratios", nmea.gear_ratios)):
+        for name in table:
+            if name not in vessels:
+                raise ScenarioError(f"{path}: key 'nmea.{key}.{name}': '{name}' is not in 'vessels' ({vessels})")
+    for name, m in nmea.mmsi.items():
+        if check_mmsi(m):
+            raise ScenarioError(f"{path}: key 'nmea.mmsi.{name}': {check_mmsi(m)}")
+    if len(set(nmea.mmsi.values())) != len(nmea.mmsi):
+        raise ScenarioError(f"{path}: key 'nmea.mmsi': two vessels with one MMSI")
+    try:
+        parse_utc(nmea.utc_start)
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: key 'nmea.utc_start': expected an ISO 8601 UTC time such as "
+                            f"2026-06-01T08:00:00Z: {exc}") from None
+
+
+def _check_events(path: str, sc: Scenario, vessels: List[str], driven: Dict[str, str]) -> None:
+    ropes = [r.name for r in sc.ropes]
     for i, ev in enumerate(sc.events):
         if ev.vessel is not None and ev.vessel not in vessels:
             raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is not in 'vessels' ({vessels})")
