@@ -43,6 +43,14 @@ def test_parameter_reference_covers_every_node_parameter():
     assert "| `marker_rate` | double | `10.0` | 0.1 to 1000 | Hz | live |" in page
 
 
+def test_topic_reference_covers_every_topic():
+    gen = _gen_docs()
+    page = _read(gen.TOPICS_PAGE)
+    for topic in ("/clock", "/sim/step", "/tf_static", "/<vessel>/odom", "/<vessel>/thruster_command",
+                  "/<rope>/end_<a|b>/wrench", "/<rope>/winch", "/<contact>/state"):
+        assert f"| `{topic}` |" in page, topic
+
+
 def test_scenario_reference_covers_every_key():
     """Every section and key of the schema, with the limits the schema states."""
     gen = _gen_docs()
@@ -62,6 +70,7 @@ def test_gen_docs_check_reports_a_stale_page(tmp_path, monkeypatch, capsys):
     stale.write_text(gen.render().replace("| `duration` |", "| `duration_s` |"), encoding="utf-8")
     monkeypatch.setattr(gen, "PAGE", str(stale))
     monkeypatch.setattr(gen, "PARAMETERS_PAGE", str(tmp_path / "node-parameters.md"))
+    monkeypatch.setattr(gen, "TOPICS_PAGE", str(tmp_path / "topics.md"))
     assert gen.main(["--check"]) == 1
     assert "duration_s" in capsys.readouterr().out
     assert gen.main([]) == 0 and gen.main(["--check"]) == 0

@@ -131,7 +131,8 @@ BAD_ORDERS = [  # (thrusters, azimuth, rpm), what the refusal names
 
 def _in_process_vessel(rclpy_context, ship_file):
     from rclpy.parameter import Parameter
-    from tug_dynamics.vessel_node import THRUSTER_COMMAND, VesselNode
+    from sim_contract.topics import THRUSTER_COMMAND
+    from tug_dynamics.vessel_node import VesselNode
     node = VesselNode(context=rclpy_context, namespace="/tug", parameter_overrides=[
         Parameter("ship_file", value=ship_file), Parameter("lockstep", value=True), Parameter("run_id", value="r")])
     return node, next(s for s in node.inputs if s.topic == THRUSTER_COMMAND)

@@ -27,6 +27,7 @@ from rclpy.node import Node
 
 from bridge_instruments import controls
 from sim_contract import geo
+from sim_contract import topics as T
 from scenario_format.particulars import breaking_loads, particulars, scenario_path
 from scenario_format.scenario import load_scenario
 from sim_math.rotations import yaw_from_quaternion
@@ -51,13 +52,13 @@ class ConsoleNode(Node):
         self.status = None
         self.tension: Dict[str, float] = {}
         self.sent = 0
-        self.create_subscription(Odometry, f"/{vessel}/odom", self._on_odom, rc.STATE_QOS)
-        self.create_subscription(VesselStatus, f"/{vessel}/status", self._on_status, rc.STATE_QOS)
+        self.create_subscription(Odometry, T.vessel_topic(vessel, T.ODOM), self._on_odom, rc.STATE_QOS)
+        self.create_subscription(VesselStatus, T.vessel_topic(vessel, T.STATUS), self._on_status, rc.STATE_QOS)
         for rope, end, _winch in ropes:
-            self.create_subscription(WrenchStamped, f"/{rope}/end_{end}/wrench",
+            self.create_subscription(WrenchStamped, T.end_wrench_topic(rope, end),
                                      lambda m, rope=rope: self._on_wrench(rope, m), rc.STATE_QOS)
-        self.cmd_pub = self.create_publisher(VesselCommand, f"/{vessel}/command", rc.COMMAND_QOS)
-        self.winch_pubs = {rope: self.create_publisher(WinchCommand, f"/{rope}/winch", rc.COMMAND_QOS)
+        self.cmd_pub = self.create_publisher(VesselCommand, T.vessel_topic(vessel, T.COMMAND), rc.COMMAND_QOS)
+        self.winch_pubs = {rope: self.create_publisher(WinchCommand, T.rope_topic(rope, T.WINCH), rc.COMMAND_QOS)
                            for rope, _end, winch in ropes if winch}
 
     def _on_odom(self, m) -> None:

@@ -42,6 +42,7 @@ from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from bridge_instruments import sentences as S
 from sim_contract import geo
+from sim_contract import topics as T
 from sim_contract.equipment import check_mmsi, parse_utc
 from scenario_format.particulars import hull_dimensions, scenario_path, scenario_ships
 
@@ -211,8 +212,8 @@ class NmeaOut(Node):
                                              towing)
         # latest serialized messages of due steps: stamp -> {topic: bytes}
         self.pending: Dict[int, Dict[str, bytes]] = {}
-        self.needed = [f"/{v}/odom" for v in self.vessels] + [f"/{v}/status" for v in self.vessels]
-        self.needed += [f"/{r}/end_{e}/wrench" for v in self.vessels for r, e in self.rope_ends[v]]
+        self.needed = [T.vessel_topic(v, T.ODOM) for v in self.vessels] + [T.vessel_topic(v, T.STATUS) for v in self.vessels]
+        self.needed += [T.end_wrench_topic(r, e) for v in self.vessels for r, e in self.rope_ends[v]]
         self.last_sent = -1
         self.reports = 0
         for topic in self.needed:
@@ -258,8 +259,8 @@ class NmeaOut(Node):
             del self.pending[min(self.pending)]
 
     def _kinematics(self, v: str, slot: Dict[str, bytes]):
-        od = deserialize_message(slot[f"/{v}/odom"], Odometry)
-        st = deserialize_message(slot[f"/{v}/status"], VesselStatus)
+        od = deserialize_message(slot[T.vessel_topic(v, T.ODOM)], Odometry)
+        st = deserialize_message(slot[T.vessel_topic(v, T.STATUS)], VesselStatus)
         p, q, tw = od.pose.pose.position, od.pose.pose.orientation, od.twist.twist
         roll, pitch, yaw = (float(a) for a in rpy_from_quaternion(q.x, q.y, q.z, q.w))
         # twist in the body frame: velocity over ground in the map frame (the horizontal part)
@@ -283,7 +284,7 @@ class NmeaOut(Node):
             shaft_rpm = st.shaft_speed * 60.0 / (2.0 * math.pi)
             tensions = []
             for rope, end in self.rope_ends[own]:
-                w = cdr.decode_wrench_stamped(slot[f"/{rope}/end_{end}/wrench"])
+                w = cdr.decode_wrench_stamped(slot[T.end_wrench_topic(rope, end)])
                 tensions.append((rope, math.sqrt(sum(c * c for c in w.force))))
             lines = S.own_ship_sentences(S.OwnShip(
                 t, k["lat"], k["lon"], k["sog"], k["cog"], k["hdg"], k["rot"], -math.degrees(st.steering_angle),

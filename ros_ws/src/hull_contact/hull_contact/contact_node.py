@@ -23,6 +23,7 @@ from nav_msgs.msg import Odometry
 from tug_msgs.msg import HullContact, ScenarioEvent
 
 from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
+from sim_contract import topics as T
 from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import cdr
 from sim_contract.node_params import CONTACT_NODE
@@ -68,9 +69,9 @@ class ContactNode(SteppedNode):
         self.rejected = 0
         self._was_in_contact = False
         self.result = None
-        self.topics = {f"/{self.fender_vessel}/odom": "fender", f"/{self.hull_vessel}/odom": "hull"}
+        self.topics = {T.vessel_topic(self.fender_vessel, T.ODOM): "fender", T.vessel_topic(self.hull_vessel, T.ODOM): "hull"}
         self.poses = {}
-        self.state_pub = self.create_fed_publisher(HullContact, "state", rc.LATCHED_STATE_QOS)
+        self.state_pub = self.create_fed_publisher(HullContact, T.STATE, rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self._encoder = cdr.HullContactEncoder(rc.WORLD_FRAME, self.contact_name, self.fender_vessel,
                                                self.fender_name, self.hull_vessel)

@@ -43,6 +43,7 @@ import urllib.parse
 from typing import Deque, Dict, List, Optional, Tuple
 
 from live_view import client_input
+from sim_contract import topics as T
 from sim_contract.geo import KNOT, compass_deg
 from scenario_format.particulars import breaking_loads_from
 from sim_math.rotations import rpy_from_quaternion
@@ -267,10 +268,10 @@ class InstructorStation:
         vessels, ropes = {}, {}
         t_sim = None
         for v in self._names("/odom"):
-            odom = self._decode(f"/{v}/odom", "odom")
+            odom = self._decode(T.vessel_topic(v, T.ODOM), "odom")
             if odom is None:
                 continue
-            status = self._decode(f"/{v}/status", "status")
+            status = self._decode(T.vessel_topic(v, T.STATUS), "status")
             stamp = odom.header.stamp.sec + 1e-9 * odom.header.stamp.nanosec
             t_sim = stamp if t_sim is None else max(t_sim, stamp)
             p, q, lin = odom.pose.pose.position, odom.pose.pose.orientation, odom.twist.twist.linear
@@ -278,7 +279,7 @@ class InstructorStation:
             d = {"t": stamp, "x": p.x, "y": p.y, "z": p.z, "q": [q.x, q.y, q.z, q.w],
                  "speed_kn": math.hypot(lin.x, lin.y) / KNOT, "heading_deg": compass_deg(yaw),
                  "heel_deg": math.degrees(roll), "trim_deg": math.degrees(pitch),
-                 "has_command": f"/{v}/command" in self.node.input_topics()}
+                 "has_command": T.vessel_topic(v, T.COMMAND) in self.node.input_topics()}
             if status is not None:
                 d.update(step=status.step, engine_order=status.engine_order,
                          rpm=status.shaft_speed * 60.0 / (2.0 * math.pi),
@@ -292,7 +293,7 @@ class InstructorStation:
                          anchor=ANCHOR_STATES.get(status.anchor_state, str(status.anchor_state)))
             vessels[v] = d
         for r in self._names("/state"):
-            state = self._decode(f"/{r}/state", "state")
+            state = self._decode(T.rope_topic(r, T.STATE), "state")
             if state is None:
                 continue
             stamp = state.header.stamp.sec + 1e-9 * state.header.stamp.nanosec
@@ -300,7 +301,7 @@ class InstructorStation:
             pts, tensions = rope_polyline(state)
             peak = max(tensions) if tensions else 0.0
             load = self.breaking.get(r)
-            winch = self._decode(f"/{r}/winch", "winch")
+            winch = self._decode(T.rope_topic(r, T.WINCH), "winch")
             rate = winch.payout_rate if winch is not None else None
             ropes[r] = {"t": stamp, "step": state.step, "model": state.model,
                         "points": [[round(c, 3) for c in p] for p in pts],
@@ -311,7 +312,7 @@ class InstructorStation:
                         "broken": bool(state.broken), "payout_rate": rate,
                         "winch": ("no order" if rate is None else "paying out" if rate > 0 else
                                   "heaving in" if rate < 0 else "holding"),
-                        "has_winch": f"/{r}/winch" in self.node.input_topics()}
+                        "has_winch": T.rope_topic(r, T.WINCH) in self.node.input_topics()}
             hist = self._history.setdefault(r, collections.deque())
             if hist and stamp < hist[-1][0]:  # a new run or a replay started again
                 hist.clear()
@@ -333,7 +334,7 @@ class InstructorStation:
         for v in self._names("/odom"):
             if v in self._scene:
                 continue
-            markers = self._decode(f"/{v}/markers", "markers")
+            markers = self._decode(T.vessel_topic(v, T.MARKERS), "markers")
             if markers is None:
                 continue
             d = {}

@@ -30,6 +30,7 @@ from visualization_msgs.msg import MarkerArray
 from rope_model.models import ModelFailure, make_model, rope_file_model
 from sea_environment.environment import Environment
 from rope_model.state_cdr import rope_state_cdr
+from sim_contract import topics as T
 from sim_plumbing import cdr
 from sim_math.rotations import matrix_from_quaternion
 from sim_contract.node_params import ROPE_NODE
@@ -100,8 +101,8 @@ class RopeNode(SteppedNode):
         self.rejected = 0  # winch orders refused (NaN, inf)
         self.clamped = 0   # winch orders clamped to the winch's limits
 
-        self.state_pub = self.create_fed_publisher(RopeState, "state", rc.LATCHED_STATE_QOS)
-        self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
+        self.state_pub = self.create_fed_publisher(RopeState, T.STATE, rc.LATCHED_STATE_QOS)
+        self.marker_pub = self.create_fed_publisher(MarkerArray, T.MARKERS, rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self.wrench_outputs: Dict[str, tuple] = {}  # end label -> (publisher, encoder)
         for end in self.ends:
@@ -112,10 +113,10 @@ class RopeNode(SteppedNode):
         self.vessel_topics = {}
         for end in self.ends:
             if end.mode == "pinned":
-                self.vessel_topics.setdefault(f"/{end.vessel}/attachments", end.vessel)
+                self.vessel_topics.setdefault(T.vessel_topic(end.vessel, T.ATTACHMENTS), end.vessel)
         inputs = [StepInput(t, AttachmentArray, decode=cdr.decode_attachment_array) for t in self.vessel_topics]
         if self.layout == "winch":
-            inputs.append(StepInput("winch", WinchCommand, kind="order", decode=cdr.decode_winch_command))
+            inputs.append(StepInput(T.WINCH, WinchCommand, kind="order", decode=cdr.decode_winch_command))
         self.init_stepping(inputs, ready=False)
         # markers on every n-th step: RViz needs no more than ~10 Hz and they cost a third of a step
         self.marker_every = max(1, round(1e9 / self.period_ns / gp("marker_rate").value))
@@ -174,7 +175,7 @@ class RopeNode(SteppedNode):
                 return False
             return True
         for end in self.ends:
-            if end.mode == "pinned" and f"/{end.vessel}/attachments" == spec.topic:
+            if end.mode == "pinned" and T.vessel_topic(end.vessel, T.ATTACHMENTS) == spec.topic:
                 point = msg.points.get(end.attachment)
                 if point is None:
                     self.complaints("attachments " + spec.topic,
@@ -245,7 +246,7 @@ class RopeNode(SteppedNode):
         for end in self.ends:
             if end.mode == "pinned":
                 self.rope.set_end(end.label, end.position, end.velocity)
-        order = inputs.get("winch")
+        order = inputs.get(T.WINCH)
         if order is not None:
             # clamped to the winch's limits like any order; the notes say how
             try:

@@ -46,6 +46,7 @@ from rclpy.duration import Duration
 from rclpy.parameter import Parameter
 from tug_msgs.msg import VesselCommand, VesselStatus
 
+from sim_contract import topics as T
 from sim_contract.geo import yaw_from_compass
 from scenario_runner.autopilot_law import (NODE_TABLE, SPEED_SOURCES, AutopilotConfig, AutopilotLaw, Measurement,
                                            Output, parse_waypoints)
@@ -125,10 +126,10 @@ class AutopilotNode(SteppedNode):
         self.odom_timeout = g("odom_timeout")
         self.log_period = g("log_period")
 
-        self.odom_topic = f"/{self.vessel}/odom"
-        self.status_topic = f"/{self.vessel}/status"
+        self.odom_topic = T.vessel_topic(self.vessel, T.ODOM)
+        self.status_topic = T.vessel_topic(self.vessel, T.STATUS)
         self.use_status = self.cfg.speed_control and self.speed_source == "status"
-        self.cmd_topic = f"/{self.vessel}/command"
+        self.cmd_topic = T.vessel_topic(self.vessel, T.COMMAND)
         self.cmd_pub = self.create_publisher(VesselCommand, self.cmd_topic, rc.COMMAND_QOS)
 
         self.command: Optional[VesselCommand] = None  # last command computed

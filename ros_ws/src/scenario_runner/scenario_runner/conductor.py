@@ -29,6 +29,7 @@ from rosgraph_msgs.msg import Clock
 from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
 
+from sim_contract import topics as T
 from sim_contract.node_params import NODE_TABLES
 from sim_math.rotations import yaw_from_quaternion
 from scenario_format.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
@@ -40,7 +41,6 @@ from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import RESCUE_AFTER, RateLimitedLog
 
 # Reliable: matches rclpy's best-effort /clock readers and lets the recorder miss nothing.
-CLOCK_QOS = rclpy.qos.QoSProfile(depth=10, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE)
 # Topics the runner itself publishes (/clock, /sim/step) or takes raw (/sim/step_done): it hands
 # their bytes to the recorder, which then needs no subscription of its own for them.
 FED_TOPICS = ("/clock", rc.SIM_STEP_TOPIC, rc.STEP_DONE_TOPIC)
@@ -204,11 +204,11 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
                   "initial_x": float(v.initial.x), "initial_y": float(v.initial.y), "initial_yaw": heading_rad(v),
                   "initial_speed": float(v.initial.speed), "initial_engine_order": float(v.initial.engine_order),
                   "initial_steering_angle": math.radians(v.initial.steering_deg)}
-        wrenches = [f"/{r.name}/end_{end}/wrench" for r in sc.ropes for end in ("a", "b")
+        wrenches = [T.end_wrench_topic(r.name, end) for r in sc.ropes for end in ("a", "b")
                     if getattr(r, f"end_{end}").split("/")[0] == v.name]
         if wrenches:
             params["wrench_topics"] = wrenches
-        contacts = [f"/{c.name}/state" for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
+        contacts = [T.contact_topic(c.name) for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
         if contacts:
             params["contact_topics"] = contacts
         if v.ship_overrides:
@@ -402,12 +402,12 @@ class Conductor(Node):
         self.complaints = RateLimitedLog(self.get_logger())
         self.failures: List[str] = []
         self.compute_times: Dict[str, List[float]] = {n: [] for n in node_names}
-        self.clock_pub = self.create_publisher(Clock, "/clock", CLOCK_QOS)
+        self.clock_pub = self.create_publisher(Clock, T.CLOCK, rc.CLOCK_QOS)
         self.step_pub = self.create_publisher(SimStep, rc.SIM_STEP_TOPIC, rc.PROTOCOL_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
-        self.cmd_pubs = {v.name: self.create_publisher(VesselCommand, f"/{v.name}/command", rc.COMMAND_QOS)
+        self.cmd_pubs = {v.name: self.create_publisher(VesselCommand, T.vessel_topic(v.name, T.COMMAND), rc.COMMAND_QOS)
                          for v in sc.vessels}
-        self.winch_pubs = {r.name: self.create_publisher(WinchCommand, f"/{r.name}/winch", rc.COMMAND_QOS)
+        self.winch_pubs = {r.name: self.create_publisher(WinchCommand, T.rope_topic(r.name, T.WINCH), rc.COMMAND_QOS)
                            for r in sc.ropes if r.layout == "winch"}
         # raw: the answers are recorded as received and decoded once, here
         self.done_sub = self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done_raw, rc.PROTOCOL_QOS,
@@ -429,7 +429,7 @@ class Conductor(Node):
         self.heading_since: Dict[Tuple[str, int], float] = {}  # (vessel, step) -> unwrapped yaw then
         self._since_steps = {(sc.events[i].when.vessel, int(round(sc.events[i].when.since * sc.exchange_rate)))
                              for i in self.triggered if sc.events[i].when.heading_change_deg is not None}
-        self.odom_subs = [self.create_subscription(Odometry, f"/{name}/odom", lambda m, n=name: self._on_odom(n, m),
+        self.odom_subs = [self.create_subscription(Odometry, T.vessel_topic(name, T.ODOM), lambda m, n=name: self._on_odom(n, m),
                                                    rc.LATCHED_STATE_QOS) for name in self.watched]
         # Vessels steered by a lockstep autopilot get its order stamped k at every step k.
         self.piloted = sorted(a.vessel for a in sc.autopilots)
@@ -641,35 +641,20 @@ def _node_of(info) -> str:
 
 
 def contract_topics(sc: Scenario) -> List[tuple]:
-    """(topic, type, offered QoS) of every topic of the topic contract for this scenario."""
-    from geometry_msgs.msg import WrenchStamped
-    from nav_msgs.msg import Odometry
-    from rosgraph_msgs.msg import Clock as ClockMsg
-    from tf2_msgs.msg import TFMessage
-    from tug_msgs.msg import AttachmentArray, HullContact, RopeState, ThrusterCommand, ThrusterStatus, VesselStatus
-    from visualization_msgs.msg import MarkerArray
-    topics = [("/clock", ClockMsg, CLOCK_QOS), (rc.SIM_STEP_TOPIC, SimStep, rc.PROTOCOL_QOS),
-              (rc.STEP_DONE_TOPIC, StepDone, rc.PROTOCOL_QOS), (rc.EVENTS_TOPIC, ScenarioEvent, rc.EVENTS_QOS)]
-    if sc.vessels:  # every vessel node broadcasts its frames (tf2_ros's QoS)
-        topics += [(rc.TF_TOPIC, TFMessage, rc.TF_QOS), (rc.TF_STATIC_TOPIC, TFMessage, rc.TF_STATIC_QOS)]
+    """(topic, type, offered QoS) of every topic of the topic contract for this scenario
+    (sim_contract.topics; /tf and /tf_static when there are vessels to broadcast their frames)."""
+    named = [(t.name, t) for t in T.GLOBAL_TOPICS if sc.vessels or t.name not in (T.TF, T.TF_STATIC)]
     for v in sc.vessels:
-        topics += [(f"/{v.name}/odom", Odometry, rc.LATCHED_STATE_QOS),
-                   (f"/{v.name}/attachments", AttachmentArray, rc.LATCHED_STATE_QOS),
-                   (f"/{v.name}/status", VesselStatus, rc.LATCHED_STATE_QOS),
-                   (f"/{v.name}/markers", MarkerArray, rc.LATCHED_STATE_QOS),
-                   (f"/{v.name}/command", VesselCommand, rc.COMMAND_QOS)]
+        named += [(T.vessel_topic(v.name, t.name), t) for t in T.VESSEL_TOPICS]
         if has_thrusters(sc, v):   # azimuth thrusters: their orders and status (tug_dynamics README, ASD tug)
-            topics += [(f"/{v.name}/thrusters", ThrusterStatus, rc.LATCHED_STATE_QOS),
-                       (f"/{v.name}/thruster_command", ThrusterCommand, rc.COMMAND_QOS)]
+            named += [(T.vessel_topic(v.name, t.name), t) for t in T.THRUSTER_TOPICS]
     for r in sc.ropes:
-        topics += [(f"/{r.name}/state", RopeState, rc.LATCHED_STATE_QOS),
-                   (f"/{r.name}/markers", MarkerArray, rc.LATCHED_STATE_QOS)]
-        topics += [(f"/{r.name}/end_{e}/wrench", WrenchStamped, rc.LATCHED_STATE_QOS)
-                   for e in ("a", "b") if "/" in getattr(r, f"end_{e}")]
+        named += [(T.rope_topic(r.name, t.name), t) for t in T.ROPE_TOPICS]
+        named += [(T.end_wrench_topic(r.name, e), T.END_WRENCH) for e in ("a", "b") if "/" in getattr(r, f"end_{e}")]
         if r.layout == "winch":
-            topics.append((f"/{r.name}/winch", WinchCommand, rc.COMMAND_QOS))
-    topics += [(f"/{c.name}/state", HullContact, rc.LATCHED_STATE_QOS) for c in sc.contacts]
-    return topics
+            named.append((T.rope_topic(r.name, T.WINCH), T.WINCH_TOPIC))
+    named += [(T.contact_topic(c.name), t) for c in sc.contacts for t in T.CONTACT_TOPICS]
+    return [(name, rc.message_class(t.type), rc.QOS_BY_KIND[t.qos]) for name, t in named]
 
 
 LAYOUTS = ("processes", "one_process")

@@ -34,6 +34,7 @@ from scenario_runner.autopilot_law import check_scenario_params as check_autopil
 from scenario_runner.recorder import McapRecorder, readable_extent
 from scenario_format.particulars import recording_metadata, scenario_path
 from scenario_format.scenario import Scenario, ScenarioError, load_scenario
+from sim_contract import topics as T
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 
@@ -60,16 +61,16 @@ class Monitor(Node):
             end = next((e for e in ("a", "b") if "/" in getattr(r, f"end_{e}")), None)
             self.tension[r.name] = []
             if end is not None:
-                wanted.append((f"/{r.name}/end_{end}/wrench", WrenchStamped,
+                wanted.append((T.end_wrench_topic(r.name, end), WrenchStamped,
                                lambda data, r=r.name: self._wrench(r, data)))
             else:  # both ends fixed or free: the rope state's end a force
-                wanted.append((f"/{r.name}/state", RopeState, lambda data, r=r.name: self._rope(r, data)))
+                wanted.append((T.rope_topic(r.name, T.STATE), RopeState, lambda data, r=r.name: self._rope(r, data)))
         for topic, msg_type, callback in wanted:
             if recorder is not None and recorder.tap(topic, callback):
                 continue
             self.create_subscription(msg_type, topic, callback, rc.LATCHED_STATE_QOS, raw=True)
         for v in sc.vessels:
-            topic = f"/{v.name}/odom"
+            topic = T.vessel_topic(v.name, T.ODOM)
             if recorder is None or not recorder.tap(topic, lambda data, v=v.name: self._odom_raw.__setitem__(v, data)):
                 self._odom_topics[v.name] = topic
         self.create_subscription(ScenarioEvent, rc.EVENTS_TOPIC, self._event, rc.EVENTS_QOS)
@@ -225,7 +226,7 @@ def live_topics(sc: Scenario) -> List[Tuple[str, str, bool]]:
     topics = [(t, type_name(cls), qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)
               for t, cls, qos in cd.contract_topics(sc)]
     extra = [(rc.TF_TOPIC, "tf2_msgs/msg/TFMessage", False), (rc.TF_STATIC_TOPIC, "tf2_msgs/msg/TFMessage", True)]
-    extra += [(f"/{v.name}/markers", "visualization_msgs/msg/MarkerArray", True) for v in sc.vessels]
+    extra += [(T.vessel_topic(v.name, T.MARKERS), "visualization_msgs/msg/MarkerArray", True) for v in sc.vessels]
     have = {t[0] for t in topics}
     return topics + [t for t in extra if t[0] not in have]
 

@@ -15,8 +15,10 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from sim_contract import topics
+
 WORLD_FRAME = "map"  # REP-105 world-fixed frame, ENU (REP-103), still-water surface at z = 0
-EVENTS_TOPIC = "/scenario/events"
+EVENTS_TOPIC = topics.EVENTS
 
 # State topics read off the step protocol (a free-running autopilot): reliable, volatile, so it
 # matches any publisher of the contract; lockstep participants read LATCHED_STATE_QOS.
@@ -34,14 +36,15 @@ COMMAND_SUB_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=Reliabi
 # Frames (tf2_msgs/TFMessage) with tf2_ros's QoS: /tf as its TransformBroadcaster (reliable,
 # volatile, keep last 100), /tf_static as its StaticTransformBroadcaster (reliable,
 # transient-local, keep last 1: a late subscriber gets each publisher's static frames).
-TF_TOPIC = "/tf"
-TF_STATIC_TOPIC = "/tf_static"
+TF_TOPIC = topics.TF
+TF_STATIC_TOPIC = topics.TF_STATIC
 TF_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE)
 TF_STATIC_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
                            durability=DurabilityPolicy.TRANSIENT_LOCAL)
 EVENTS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                         reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+CLOCK_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def period_ns(rate_hz: float) -> int:
@@ -100,8 +103,8 @@ def declare_table(node, table) -> None:
 # ---------------------------------------------------------------------------------------
 # Stepping: lockstep participant or free-running node.
 # ---------------------------------------------------------------------------------------
-SIM_STEP_TOPIC = "/sim/step"
-STEP_DONE_TOPIC = "/sim/step_done"
+SIM_STEP_TOPIC = topics.SIM_STEP
+STEP_DONE_TOPIC = topics.STEP_DONE
 # Outputs of a step must reach late joiners (e.g. a node that matched after step 0 was sent).
 LATCHED_STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
                                reliability=ReliabilityPolicy.RELIABLE,
@@ -111,6 +114,16 @@ LATCHED_STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50,
 # runner sends SimStep(0) only once every participant's subscription has matched.
 PROTOCOL_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.VOLATILE)
+# The profile of each QoS kind of the topic contract (sim_contract.topics), as offered.
+QOS_BY_KIND = {"latched_state": LATCHED_STATE_QOS, "command": COMMAND_QOS, "protocol": PROTOCOL_QOS,
+               "clock": CLOCK_QOS, "events": EVENTS_QOS, "tf": TF_QOS, "tf_static": TF_STATIC_QOS}
+
+
+def message_class(ros_type: str):
+    """The Python class of a ROS type named as the contract names it ("nav_msgs/msg/Odometry")."""
+    import importlib
+    package, kind, name = ros_type.split("/")
+    return getattr(importlib.import_module(f"{package}.{kind}"), name)
 
 
 EXECUTORS = ("events", "single")

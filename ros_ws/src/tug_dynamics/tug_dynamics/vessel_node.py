@@ -34,6 +34,7 @@ from tug_msgs.msg import (AttachmentArray, HullContact, ScenarioEvent, ThrusterC
 
 from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
+from sim_contract import topics as T
 from sim_contract.node_params import VESSEL_NODE
 from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
@@ -52,7 +53,6 @@ _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
 _STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
 _STATUS_FLOATS_ENV = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_ENV)
 _STILL_DEEP = EnvironmentStatus()   # what status reports without an environment
-THRUSTER_COMMAND = "thruster_command"   # the per-thruster order input (tug_msgs/ThrusterCommand)
 
 
 class VesselNode(SteppedNode):
@@ -113,25 +113,25 @@ class VesselNode(SteppedNode):
         # contact topic -> (force on this vessel, world; point, body) of the step being computed
         self._contacts = {t: (np.zeros(3), np.zeros(3)) for t in self.contact_topics}
 
-        self.odom_pub = self.create_fed_publisher(Odometry, "odom", rc.LATCHED_STATE_QOS)
+        self.odom_pub = self.create_fed_publisher(Odometry, T.ODOM, rc.LATCHED_STATE_QOS)
         self.tf_pub = self.create_fed_publisher(TFMessage, rc.TF_TOPIC, rc.TF_QOS)
         self.tf_static_pub = self.create_fed_publisher(TFMessage, rc.TF_STATIC_TOPIC, rc.TF_STATIC_QOS)
-        self.marker_pub = self.create_fed_publisher(MarkerArray, "markers", rc.LATCHED_STATE_QOS)
+        self.marker_pub = self.create_fed_publisher(MarkerArray, T.MARKERS, rc.LATCHED_STATE_QOS)
         ship_cfg = ship_config(path, overrides)[1]  # checked by load_ship above
         self.scene = VesselScene(self.vessel_name, HullDimensions.from_ship_config(ship_cfg), self.model.attachments)
         self._rope_forces = {}  # wrench topic -> (attachment point, force in body axes) of the last step
-        self.attach_pub = self.create_fed_publisher(AttachmentArray, "attachments", rc.LATCHED_STATE_QOS)
-        self.status_pub = self.create_fed_publisher(VesselStatus, "status", rc.LATCHED_STATE_QOS)
+        self.attach_pub = self.create_fed_publisher(AttachmentArray, T.ATTACHMENTS, rc.LATCHED_STATE_QOS)
+        self.status_pub = self.create_fed_publisher(VesselStatus, T.STATUS, rc.LATCHED_STATE_QOS)
         # per-thruster state, on ships with azimuth thrusters only (a prescribed motion's base
         # ship reports its thrusters too, though it takes no orders)
         self._thruster_names = tuple(t.name for t in getattr(self.model.status(), "thrusters", ()))
-        self.thrusters_pub = (self.create_fed_publisher(ThrusterStatus, "thrusters", rc.LATCHED_STATE_QOS)
+        self.thrusters_pub = (self.create_fed_publisher(ThrusterStatus, T.THRUSTERS, rc.LATCHED_STATE_QOS)
                               if self._thruster_names else None)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self._wrench_points = {}  # frame_id -> attachment point (body), for accepted frames
         # commands raw: bytes that are not a VesselCommand are refused and counted, never crash the node
-        self.init_stepping([StepInput("command", VesselCommand, kind="order", decode=cdr.decode_vessel_command),
-                            StepInput(THRUSTER_COMMAND, ThrusterCommand, kind="order",
+        self.init_stepping([StepInput(T.COMMAND, VesselCommand, kind="order", decode=cdr.decode_vessel_command),
+                            StepInput(T.THRUSTER_COMMAND, ThrusterCommand, kind="order",
                                       decode=cdr.decode_thruster_command)] +
                            [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics] +
                            [StepInput(t, HullContact, decode=cdr.decode_hull_contact) for t in self.contact_topics])
@@ -200,7 +200,7 @@ class VesselNode(SteppedNode):
         self.rejected += 1
         if self.complaints("thruster command rejected",
                            f"thruster command rejected, keeping the last valid orders: {exc}"):
-            self.emit_event("command_rejected", f"{THRUSTER_COMMAND}: {exc}")
+            self.emit_event("command_rejected", f"{T.THRUSTER_COMMAND}: {exc}")
 
     def _thruster_orders(self, msg: cdr.ThrusterCommandIn) -> List[ThrusterOrder]:
         """The orders of a ThrusterCommand, checked as far as the message goes (lengths, names,
@@ -243,7 +243,7 @@ class VesselNode(SteppedNode):
         # starts empty (an order stamped for the step still fills it), as stepping.py does for
         # a rejected order.
         if self.namespace_name in msg.ordered:
-            self._buffer[THRUSTER_COMMAND].setdefault(msg.step, REJECTED_ORDER)
+            self._buffer[T.THRUSTER_COMMAND].setdefault(msg.step, REJECTED_ORDER)
         super()._on_trigger(msg)
 
     def _wrench_point(self, topic: str, msg: cdr.WrenchIn) -> Optional[np.ndarray]:
@@ -270,7 +270,7 @@ class VesselNode(SteppedNode):
 
     # -- stepping -------------------------------------------------------------------------
     def compute_step(self, inputs) -> None:
-        order = inputs.get("command")
+        order = inputs.get(T.COMMAND)
         if order is not None:
             cmd = Command(engine_order=order.engine_order, steering_angle=order.steering_angle, anchor=order.anchor)
             try:
@@ -281,7 +281,7 @@ class VesselNode(SteppedNode):
             for note in notes:
                 self.clamped += 1
                 self.complaints("command clamped", f"command clamped: {note}", "warning")
-        thruster_order = inputs.get(THRUSTER_COMMAND)
+        thruster_order = inputs.get(T.THRUSTER_COMMAND)
         if thruster_order is not None:   # after `command`: of two orders for one step, this one holds
             try:
                 notes = self.model.set_thruster_command(self._thruster_orders(thruster_order))
