@@ -254,21 +254,23 @@ def burner_main(cores: float) -> None:
 
 
 # -- one run ---------------------------------------------------------------------------------
-def run(duration: float, config: str, tmp: str, browser) -> dict:
-    """config: 'none' (no live view), 'live' (no client), 'browser', or 'ws<N>'."""
+def runner_command(duration: float, config: str, tmp: str):
+    """The runner's command line, with the live view (on two free ports: WebSocket and the
+    instructor station's HTTP) unless config is 'none' or a synthetic load; returns (cmd, port,
+    http_port), the ports None without the live view."""
     cmd = ["ros2", "run", "scenario_runner", "run_scenario", "default_demo.yaml", "--duration", str(duration),
            "--quiet", "--output", os.path.join(tmp, "bench.mcap")]
-    res = {}
-    http_port = None
-    clients = None
+    port = http_port = None
     if config != "none" and not config.startswith("burn"):
         port, http_port = free_port(), free_port()
         cmd += ["--live", "--live-port", str(port), "--ros-args", "-p", f"live_view:http_port:={http_port}"]
-    res["idle_before"] = wait_quiet()
-    b0 = browser.cpu() if browser is not None else {}
-    d0 = browser.cpu(driver=True) if browser is not None else {}
-    busy0, self0, t0 = busy_cpu(), resource.getrusage(resource.RUSAGE_SELF), time.monotonic()
-    runner = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return cmd, port, http_port
+
+
+def start_runner_cpu_sampler(runner):
+    """The run_scenario process's CPU can only be read while it lives (`ros2 run` starts it as
+    its child and it is gone when the run ends): a thread reads it every 0.1 s and keeps the
+    last value. Returns stop(), to call once the runner ended: that last value, in s."""
     last_cpu = [0.0]
     done = threading.Event()
 
@@ -286,7 +288,20 @@ def run(duration: float, config: str, tmp: str, browser) -> dict:
             done.wait(0.1)
     sampler = threading.Thread(target=sample, daemon=True)
     sampler.start()
-    page = None
+
+    def stop():
+        done.set()
+        sampler.join()
+        return last_cpu[0]
+    return stop
+
+
+def start_load(config: str, port, http_port, runner, browser):
+    """What the row puts beside the runner: the WebSocket clients ('ws<N>'), the synthetic load
+    ('burn<cores>') or the page's requests ('poll'), each in a process of this script so that
+    its CPU is measured apart, or the browser's page ('browser<nice>'). Returns (clients
+    process or None, page or None)."""
+    clients = page = None
     if config.startswith("ws"):
         clients = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--clients", str(port), config[2:]],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -298,29 +313,34 @@ def run(duration: float, config: str, tmp: str, browser) -> dict:
                                     f"http://127.0.0.1:{http_port}/", "0.1"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     elif config.startswith("browser"):
-        browser.renice(int(config[len("browser"):] or 0))
-        url = f"http://localhost:{http_port}/"
-        deadline = time.monotonic() + 120
-        while True:
-            try:
-                with urllib.request.urlopen(url + "api/state", timeout=1):
-                    break
-            except OSError:
-                if runner.poll() is not None or time.monotonic() > deadline:
-                    break
-                time.sleep(0.1)
-        page = browser.browser.new_page(viewport={"width": 1400, "height": 820})
-        page.goto(url + "?vessel=tug&camera=follow")
-    # the run (the browser's page works in its own processes meanwhile)
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out, err = runner.communicate()
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    res["all_cpu"] = r1.ru_utime + r1.ru_stime - r0.ru_utime - r0.ru_stime  # the runner and its nodes
-    done.set()
-    sampler.join()
-    res["runner_cpu"] = last_cpu[0]
-    life, busy1, self1 = time.monotonic() - t0, busy_cpu(), resource.getrusage(resource.RUSAGE_SELF)
-    res["life"] = life
+        page = open_page(browser, int(config[len("browser"):] or 0), http_port, runner)
+    return clients, page
+
+
+def open_page(browser, nice: int, http_port, runner):
+    """The instructor station in the browser at this niceness, opened as soon as the page
+    answers (while the nodes are still starting; given up when the runner ends or after 120 s)
+    and following the tug."""
+    browser.renice(nice)
+    url = f"http://localhost:{http_port}/"
+    deadline = time.monotonic() + 120
+    while True:
+        try:
+            with urllib.request.urlopen(url + "api/state", timeout=1):
+                break
+        except OSError:
+            if runner.poll() is not None or time.monotonic() > deadline:
+                break
+            time.sleep(0.1)
+    page = browser.browser.new_page(viewport={"width": 1400, "height": 820})
+    page.goto(url + "?vessel=tug&camera=follow")
+    return page
+
+
+def read_browser(res: dict, browser, page, b0: dict, d0: dict) -> float:
+    """The page's CPU (res["browser_cpu"], Chromium's processes since b0) and what it received
+    (res["page"]), then closes it; returns the CPU of Chromium and Playwright's driver since d0,
+    which is this benchmark's own and not other processes' load."""
     idle_browser = 0.0
     if browser is not None:
         b1, d1 = browser.cpu(), browser.cpu(driver=True)
@@ -331,21 +351,26 @@ def run(duration: float, config: str, tmp: str, browser) -> dict:
         res["page"] = page.evaluate("({updates: instructor.updates, frames: instructor.frames, "
                                     "first_t: instructor.firstT === undefined ? null : instructor.firstT})")
         page.close()
-    if clients is not None:
-        if config.startswith("burn"):
-            clients.terminate()
-        cout, cerr = clients.communicate(timeout=60)
-        r2 = resource.getrusage(resource.RUSAGE_CHILDREN)  # the clients' process has just been waited for
-        res["clients_cpu"] = r2.ru_utime + r2.ru_stime - r1.ru_utime - r1.ru_stime
-        try:
-            res["clients"] = json.loads(cout.strip().splitlines()[-1]) if not config.startswith("burn") else {}
-        except (ValueError, IndexError):
-            sys.exit(f"the clients failed:\n{cout}\n{cerr[-3000:]}")
-    # other processes' CPU while the runner lived: the machine's busy time less this benchmark's
-    # processes (the clients' all run within the runner's life, as does the page)
-    ours = res["all_cpu"] + res.get("clients_cpu", 0.0) + idle_browser + (
-        self1.ru_utime + self1.ru_stime - self0.ru_utime - self0.ru_stime)
-    res["foreign_cores"] = max(0.0, (busy1 - busy0 - ours) / life)
+    return idle_browser
+
+
+def read_clients(res: dict, clients, config: str, r1) -> None:
+    """Ends the clients' process (the synthetic load is terminated, the others end with the
+    server) and reads its CPU since r1 (res["clients_cpu"]) and its JSON report (res["clients"])."""
+    if config.startswith("burn"):
+        clients.terminate()
+    cout, cerr = clients.communicate(timeout=60)
+    r2 = resource.getrusage(resource.RUSAGE_CHILDREN)  # the clients' process has just been waited for
+    res["clients_cpu"] = r2.ru_utime + r2.ru_stime - r1.ru_utime - r1.ru_stime
+    try:
+        res["clients"] = json.loads(cout.strip().splitlines()[-1]) if not config.startswith("burn") else {}
+    except (ValueError, IndexError):
+        sys.exit(f"the clients failed:\n{cout}\n{cerr[-3000:]}")
+
+
+def read_runner_summary(res: dict, runner, out: str, err: str) -> None:
+    """The runner's printed numbers: real-time factor and stepping wall time (a failed run ends
+    the benchmark), the live view sender's rate and CPU, the instructor sampler's cost."""
     m = ROW.search(out)
     if runner.returncode != 0 or not m:
         sys.exit(f"run failed ({runner.returncode}):\n{out}\n{err[-3000:]}")
@@ -357,6 +382,36 @@ def run(duration: float, config: str, tmp: str, browser) -> dict:
     s = SAMPLER.search(err + out)
     if s:
         res.update(samples=int(s["n"]), sample_ms=float(s["ms"]))
+
+
+def run(duration: float, config: str, tmp: str, browser) -> dict:
+    """config: 'none' (no live view), 'live' (no client), 'browser', or 'ws<N>'."""
+    cmd, port, http_port = runner_command(duration, config, tmp)
+    res = {}
+    res["idle_before"] = wait_quiet()
+    b0 = browser.cpu() if browser is not None else {}
+    d0 = browser.cpu(driver=True) if browser is not None else {}
+    busy0, self0, t0 = busy_cpu(), resource.getrusage(resource.RUSAGE_SELF), time.monotonic()
+    runner = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stop_sampler = start_runner_cpu_sampler(runner)
+    clients, page = start_load(config, port, http_port, runner, browser)
+    # the run (the browser's page works in its own processes meanwhile)
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out, err = runner.communicate()
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    res["all_cpu"] = r1.ru_utime + r1.ru_stime - r0.ru_utime - r0.ru_stime  # the runner and its nodes
+    res["runner_cpu"] = stop_sampler()
+    life, busy1, self1 = time.monotonic() - t0, busy_cpu(), resource.getrusage(resource.RUSAGE_SELF)
+    res["life"] = life
+    idle_browser = read_browser(res, browser, page, b0, d0)
+    if clients is not None:
+        read_clients(res, clients, config, r1)
+    # other processes' CPU while the runner lived: the machine's busy time less this benchmark's
+    # processes (the clients' all run within the runner's life, as does the page)
+    ours = res["all_cpu"] + res.get("clients_cpu", 0.0) + idle_browser + (
+        self1.ru_utime + self1.ru_stime - self0.ru_utime - self0.ru_stime)
+    res["foreign_cores"] = max(0.0, (busy1 - busy0 - ours) / life)
+    read_runner_summary(res, runner, out, err)
     return res
 
 

@@ -496,7 +496,7 @@ def print_table(rows, paced_duration):
               f"{lk['foreign_cores']:.2f} / {pc['foreign_cores']:.2f} |")
 
 
-def main():
+def parse_args():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--tows", default="1,2,4,6,8", help="numbers of tows, lockstep and paced (every node a process)")
     p.add_argument("--one-process", default="",
@@ -515,13 +515,13 @@ def main():
     p.add_argument("--pyspy-duration", type=float, default=60.0, help="simulated s of the profiled run")
     p.add_argument("--json", help="write every number here")
     p.add_argument("--merge", help="a --json file of an earlier run: its runs fill what this one does not measure")
-    args = p.parse_args()
-    tows = [int(t) for t in args.tows.split(",") if t]
-    single = [int(t) for t in args.one_process.split(",") if t]
-    record = not args.no_record
-    env = dict(os.environ)
-    env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-    started = time.monotonic()
+    return p.parse_args()
+
+
+def run_rounds(tows, single, args, record, env, started):
+    """Every run of this invocation (both layouts, then the py-spy run), on scenarios generated
+    into a temporary folder that lives only as long as the runs; returns (results, attempts,
+    py-spy profile or None)."""
     results, attempts, prof = {}, {}, None
     with tempfile.TemporaryDirectory() as tmp:
         paths = write_scenarios(sorted(set(tows + single + ([args.pyspy] if args.pyspy else []))), tmp)
@@ -529,21 +529,31 @@ def main():
         measure(single, "one_process", paths, args, tmp, record, env, started, results, attempts)
         if args.pyspy:
             prof = pyspy_profile(paths[args.pyspy, "lockstep"], args.pyspy_duration, tmp, record, env, args.pyspy_bin)
-    if args.merge:
-        with open(args.merge) as f:
-            old = json.load(f)
-        for key, runs in old["runs"].items():
-            parts = key.split("|")
-            layout, n, mode = ("processes", *parts) if len(parts) == 2 else parts
-            results.setdefault((layout, int(n), mode), runs)
-        for key, v in old.get("attempts", {}).items():
-            attempts.setdefault(key, [tuple(x) for x in v])
-        prof = prof or old.get("pyspy")
-        if prof and not args.pyspy:
-            args.pyspy, args.pyspy_duration = prof.get("n", 0), prof.get("duration", args.pyspy_duration)
-    tows = sorted({n for (layout, n, _) in results if layout == "processes"})
-    single = sorted({n for (layout, n, _) in results if layout == "one_process"})
-    rows = summarise(tows, "processes", results)
+    return results, attempts, prof
+
+
+def merge_earlier(args, results, attempts, prof):
+    """Fill what this invocation did not measure from an earlier --json (--merge), so that a
+    disturbed row can be re-run alone; returns the py-spy profile (this run's, else the earlier
+    one's, whose N and duration then go into args for the report)."""
+    with open(args.merge) as f:
+        old = json.load(f)
+    for key, runs in old["runs"].items():
+        parts = key.split("|")
+        layout, n, mode = ("processes", *parts) if len(parts) == 2 else parts
+        results.setdefault((layout, int(n), mode), runs)
+    for key, v in old.get("attempts", {}).items():
+        attempts.setdefault(key, [tuple(x) for x in v])
+    prof = prof or old.get("pyspy")
+    if prof and not args.pyspy:
+        args.pyspy, args.pyspy_duration = prof.get("n", 0), prof.get("duration", args.pyspy_duration)
+    return prof
+
+
+def report_scaling(rows, tows, args, record):
+    """The main table of the processes layout and, with two or more N, the linear fits and the
+    largest N held paced; returns (cpu_fit, wall_fit, held) for the plot and the json (None
+    with fewer than two N)."""
     rec = "recorded" if record else "not recorded"
     print(f"\nTows in one sea (default demo's tow, {SPACING:g} m apart), every node its own process, {rec}, "
           f"50 Hz; lockstep {args.duration:g} s, paced {args.paced_duration:g} s simulated; "
@@ -561,16 +571,26 @@ def main():
               f"(R^2 {wall_fit[2]:.4f})")
         print(f"Largest number of tows held in paced real time at 50 Hz without an overrun: "
               f"{held if held is not None else 'none'} (tried {', '.join(map(str, tows))})")
-    if attempts:
-        print("Paced attempts (overruns, other load in cores; the least loaded is in the table): " + "; ".join(
-            f"{k.replace('|', ' ')} tows: " + ", ".join(f"{o} ({c:.2f})" for o, c in v) for k, v in attempts.items()))
-    srows = summarise(single, "one_process", results)
-    if srows:
-        print("\nThe same, every node in the runner's process (--layout one_process):\n")
-        print_table(srows, args.paced_duration)
-        print(f"\nLargest number held paced without an overrun, one process: {held_of(srows)} "
-              f"(tried {', '.join(map(str, single))})")
-    # where the CPU of a step goes, by process kind and thread (smallest and largest N)
+    return cpu_fit, wall_fit, held
+
+
+def report_attempts(attempts):
+    """Every paced attempt, so that a retried row shows what the table's run was chosen from."""
+    print("Paced attempts (overruns, other load in cores; the least loaded is in the table): " + "; ".join(
+        f"{k.replace('|', ' ')} tows: " + ", ".join(f"{o} ({c:.2f})" for o, c in v) for k, v in attempts.items()))
+
+
+def report_one_process(srows, single, paced_duration):
+    """The same table for --one-process, for comparison with every node a process."""
+    print("\nThe same, every node in the runner's process (--layout one_process):\n")
+    print_table(srows, paced_duration)
+    print(f"\nLargest number held paced without an overrun, one process: {held_of(srows)} "
+          f"(tried {', '.join(map(str, single))})")
+
+
+def report_cpu_split(rows):
+    """Where the CPU of a step goes, by process kind and thread, and each node's compute time,
+    for the smallest and the largest N (what grows with N)."""
     for label, mode in (("lockstep", "lock"), ("paced", "paced")):
         for r in (rows[:1] + rows[-1:]) if rows else []:
             split = r[mode]["split"]
@@ -590,18 +610,55 @@ def main():
             if comp:
                 print("\nmean compute time per node and step (StepDone compute_time: model step and publishing, "
                       "wall): " + ", ".join(f"{k} {v:.3f} ms" for k, v in sorted(comp.items())))
+
+
+def report_pyspy(prof, n_tows, duration):
+    """The py-spy run: what each process kind spends its active samples on (ACTIVITIES), and
+    each kind's most sampled innermost frames."""
+    print(f"\npy-spy, {n_tows} tows, lockstep, {duration:g} s simulated: share of the active "
+          "samples (running, or runnable and waiting for a core) of each process kind by what the innermost "
+          "Python frame that names an activity does\n")
+    acts = [a for a, _ in ACTIVITIES] + ["other Python"]
+    print("| process | samples | " + " | ".join(acts) + " |")
+    print("|---|---|" + "---|" * len(acts))
+    for role, total in sorted(prof["samples"].items(), key=lambda kv: -kv[1]):
+        print(f"| {role} | {total} | " + " | ".join(
+            f"{100 * prof['by_activity'].get(f'{role}|{a}', 0) / total:.0f} %" for a in acts) + " |")
+    for role, top in prof["top"].items():
+        print(f"- {role}: " + "; ".join(f"{leaf} {100 * n / prof['samples'][role]:.0f} %" for leaf, n in top))
+
+
+def write_json(path, rows, srows, cpu_fit, wall_fit, held, results, attempts, prof):
+    """Every number of the report and every run, so that a later --merge can reuse them."""
+    with open(path, "w") as f:
+        json.dump({"rows": rows, "one_process_rows": srows, "cpu_fit": cpu_fit, "wall_fit": wall_fit,
+                   "held": held, "runs": {f"{lay}|{n}|{m}": v for (lay, n, m), v in results.items()},
+                   "attempts": attempts, "pyspy": prof}, f, indent=1)
+
+
+def main():
+    args = parse_args()
+    tows = [int(t) for t in args.tows.split(",") if t]
+    single = [int(t) for t in args.one_process.split(",") if t]
+    record = not args.no_record
+    env = dict(os.environ)
+    env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    started = time.monotonic()
+    results, attempts, prof = run_rounds(tows, single, args, record, env, started)
+    if args.merge:
+        prof = merge_earlier(args, results, attempts, prof)
+    tows = sorted({n for (layout, n, _) in results if layout == "processes"})
+    single = sorted({n for (layout, n, _) in results if layout == "one_process"})
+    rows = summarise(tows, "processes", results)
+    cpu_fit, wall_fit, held = report_scaling(rows, tows, args, record)
+    if attempts:
+        report_attempts(attempts)
+    srows = summarise(single, "one_process", results)
+    if srows:
+        report_one_process(srows, single, args.paced_duration)
+    report_cpu_split(rows)
     if prof:
-        print(f"\npy-spy, {args.pyspy} tows, lockstep, {args.pyspy_duration:g} s simulated: share of the active "
-              "samples (running, or runnable and waiting for a core) of each process kind by what the innermost "
-              "Python frame that names an activity does\n")
-        acts = [a for a, _ in ACTIVITIES] + ["other Python"]
-        print("| process | samples | " + " | ".join(acts) + " |")
-        print("|---|---|" + "---|" * len(acts))
-        for role, total in sorted(prof["samples"].items(), key=lambda kv: -kv[1]):
-            print(f"| {role} | {total} | " + " | ".join(
-                f"{100 * prof['by_activity'].get(f'{role}|{a}', 0) / total:.0f} %" for a in acts) + " |")
-        for role, top in prof["top"].items():
-            print(f"- {role}: " + "; ".join(f"{leaf} {100 * n / prof['samples'][role]:.0f} %" for leaf, n in top))
+        report_pyspy(prof, args.pyspy, args.pyspy_duration)
     if len(rows) > 1:
         plot(rows, cpu_fit, wall_fit, held, args.plot, srows)
         print(f"\nplot: {os.path.abspath(args.plot)}")
@@ -609,10 +666,7 @@ def main():
         print_table(rows, args.paced_duration)
     print(f"{time.monotonic() - started:.0f} s in all")
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump({"rows": rows, "one_process_rows": srows, "cpu_fit": cpu_fit, "wall_fit": wall_fit,
-                       "held": held, "runs": {f"{lay}|{n}|{m}": v for (lay, n, m), v in results.items()},
-                       "attempts": attempts, "pyspy": prof}, f, indent=1)
+        write_json(args.json, rows, srows, cpu_fit, wall_fit, held, results, attempts, prof)
 
 
 if __name__ == "__main__":

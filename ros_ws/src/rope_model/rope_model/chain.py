@@ -73,6 +73,40 @@ def _end_name(end):
     raise ValueError(f"end must be 'a' or 'b', got {end!r}")
 
 
+def _layout_arrays(X, E, lengths):
+    """The layout as float arrays (copies), checked before anything is built from it: N >= 1
+    elements, (N, 3) centres and axes, positive finite lengths, finite values; the axes are
+    normalised."""
+    X = np.array(X, dtype=float)
+    E = np.array(E, dtype=float)
+    L = np.array(lengths, dtype=float)
+    n = L.shape[0] if L.ndim == 1 else -1
+    if n < 1:
+        raise ValueError(f"n_elements must be >= 1, got {max(n, 0)}")
+    if X.shape != (n, 3) or E.shape != (n, 3):
+        raise ValueError("positions and axes must have shape (N, 3)")
+    if not (np.all(np.isfinite(L)) and np.all(L > 0)):
+        raise ValueError(f"element lengths must be positive and finite, got min {L.min()}")
+    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(E))):
+        raise ValueError("positions and axes must be finite")
+    E /= np.linalg.norm(E, axis=1)[:, None]
+    return X, E, L
+
+
+def _check_settings(end_a, end_b, max_substep, theta, relaxation):
+    """End modes and integration settings, refused before any state is built (theta: the
+    implicit scheme's weight, 0.5 .. 1)."""
+    for nm, m in (("end_a", end_a), ("end_b", end_b)):
+        if m not in END_MODES:
+            raise ValueError(f"{nm}: expected one of {END_MODES}, got {m!r}")
+    if not (math.isfinite(max_substep) and max_substep > 0):
+        raise ValueError(f"max_substep must be positive, got {max_substep}")
+    if not (0.5 <= theta <= 1.0):
+        raise ValueError(f"theta must be in [0.5, 1], got {theta}")
+    if not (math.isfinite(relaxation) and relaxation >= 0):
+        raise ValueError(f"relaxation must be >= 0, got {relaxation}")
+
+
 class RopeChain:
     """N rigid cylindrical elements joined by tension-only spring-dampers (Eq 1-26).
 
@@ -103,34 +137,24 @@ class RopeChain:
                  relaxation=0.0, current=(0.0, 0.0, 0.0), nominal_element_length=None):
         if not isinstance(params, RopeParams):
             raise TypeError("params must be a RopeParams (see load_rope_params)")
-        X = np.array(X, dtype=float)
-        E = np.array(E, dtype=float)
-        L = np.array(lengths, dtype=float)
-        n = L.shape[0] if L.ndim == 1 else -1
-        if n < 1:
-            raise ValueError(f"n_elements must be >= 1, got {max(n, 0)}")
-        if X.shape != (n, 3) or E.shape != (n, 3):
-            raise ValueError("positions and axes must have shape (N, 3)")
-        if not (np.all(np.isfinite(L)) and np.all(L > 0)):
-            raise ValueError(f"element lengths must be positive and finite, got min {L.min()}")
-        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(E))):
-            raise ValueError("positions and axes must be finite")
-        E /= np.linalg.norm(E, axis=1)[:, None]
-        for nm, m in (("end_a", end_a), ("end_b", end_b)):
-            if m not in END_MODES:
-                raise ValueError(f"{nm}: expected one of {END_MODES}, got {m!r}")
-        if not (math.isfinite(max_substep) and max_substep > 0):
-            raise ValueError(f"max_substep must be positive, got {max_substep}")
-        if not (0.5 <= theta <= 1.0):
-            raise ValueError(f"theta must be in [0.5, 1], got {theta}")
-        if not (math.isfinite(relaxation) and relaxation >= 0):
-            raise ValueError(f"relaxation must be >= 0, got {relaxation}")
+        X, E, L = _layout_arrays(X, E, lengths)
+        _check_settings(end_a, end_b, max_substep, theta, relaxation)
         self.params = params
-        p = params  # scalar kernel parameters, fixed for the rope's life (params is frozen)
-        # the kernel's parameters, attachment data, flags and outputs in one array (one
-        # dispatch argument); theta, relaxation and current are properties writing into it,
-        # att_pos, att_vel, att_on etc. are views into it
-        io = self._io = np.zeros((K.IO_ROWS, 3))
+        self._io = self._kernel_io(params)
+        self._init_elements(X, E, L)
+        self._init_ends(end_a, end_b, p_a, p_b)
+        self._init_connections(L.shape[0])
+        self._init_winch(winch, nominal_element_length)
+        self._init_stepping(max_substep, theta, relaxation, current)
+        self._pack()
+        self._check_initial_layout(L)
+
+    def _kernel_io(self, p: RopeParams):
+        """The kernel's parameters, attachment data, flags and outputs in one array (one
+        dispatch argument); the scalar parameters are fixed for the rope's life (params is
+        frozen); theta, relaxation and current are properties writing into it, att_pos,
+        att_vel, att_on etc. are views into it (_bind_io)."""
+        io = np.zeros((K.IO_ROWS, 3))
         for key, v in ((K.P_MU, p.mass_per_length), (K.P_RADIUS, p.radius), (K.P_EA, p.ea),
                        (K.P_CD, p.drag_normal), (K.P_CF, p.drag_tangential),
                        (K.P_TFAC, p.tangential_area_factor), (K.P_CA, p.added_mass_coefficient),
@@ -144,29 +168,46 @@ class RopeChain:
                        (K.P_MU_TR, p.seabed.friction_transverse),
                        (K.P_VSLIP, p.seabed.slip_speed)):
             io[key] = v
+        return io
+
+    def _init_elements(self, X, E, L):
+        """Per-element state: the layout given, at rest, in calm water."""
+        n = L.shape[0]
         self.X, self.E, self.L = X, E, L
         self.V = np.zeros((n, 3))
         self.W = np.zeros((n, 3))
         self.env = self._calm_env(n)
         self._environment = None    # attach_environment
+
+    def _init_ends(self, end_a, end_b, p_a, p_b):
+        """End modes and attachment points; by default the points are the rope ends of the
+        layout, so that the rope starts attached where it lies."""
         self.end_modes = [end_a, end_b]
         self._bind_io()
         self.att_on[:] = [m != "free" for m in self.end_modes]
-        # default attachment points: the rope ends of the layout
+        X, E, L = self.X, self.E, self.L
         front = X[0] + 0.5 * L[0] * E[0]
         aft = X[-1] - 0.5 * L[-1] * E[-1]
         self.att_pos[0] = front if p_a is None else _vec3(p_a, "p_a")
         self.att_pos[1] = aft if p_b is None else _vec3(p_b, "p_b")
+
+    def _init_connections(self, n):
+        """Per-connection state (N + 1 connections, the attachments included): all intact,
+        armed to part, with the rope file's breaking load."""
         self.conn_ok = np.ones(n + 1, dtype=np.int64)
         self.armed = np.ones(n + 1, dtype=np.int64)  # parting re-armed once unloaded
-        self.breaking_load = np.full(n + 1, float(params.breaking_load))
+        self.breaking_load = np.full(n + 1, float(self.params.breaking_load))
+
+    def _init_winch(self, winch, nominal_element_length):
+        """The winch at end a, its drum stopped, in the mode and with the settings of the rope
+        file's winch: section (set_winch changes them later)."""
+        params = self.params
         self.winch = bool(winch)
         if self.winch and self.end_modes[0] == "free":
             raise ValueError("a winch needs end a attached ('pinned' or 'fixed')")
         self.l_nom = float(nominal_element_length or params.nominal_element_length)
         self.payout_rate = 0.0  # the drum's pay-out rate now, m/s (+ out): the order in 'speed'
         self._paying = False  # pay-out active in the current sub-step (not at a limit)
-        # winch mode and its settings (set_winch; defaults from the rope file's winch: section)
         w = params.winch.resolved(params.breaking_load, params.winch_max_payout_speed)
         self.winch_mode = w["mode"]
         self.set_tension = w["set_tension"]
@@ -174,6 +215,11 @@ class RopeChain:
         self.brake_load = w["brake_load"]
         self.winch_gain = w["gain"]
         self.speed_order = 0.0  # the last 'speed' order, m/s
+
+    def _init_stepping(self, max_substep, theta, relaxation, current):
+        """Integration settings, the clock, the event log and the kernel's outputs and
+        workspace, before the first step."""
+        n = self.L.shape[0]
         self.max_substep = float(max_substep)
         self.theta = float(theta)
         self.relaxation = float(relaxation)
@@ -184,14 +230,17 @@ class RopeChain:
         self.tensions = np.zeros(n + 1)
         self._ws = K.new_workspace(n)
         self._split = (0.0, 0.0, 1, 0.0)
-        self._pack()
+
+    def _check_initial_layout(self, L):
+        """Refuse a layout no run could start from: more rope deployed than the rope has, or
+        a connection overloaded before any motion (straight between ends farther apart than
+        the rope reaches, or an absurd EA). Computes the initial tensions and end forces."""
+        params = self.params
         total = float(L.sum())
         if total > params.length * (1 + 1e-9):
             raise ValueError(f"deployed length {total:.3f} m exceeds rope length {params.length} m")
         self._refresh()
         if self.events or self._diverged_connection() is not None:
-            # a layout stretched beyond the breaking load before any motion (straight between
-            # ends farther apart than the rope reaches, or an absurd EA): no state to start from
             c = int(self.events[0].connection if self.events else self._io[K.IO_DIAG, 0])
             T = float(self.events[0].tension if self.events else self._io[K.IO_DIAG, 1])
             span = float(np.linalg.norm(self.att_pos[1] - self.att_pos[0]))

@@ -310,10 +310,30 @@ def _default_hmax(length: float) -> float:
 
 def cross_checks(s: DisplacementShip) -> List[tuple]:
     """Checks between keys: [(dotted key, message)], empty when the file is consistent."""
+    L = s.hull.length
+    out = _check_hull(s.hull, s.water_density)
+    hmax = s.integration.max_substep if s.integration else _default_hmax(L)
+    out += _check_engine_and_steering_lags(s, hmax)
+    out += _check_thrusters(s.thrusters or [], L, hmax)
+    out += _check_anchor_chain(s.anchor)
+    props = s.propellers or []
+    out += _check_drive_sections(s, props)
+    out += _check_propellers(props, L)
+    out += _check_rudders(s.rudders or [], len(props), s.hull)
+    out += _check_roll(s.roll, s.hull, hmax)
+    out += _check_anchor_lever(s.anchor, L)
+    out += _check_towline(s.towline_simple, s.hull)
+    out += _check_attachments(s.attachments or {}, L)
+    out += _check_current(s.current)
+    return out
+
+
+def _check_hull(h: Hull, water_density: float) -> List[tuple]:
+    """The hull's particulars must describe a real hull: a plausible fullness, the centre of
+    gravity and the lateral plane on it, a gyration radius ships have."""
     out = []
-    h = s.hull
     L, B, T = h.length, h.beam, h.draft
-    cb = h.mass / (s.water_density * L * B * T)
+    cb = h.mass / (water_density * L * B * T)
     # the block coefficient of real hulls is 0.35 (fast craft) .. 0.9 (barges); 0.1-1.1 allows
     # for overhangs and for L, B, T not quite the displacement's
     if not 0.1 <= cb <= 1.1:
@@ -332,110 +352,210 @@ def cross_checks(s: DisplacementShip) -> List[tuple]:
             out.append(("hull.crossflow", f"x_aft {cf.x_aft:g} .. x_fore {cf.x_fore:g} m: expected "
                                           f"-L <= x_aft < x_fore <= L ({L:g} m)"))
     if h.resistance is not None:
-        v, f = h.resistance.speed, h.resistance.force
-        if len(v) != len(f):
-            out.append(("hull.resistance.force", f"{len(f)} values for {len(v)} speeds"))
-        elif any(b <= a for a, b in zip(v, v[1:])):
-            out.append(("hull.resistance.speed", "speeds must increase"))
-    hmax = s.integration.max_substep if s.integration else _default_hmax(L)
+        out += _check_resistance_table(h.resistance)
+    return out
+
+
+def _check_resistance_table(res: Resistance) -> List[tuple]:
+    """The resistance curve is interpolated in speed: one force per speed, speeds increasing."""
+    v, f = res.speed, res.force
+    if len(v) != len(f):
+        return [("hull.resistance.force", f"{len(f)} values for {len(v)} speeds")]
+    if any(b <= a for a, b in zip(v, v[1:])):
+        return [("hull.resistance.speed", "speeds must increase")]
+    return []
+
+
+def _check_lag(key: str, time_constant: float, hmax: float) -> List[tuple]:
+    """A first-order lag faster than the RK4 sub-step can follow would blow the state up."""
     # RK4 is stable for a first-order lag while h / T < 2.78: keep a margin of 1.4
+    if time_constant < 0.5 * hmax:
+        return [(key, f"{time_constant:g} s is shorter than half the integration sub-step "
+                      f"({hmax:g} s, integration.max_substep): the lag would be unstable")]
+    return []
+
+
+def _check_engine_and_steering_lags(s: DisplacementShip, hmax: float) -> List[tuple]:
+    """The engine's and the steering gear's lags are integrated with the ship's sub-step."""
+    out = []
     for key, sec in (("engine.time_constant", s.engine), ("steering.time_constant", s.steering)):
-        if sec is not None and sec.time_constant < 0.5 * hmax:
-            out.append((key, f"{sec.time_constant:g} s is shorter than half the integration sub-step "
-                             f"({hmax:g} s, integration.max_substep): the lag would be unstable"))
+        if sec is not None:
+            out += _check_lag(key, sec.time_constant, hmax)
+    return out
+
+
+def _check_kt(key: str, kt: List[float]) -> List[tuple]:
+    """A K_T(J) polynomial must give thrust at the bollard (J = 0) and have sane coefficients."""
+    out = []
+    if kt[0] <= 0.0:
+        out.append((key, f"K_T at J = 0 must be positive, got {kt[0]:g}"))
+    if any(abs(c) > 5.0 for c in kt):
+        out.append((key, f"coefficients beyond +-5: {kt}"))
+    return out
+
+
+def _check_thrusters(thrusters: List[Thruster], L: float, hmax: float) -> List[tuple]:
+    """Each azimuth thruster: on the ship, a name of its own (orders and telemetry address it),
+    one source of K_T, usable tables, lags the sub-step resolves, a valid azimuth range."""
+    out = []
     names = set()
-    for i, th in enumerate(s.thrusters or []):
+    for i, th in enumerate(thrusters):
         key = f"thrusters.{i}"
         out += _point(f"{key}.position", th.position, L)
         name = th.name if th.name is not None else f"thruster{i}"
         if name in names:
             out.append((f"{key}.name", f"{name!r} is used by another thruster"))
         names.add(name)
-        if (th.kt is None) == (th.open_water is None):
-            out.append((f"{key}.kt", "give exactly one of kt and open_water"))
-        if th.kt is not None:
-            if th.kt[0] <= 0.0:
-                out.append((f"{key}.kt", f"K_T at J = 0 must be positive, got {th.kt[0]:g}"))
-            if any(abs(c) > 5.0 for c in th.kt):
-                out.append((f"{key}.kt", f"coefficients beyond +-5: {th.kt}"))
-        if th.open_water is not None and len(th.open_water.J) != len(th.open_water.KT):
-            out.append((f"{key}.open_water.KT", f"{len(th.open_water.KT)} values for {len(th.open_water.J)} J"))
-        td = th.thrust_deduction
-        if isinstance(td, DeductionTable):
-            if len(td.azimuth_deg) != len(td.value):
-                out.append((f"{key}.thrust_deduction.value",
-                            f"{len(td.value)} values for {len(td.azimuth_deg)} azimuths"))
-            elif any(b <= a for a, b in zip(td.azimuth_deg, td.azimuth_deg[1:])):
-                out.append((f"{key}.thrust_deduction.azimuth_deg", "azimuths must increase"))
-            elif td.azimuth_deg[-1] - td.azimuth_deg[0] >= 360.0:
-                out.append((f"{key}.thrust_deduction.azimuth_deg", "-180 and 180 are the same azimuth: give one"))
+        out += _check_thruster_thrust_curve(key, th)
+        out += _check_deduction_table(key, th.thrust_deduction)
         for sub, tc in (("time_constant", th.time_constant), ("azimuth_time_constant", th.azimuth_time_constant)):
-            if tc < 0.5 * hmax:
-                out.append((f"{key}.{sub}", f"{tc:g} s is shorter than half the integration sub-step "
-                                            f"({hmax:g} s, integration.max_substep): the lag would be unstable"))
-        if th.full_360:
-            if th.azimuth_range_deg is not None:
-                out.append((f"{key}.azimuth_range_deg", "a full_360 unit has no range (set full_360: false)"))
-        else:
-            r = th.azimuth_range_deg
-            if r is None:
-                out.append((f"{key}.azimuth_range_deg", "required key is missing (full_360: false)"))
-            elif not -180.0 <= r[0] < r[1] <= 180.0:
-                out.append((f"{key}.azimuth_range_deg", f"{r}: need -180 <= lo < hi <= 180 deg"))
-    a = s.anchor
+            out += _check_lag(f"{key}.{sub}", tc, hmax)
+        out += _check_azimuth_range(key, th)
+    return out
+
+
+def _check_thruster_thrust_curve(key: str, th: Thruster) -> List[tuple]:
+    """K_T comes from exactly one of the polynomial and the open-water points (fitted by
+    ship_file), each of which must be usable."""
+    out = []
+    if (th.kt is None) == (th.open_water is None):
+        out.append((f"{key}.kt", "give exactly one of kt and open_water"))
+    if th.kt is not None:
+        out += _check_kt(f"{key}.kt", th.kt)
+    if th.open_water is not None and len(th.open_water.J) != len(th.open_water.KT):
+        out.append((f"{key}.open_water.KT", f"{len(th.open_water.KT)} values for {len(th.open_water.J)} J"))
+    return out
+
+
+def _check_deduction_table(key: str, td: Union[float, DeductionTable]) -> List[tuple]:
+    """A thrust-deduction table is interpolated periodically in azimuth: one value per azimuth,
+    azimuths increasing and spanning less than a full turn."""
+    if not isinstance(td, DeductionTable):
+        return []
+    if len(td.azimuth_deg) != len(td.value):
+        return [(f"{key}.thrust_deduction.value", f"{len(td.value)} values for {len(td.azimuth_deg)} azimuths")]
+    if any(b <= a for a, b in zip(td.azimuth_deg, td.azimuth_deg[1:])):
+        return [(f"{key}.thrust_deduction.azimuth_deg", "azimuths must increase")]
+    if td.azimuth_deg[-1] - td.azimuth_deg[0] >= 360.0:
+        return [(f"{key}.thrust_deduction.azimuth_deg", "-180 and 180 are the same azimuth: give one")]
+    return []
+
+
+def _check_azimuth_range(key: str, th: Thruster) -> List[tuple]:
+    """A unit with stops needs its range (lo < hi within -180..180); a full_360 unit has none."""
+    if th.full_360:
+        if th.azimuth_range_deg is not None:
+            return [(f"{key}.azimuth_range_deg", "a full_360 unit has no range (set full_360: false)")]
+        return []
+    r = th.azimuth_range_deg
+    if r is None:
+        return [(f"{key}.azimuth_range_deg", "required key is missing (full_360: false)")]
+    if not -180.0 <= r[0] < r[1] <= 180.0:
+        return [(f"{key}.azimuth_range_deg", f"{r}: need -180 <= lo < hi <= 180 deg")]
+    return []
+
+
+def _check_anchor_chain(a: Optional[Anchor]) -> List[tuple]:
+    """The chain's catenary limit needs both its length and its weight (or neither)."""
     if a is not None and (a.chain_out is None) != (a.chain_weight is None):
-        out.append((f"anchor.{'chain_weight' if a.chain_weight is None else 'chain_out'}",
-                    "chain_out and chain_weight go together (or neither)"))
-    props = s.propellers or []
+        return [(f"anchor.{'chain_weight' if a.chain_weight is None else 'chain_out'}",
+                 "chain_out and chain_weight go together (or neither)")]
+    return []
+
+
+def _check_drive_sections(s: DisplacementShip, props: List[Propeller]) -> List[tuple]:
+    """Propellers turn at the engine's rpm and rudders at the steering gear's rate: the
+    sections they depend on must be there."""
+    out = []
     if props and s.engine is None:
         out.append(("engine", "propellers need an 'engine' section (rated_rpm, time_constant)"))
     if s.rudders and s.steering is None:
         out.append(("steering", "rudders need a 'steering' section"))
+    return out
+
+
+def _check_propellers(props: List[Propeller], L: float) -> List[tuple]:
+    """Each propeller on the ship with a usable K_T polynomial."""
+    out = []
     for i, p in enumerate(props):
         out += _point(f"propellers.{i}.position", p.position, L)
-        if p.kt[0] <= 0.0:
-            out.append((f"propellers.{i}.kt", f"K_T at J = 0 must be positive, got {p.kt[0]:g}"))
-        if any(abs(c) > 5.0 for c in p.kt):
-            out.append((f"propellers.{i}.kt", f"coefficients beyond +-5: {p.kt}"))
-    for i, r in enumerate(s.rudders or []):
+        out += _check_kt(f"propellers.{i}.kt", p.kt)
+    return out
+
+
+def _check_rudders(rudders: List[Rudder], n_propellers: int, h: Hull) -> List[tuple]:
+    """Each rudder on the ship, of a size ships have, behind an existing propeller (or none)."""
+    out = []
+    L, T = h.length, h.draft
+    for i, r in enumerate(rudders):
         out += _point(f"rudders.{i}.position", r.position, L)
         if r.area > 0.1 * L * T:
             out.append((f"rudders.{i}.area", f"{r.area:g} m^2 is more than 0.1 L T = {0.1 * L * T:g} m^2"))
         if abs(r.x_H) > L:
             out.append((f"rudders.{i}.x_H", f"{r.x_H:g} m is off the hull (|x_H| <= L)"))
-        if r.propeller is not None and not 0 <= r.propeller < len(props):
+        if r.propeller is not None and not 0 <= r.propeller < n_propellers:
             out.append((f"rudders.{i}.propeller",
-                        f"must be an index into propellers (0..{len(props) - 1}) or null, got {r.propeller}"))
-    if s.roll is not None:
-        ro = s.roll
-        if ro.radius_of_gyration > B:
-            out.append(("roll.radius_of_gyration", f"{ro.radius_of_gyration:g} m is more than the beam ({B:g} m)"))
-        if abs(ro.z_g) > L:
-            out.append(("roll.z_g", f"{ro.z_g:g} m is off the hull"))
-        if ro.z_lateral_resistance < -T:
-            out.append(("roll.z_lateral_resistance", f"{ro.z_lateral_resistance:g} m is below the keel (-{T:g} m)"))
-        # the roll oscillation must be resolved by the RK4 sub-step (omega h < 1.6)
-        kxx2 = ro.radius_of_gyration ** 2 * (1.0 + ro.added_inertia_ratio) + ro.z_g ** 2
-        period = 2.0 * math.pi * math.sqrt(kxx2 / (G * ro.gm))
-        if period < 4.0 * hmax:
-            out.append(("roll.gm", f"roll period {period:.3g} s is shorter than 4 integration sub-steps "
-                                   f"({hmax:g} s): lower gm or integration.max_substep"))
-    if s.anchor is not None and s.anchor.moment_lever > 2.0 * L:
-        out.append(("anchor.moment_lever", f"{s.anchor.moment_lever:g} m is more than 2 L"))
-    t = s.towline_simple
-    if t is not None:
-        if t.force == "resistance":
-            if t.reference_speed is None:
-                out.append(("towline_simple.reference_speed", "required key is missing (force: resistance)"))
-            if h.resistance is None:
-                out.append(("towline_simple.force", "'resistance' needs hull.resistance"))
-        if t.lever is not None and abs(t.lever) > L:
-            out.append(("towline_simple.lever", f"{t.lever:g} m is off the hull (|lever| <= L)"))
-    for k, p in (s.attachments or {}).items():
-        out += _point(f"attachments.{k}", p, L)
-    if any(abs(c) > 10.0 for c in s.current):
-        out.append(("current", f"{s.current} m/s: components must be within +-10 m/s"))
+                        f"must be an index into propellers (0..{n_propellers - 1}) or null, got {r.propeller}"))
     return out
+
+
+def _check_roll(ro: Optional[Roll], h: Hull, hmax: float) -> List[tuple]:
+    """Roll particulars within the hull, and a roll period the RK4 sub-step can resolve."""
+    if ro is None:
+        return []
+    out = []
+    L, B, T = h.length, h.beam, h.draft
+    if ro.radius_of_gyration > B:
+        out.append(("roll.radius_of_gyration", f"{ro.radius_of_gyration:g} m is more than the beam ({B:g} m)"))
+    if abs(ro.z_g) > L:
+        out.append(("roll.z_g", f"{ro.z_g:g} m is off the hull"))
+    if ro.z_lateral_resistance < -T:
+        out.append(("roll.z_lateral_resistance", f"{ro.z_lateral_resistance:g} m is below the keel (-{T:g} m)"))
+    # the roll oscillation must be resolved by the RK4 sub-step (omega h < 1.6)
+    kxx2 = ro.radius_of_gyration ** 2 * (1.0 + ro.added_inertia_ratio) + ro.z_g ** 2
+    period = 2.0 * math.pi * math.sqrt(kxx2 / (G * ro.gm))
+    if period < 4.0 * hmax:
+        out.append(("roll.gm", f"roll period {period:.3g} s is shorter than 4 integration sub-steps "
+                               f"({hmax:g} s): lower gm or integration.max_substep"))
+    return out
+
+
+def _check_anchor_lever(a: Optional[Anchor], L: float) -> List[tuple]:
+    """The anchor's yaw-moment lever is a point on or near the ship."""
+    if a is not None and a.moment_lever > 2.0 * L:
+        return [("anchor.moment_lever", f"{a.moment_lever:g} m is more than 2 L")]
+    return []
+
+
+def _check_towline(t: Optional[TowlineSimple], h: Hull) -> List[tuple]:
+    """A towline sized from the resistance needs the resistance curve and a speed to read it
+    at; its lever is on the hull."""
+    if t is None:
+        return []
+    out = []
+    if t.force == "resistance":
+        if t.reference_speed is None:
+            out.append(("towline_simple.reference_speed", "required key is missing (force: resistance)"))
+        if h.resistance is None:
+            out.append(("towline_simple.force", "'resistance' needs hull.resistance"))
+    if t.lever is not None and abs(t.lever) > h.length:
+        out.append(("towline_simple.lever", f"{t.lever:g} m is off the hull (|lever| <= L)"))
+    return out
+
+
+def _check_attachments(attachments: Dict[str, List[float]], L: float) -> List[tuple]:
+    """Rope and fender attachment points are on the ship."""
+    out = []
+    for k, p in attachments.items():
+        out += _point(f"attachments.{k}", p, L)
+    return out
+
+
+def _check_current(current: List[float]) -> List[tuple]:
+    """The ship's own current (m/s east, north) stays within what seas have."""
+    if any(abs(c) > 10.0 for c in current):
+        return [("current", f"{current} m/s: components must be within +-10 m/s")]
+    return []
 
 
 def _point(key: str, p: List[float], L: float) -> List[tuple]:
