@@ -57,8 +57,8 @@ LAYERS = [
     {"tug_dynamics", "rope_model"},                 # vessel and rope models and their nodes
     {"hull_contact"},                               # contact between hulls (knows both)
     {"scenario_format"},                            # the scenario format, a run's particulars (ROS-free)
-    {"bridge_instruments", "live_view"},            # the human edge: console, NMEA/AIS, the page
-    {"scenario_runner"},                            # runs, records, replays, analyses
+    {"bridge_instruments", "live_view", "recording"},  # the human edge; a run's recording, replay, analysis
+    {"scenario_runner"},                            # runs a scenario
 ]
 _LAYER = {p: i for i, layer in enumerate(LAYERS) for p in layer}
 

@@ -152,8 +152,8 @@ class _PastTheChecks(BaseException):
 
 @pytest.fixture
 def run_in_process(capfd, monkeypatch):
-    """run_in_process(executable, *args) -> subprocess.CompletedProcess: the scenario_runner
-    command line `executable args` run in this process, through the entry function its console
+    """run_in_process(executable, *args) -> subprocess.CompletedProcess: the scenario_runner (or
+    recording: analyze, replay) command line `executable args` run in this process, through the entry function its console
     script calls (sys.exit(main())): the exit status is main's return value (or SystemExit's, as
     argparse raises it), stdout and stderr are what the process would print (file descriptors
     1 and 2, captured). An exception main lets out fails the test, as the process's traceback would.
@@ -167,7 +167,7 @@ def run_in_process(capfd, monkeypatch):
         raise _PastTheChecks()
 
     def _run(executable: str, *args) -> subprocess.CompletedProcess:
-        main = entry_function("scenario_runner", executable)
+        main = entry_function("recording" if executable in ("analyze", "replay") else "scenario_runner", executable)
         argv = [str(a) for a in args]
         capfd.readouterr()
         try:

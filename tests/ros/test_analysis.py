@@ -1,4 +1,4 @@
-"""Acceptance of the analysis tool (`analyze`, scenario_runner/analysis.py):
+"""Acceptance of the analysis tool (`analyze`, recording/analysis.py):
 
 - a turning recording (harbour tug, engine order 0.6, 20 deg helm from rest, 120 s at 20 Hz)
   gives the steady turning diameter the vessel library measures: the analysis of the MCAP
@@ -19,7 +19,6 @@ import json
 import math
 import os
 import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -47,16 +46,13 @@ EXPECTED_FIGURES = ["tracks.png", "yaw.png", "speed_yaw_rate.png", "motions.png"
 KN = 1852.0 / 3600.0
 
 
-def tool(executable, module):
-    """The installed executable once setup.py lists it, else `python -m module`."""
-    try:
-        return [executable_path("scenario_runner", executable)]
-    except FileNotFoundError:
-        return [sys.executable, "-m", module]
+def tool(executable):
+    """The installed executable of the recording package (`ros2 run recording <executable>`)."""
+    return [executable_path("recording", executable)]
 
 
 def analyze(*args, timeout=120):
-    return subprocess.run(tool("analyze", "scenario_runner.analysis") + [str(a) for a in args],
+    return subprocess.run(tool("analyze") + [str(a) for a in args],
                           capture_output=True, text=True, timeout=timeout)
 
 
@@ -179,7 +175,7 @@ def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
         max(rope["tension_a_max"], rope["tension_b_max"], rope["tension_max_anywhere"]) / rope_file["breaking_load"])
     # the towline angle: the barge lies dead astern of the tug at the start, so the line leaves
     # the tug's winch astern (+-180 deg) and the barge's bow bollard ahead (0 deg)
-    from scenario_runner.analysis import Recording, towline_angle
+    from recording.analysis import Recording, towline_angle
     rec = Recording(str(demo_recording))
     vessel_a, _, angle_a = towline_angle(rec, "towline", "a")
     vessel_b, _, angle_b = towline_angle(rec, "towline", "b")
@@ -253,7 +249,7 @@ def _write_odom_recording(path, n=50, corrupt=(), old_status=False):
     from mcap.writer import Writer
     from nav_msgs.msg import Odometry
     from rclpy.serialization import serialize_message
-    from scenario_runner.recorder import message_definition
+    from recording.recorder import message_definition
     with open(path, "wb") as f:
         w = Writer(f)
         w.start(profile="ros2", library="test")
@@ -279,7 +275,7 @@ def _write_odom_recording(path, n=50, corrupt=(), old_status=False):
 
 
 def test_undecodable_messages_are_reported_with_their_topic_and_count(tmp_path, capsys):
-    from scenario_runner import analysis
+    from recording import analysis
     path = _write_odom_recording(str(tmp_path / "rec.mcap"), corrupt={3, 17, 30})
     assert analysis.main([path, "-o", str(tmp_path / "an"), "--no-figures", "--quiet"]) == analysis.EXIT_OK
     err = capsys.readouterr().err
@@ -290,7 +286,7 @@ def test_undecodable_messages_are_reported_with_their_topic_and_count(tmp_path, 
 
 
 def test_a_programming_error_while_reading_is_not_turned_into_a_note(tmp_path, monkeypatch):
-    from scenario_runner import analysis
+    from recording import analysis
     path = _write_odom_recording(str(tmp_path / "rec.mcap"))
 
     def typo(msg):
@@ -303,7 +299,7 @@ def test_a_programming_error_while_reading_is_not_turned_into_a_note(tmp_path, m
 def test_an_older_message_without_a_field_read_is_left_out_with_a_note(tmp_path, monkeypatch):
     """A type that does not import here is decoded with the file's own schema; an older version
     of it lacks fields the analysis reads: its topic is left out, and a note names the fields."""
-    from scenario_runner import analysis, mcap_io
+    from recording import analysis, mcap_io
     installed = mcap_io.message_class
 
     def without_tug_msgs(type_name):

@@ -18,7 +18,7 @@ def test_analysis_turning_diameter_matches_the_vessel_library(tmp_path, ros_doma
     assert proc.returncode == 0, proc.stdout + proc.stderr
     # The turn is driven by the towline angle, not the helm: it starts at t = 0.
     out = tmp_path / "analysis"
-    ana = subprocess.run([executable_path("scenario_runner", "analyze"), str(rec), "-o", str(out), "--turn-start",
+    ana = subprocess.run([executable_path("recording", "analyze"), str(rec), "-o", str(out), "--turn-start",
                           "0", "--quiet"], capture_output=True, text=True, timeout=300)
     assert ana.returncode == 0, ana.stdout + ana.stderr
     turn = json.load(open(out / "summary.json"))["vessels"]["barge"]["turn"]

@@ -157,7 +157,7 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain, cap
     # the commanded values in /tug/status. The turn starts at the console's first helm order
     # (-5 deg, stamped t(mine[2])): the tug applies an order from the step after its stamp, or a
     # few steps later when the console's newest /clock lags (0.1 s: the next helm key came later)
-    from scenario_runner import analysis
+    from recording import analysis
     wall = tmp_path / "girt_wall_stamped.mcap"
     _wall_stamped_copy(str(out), str(wall), "/tug/command")
     capsys.readouterr()

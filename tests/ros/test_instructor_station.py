@@ -312,7 +312,7 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     try:
         _wait_http(url, live)
         # at twice the recorded pace (the page follows the replay's /clock, whatever its rate)
-        replay = subprocess.Popen([executable_path("scenario_runner", "replay"), str(out), "--rate", "2"],
+        replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "2"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         page, errors = _open_page(browser, url)
         _wait_page(page, "instructor.snap && instructor.snap.t > 4 && instructor.hasGeometry('tug') && "

@@ -188,7 +188,7 @@ def test_live_view_of_a_paced_run(tmp_path, ros_domain, rclpy_context, full_doma
     # test's own observer match them before step 0 (it checks every step's odometry)
     from ament_index_python.packages import get_package_share_directory
     from rclpy.serialization import deserialize_message
-    from scenario_runner.recorder import message_definition
+    from recording.recorder import message_definition
     share = get_package_share_directory("scenario_runner")
     sc = dict(yaml.safe_load(open(f"{share}/scenarios/default_demo.yaml")), name="live", mode="realtime",
               duration=DURATION)

@@ -56,7 +56,7 @@ def small_disk(tmp_path):
 def test_a_full_disk_stops_the_run_and_leaves_a_file_the_mcap_library_reads(tmp_path, ros_domain, small_disk):
     import re
     from mcap.reader import make_reader
-    from scenario_runner.mcap_io import McapFile
+    from recording.mcap_io import McapFile
     out = small_disk / "tow.mcap"
     proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), "seed000_straight_tow_5kn.yaml",
                            "--duration", "60", "--quiet", "--output", str(out), "--log-dir", str(tmp_path / "logs")],

@@ -1,4 +1,4 @@
-"""Acceptance of the replay tool (`replay`, scenario_runner/replay.py):
+"""Acceptance of the replay tool (`replay`, recording/replay.py):
 
 - a recording (default demo, 6 s: two vessels, a rope, 17 topics) replayed and recorded again
   with the project's McapRecorder (log time = wall-clock receive time) gives the same messages
@@ -20,7 +20,6 @@
 import json
 import os
 import subprocess
-import sys
 import threading
 import time
 
@@ -38,15 +37,13 @@ P95_TOL = 0.100  # s
 MAX_TOL = 0.500  # s
 
 
-def tool(executable, module):
-    try:
-        return [executable_path("scenario_runner", executable)]
-    except FileNotFoundError:
-        return [sys.executable, "-m", module]
+def tool(executable):
+    """The installed executable of the recording package (`ros2 run recording <executable>`)."""
+    return [executable_path("recording", executable)]
 
 
 def replay_cmd(*args):
-    return tool("replay", "scenario_runner.replay") + [str(a) for a in args]
+    return tool("replay") + [str(a) for a in args]
 
 
 def start_replay(domain, *args):
@@ -89,15 +86,15 @@ def same_cdr_lists(a, b) -> bool:
 
 
 def original_messages(path):
-    from scenario_runner.mcap_io import McapFile
+    from recording.mcap_io import McapFile
     return list(McapFile(str(path)).messages_in_time_order())
 
 
 def make_recorder(path, source):
     """McapRecorder subscribed to every topic of `source`, logging wall-clock receive times."""
-    from scenario_runner.mcap_io import McapFile, message_class
-    from scenario_runner.recorder import McapRecorder
-    from scenario_runner.replay import qos_from_metadata
+    from recording.mcap_io import McapFile, message_class
+    from recording.recorder import McapRecorder
+    from recording.replay import qos_from_metadata
 
     class WallClockRecorder(McapRecorder):
         def _write(self, topic, data):
@@ -136,7 +133,7 @@ def test_replay_recorded_again_gives_the_same_messages_and_timing(demo_recording
     rec.close()
     rec.destroy_node()
 
-    from scenario_runner.mcap_io import McapFile
+    from recording.mcap_io import McapFile
     orig = original_messages(demo_recording)
     rerec = list(McapFile(str(rerec_path)).messages())  # file order = receive order
     assert McapFile(str(rerec_path)).scan().complete
@@ -197,7 +194,7 @@ def test_replay_recorded_again_gives_the_same_messages_and_timing(demo_recording
         if name == "rerec":
             extra = ["--length"] + [f"{v}={s['length']}" for v, s in res["orig"]["vessels"].items()] + \
                 ["--breaking-load"] + [f"{r}={s['breaking_load']}" for r, s in res["orig"]["ropes"].items()]
-        out = subprocess.run(tool("analyze", "scenario_runner.analysis") + [str(path), "-o", str(tmp_path / name),
+        out = subprocess.run(tool("analyze") + [str(path), "-o", str(tmp_path / name),
                                                                              "--no-figures", *extra],
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 0, out.stderr
@@ -320,7 +317,7 @@ def test_replay_of_a_rosbag2_file_from_another_tool(tmp_path, ros_domain, rclpy_
 def test_truncated_recording_is_reported_and_its_readable_part_replayed(demo_recording, ros_domain, rclpy_context,
                                                                          tmp_path):
     from nav_msgs.msg import Odometry
-    from scenario_runner.mcap_io import McapFile
+    from recording.mcap_io import McapFile
     from sim_plumbing import ros_common as rc
     data = demo_recording.read_bytes()
     cut = tmp_path / "cut.mcap"
@@ -368,7 +365,7 @@ def _write_chatter(path, topics, n=12, compression=""):
 
 
 def test_replay_says_which_topics_get_a_default_qos(tmp_path, ros_domain):
-    from scenario_runner.recorder import qos_yaml
+    from recording.recorder import qos_yaml
     from sim_plumbing import ros_common as rc
     path = _write_chatter(str(tmp_path / "qos.mcap"), {
         "/good": {"offered_qos_profiles": qos_yaml(rc.STATE_QOS)},

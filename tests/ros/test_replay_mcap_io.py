@@ -1,5 +1,5 @@
 """Bad input: the tolerant MCAP reader shared by `replay` and `analyze`
-(scenario_runner/mcap_io.py). ROS-free and fast: synthetic files written with the mcap
+(recording/mcap_io.py). ROS-free and fast: synthetic files written with the mcap
 library (several chunks, every compression), then cut or damaged on purpose.
 
 - an intact file reads exactly as the mcap library reads it (same messages, same order);
@@ -16,7 +16,7 @@ import struct
 
 import pytest
 
-from scenario_runner.mcap_io import McapFile, McapReadError
+from recording.mcap_io import McapFile, McapReadError
 
 N_MESSAGES = 600
 
@@ -162,7 +162,7 @@ def _write_strings(path, good, corrupt_on, n_corrupt):
 
 
 def test_decoder_counts_corrupt_messages_per_topic(tmp_path):
-    from scenario_runner.mcap_io import Decoder
+    from recording.mcap_io import Decoder
     mf = McapFile(_write_strings(str(tmp_path / "s.mcap"), good=4, corrupt_on="/bad", n_corrupt=3))
     dec = Decoder()
     decoded = [dec.decode(m) for m in mf.messages()]
@@ -172,7 +172,7 @@ def test_decoder_counts_corrupt_messages_per_topic(tmp_path):
 
 
 def test_decoder_with_the_files_schema_counts_corrupt_messages_too(tmp_path, monkeypatch):
-    from scenario_runner import mcap_io
+    from recording import mcap_io
 
     def not_installed(type_name):
         raise ImportError(f"type {type_name} is not importable here")
@@ -188,7 +188,7 @@ def test_decoder_with_the_files_schema_counts_corrupt_messages_too(tmp_path, mon
 def test_decoder_lets_an_error_that_is_not_corrupt_data_propagate(tmp_path, monkeypatch):
     """A bug (here: the deserializer raising TypeError) is not counted as a corrupt message."""
     import rclpy.serialization
-    from scenario_runner.mcap_io import Decoder
+    from recording.mcap_io import Decoder
 
     def broken(data, cls):
         raise TypeError("a programming error")
@@ -199,7 +199,7 @@ def test_decoder_lets_an_error_that_is_not_corrupt_data_propagate(tmp_path, monk
 
 
 def test_unreadable_bag_metadata_is_said_and_the_files_present_used(tmp_path):
-    from scenario_runner.mcap_io import locate_recording
+    from recording.mcap_io import locate_recording
     bag = tmp_path / "bag"
     bag.mkdir()
     _write(str(bag / "bag_0.mcap"))

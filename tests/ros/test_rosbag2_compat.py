@@ -75,7 +75,7 @@ def _typestore():
 def _announced_hashes(context, type_names):
     """type -> the hash ROS announces for a publisher of that type (TopicEndpointInfo)."""
     from rclpy.node import Node
-    from scenario_runner.mcap_io import message_class
+    from recording.mcap_io import message_class
     node = Node("hash_probe", context=context)
     try:
         out = {}
@@ -189,7 +189,7 @@ def test_analyze_reads_the_bag_directory_through_its_mcap(recording, tmp_path):
     _, metadata = _summary(recording)
     bag = _as_bag_directory(recording, _bag_metadata(metadata), tmp_path)
     out = tmp_path / "analysis"
-    proc = subprocess.run([executable_path("scenario_runner", "analyze"), str(bag), "-o", str(out), "--no-figures"],
+    proc = subprocess.run([executable_path("recording", "analyze"), str(bag), "-o", str(out), "--no-figures"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert f"reading {bag / recording.name}" in proc.stdout
@@ -199,7 +199,7 @@ def test_analyze_reads_the_bag_directory_through_its_mcap(recording, tmp_path):
 def test_a_killed_run_without_the_metadata_record_still_reads(recording, tmp_path):
     """The metadata record is written on close: a run killed before that leaves a file without
     it (and without summary), which reads as before; a file cut after it keeps it."""
-    from scenario_runner.mcap_io import McapFile
+    from recording.mcap_io import McapFile
     summary, _ = _summary(recording)
     (index,) = [i for i in summary.metadata_indexes if i.name == "rosbag2"]
     data = recording.read_bytes()

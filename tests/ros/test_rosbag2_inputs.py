@@ -52,7 +52,7 @@ def _write_bag(path: Path, storage: str) -> Path:
 
 def _analyze(*args):
     from scenario_runner.conductor import executable_path
-    return subprocess.run([executable_path("scenario_runner", "analyze"), *map(str, args), "--no-figures"],
+    return subprocess.run([executable_path("recording", "analyze"), *map(str, args), "--no-figures"],
                           capture_output=True, text=True, timeout=120)
 
 
@@ -130,7 +130,7 @@ def test_recorder_qos_yaml_is_rosbag2_version_9():
     from rclpy.duration import Duration
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
     from rosbags.rosbag2.metadata import parse_qos
-    from scenario_runner.recorder import qos_yaml
+    from recording.recorder import qos_yaml
     profiles = [
         QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL),
         QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.BEST_EFFORT,
@@ -154,7 +154,7 @@ def test_recorder_qos_yaml_is_rosbag2_version_9():
 
 def test_bag_metadata_yaml_round_trips():
     from rclpy.qos import QoSProfile
-    from scenario_runner.recorder import bag_metadata, qos_dict, to_yaml, type_hash
+    from recording.recorder import bag_metadata, qos_dict, to_yaml, type_hash
     topics = [{"name": "/tug/odom", "type": "nav_msgs/msg/Odometry", "qos": [qos_dict(QoSProfile(depth=1))],
                "hash": type_hash("nav_msgs/msg/Odometry"), "count": 3},
               {"name": "/idle", "type": "std_msgs/msg/String", "qos": [qos_dict(QoSProfile(depth=10))],

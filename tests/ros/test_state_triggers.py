@@ -65,7 +65,7 @@ def test_zigzag_reverses_the_helm_at_the_step_the_heading_crosses(tmp_path):
         assert steer[j] == pytest.approx(side * -math.radians(10.0))
         k0, side, reversals = k, -side, reversals + 1
     assert reversals >= 4 and abs(t[1] - t[0] - dt) < 1e-9
-    out = subprocess.run([executable_path("scenario_runner", "analyze"), str(rec), "-o", str(tmp_path / "an"),
+    out = subprocess.run([executable_path("recording", "analyze"), str(rec), "-o", str(tmp_path / "an"),
                           "--no-figures"], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     vs = json.loads((tmp_path / "an" / "summary.json").read_text())["vessels"]["tug"]
@@ -84,7 +84,7 @@ def test_crash_stop_stops_the_engine_when_headway_is_lost(tmp_path):
     assert list(eo[:2]) == [-1.0, 0.0] and ct[0] == pytest.approx(10.0)
     first_astern = int(np.nonzero((t > 10.0) & (u < 0.0))[0][0])
     assert ct[1] == pytest.approx(t[first_astern], abs=1e-9)
-    out = subprocess.run([executable_path("scenario_runner", "analyze"), str(rec), "-o", str(tmp_path / "an"),
+    out = subprocess.run([executable_path("recording", "analyze"), str(rec), "-o", str(tmp_path / "an"),
                           "--no-figures"], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     stop = json.loads((tmp_path / "an" / "summary.json").read_text())["vessels"]["tug"]["stopping"]

@@ -23,8 +23,6 @@ setup(
         "console_scripts": [
             "send_command = scenario_runner.send_command:main",
             "run_scenario = scenario_runner.run_scenario:main",
-            "replay = scenario_runner.replay:main",
-            "analyze = scenario_runner.analysis:main",
             "autopilot = scenario_runner.autopilot:main",
         ],
     },

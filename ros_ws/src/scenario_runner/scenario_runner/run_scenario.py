@@ -31,7 +31,7 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
-from scenario_runner.recorder import McapRecorder, readable_extent
+from recording.recorder import McapRecorder, readable_extent
 from scenario_format.particulars import recording_metadata, scenario_path
 from scenario_format.scenario import Scenario, ScenarioError, load_scenario
 from sim_contract import topics as T

@@ -3,7 +3,7 @@ WebSocket protocol carries it: the type's .msg text, then every dependency once
 ("=" * 80, "MSG: pkg/Type", its text). Read from share/<pkg>/msg/<Type>.msg of the installed
 interface packages (no ROS import; ament_index_python is a file lookup).
 
-Written once: the recorder (scenario_runner.recorder) and the live view take their schemas from here, so the
+Written once: the recorder (recording.recorder) and the live view take their schemas from here, so the
 live view and the recording describe a type identically.
 """
 from __future__ import annotations

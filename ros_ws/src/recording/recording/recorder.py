@@ -40,7 +40,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 
 from rclpy.serialization import deserialize_message
 
-from scenario_runner.mcap_io import ros_decode_errors
+from recording.mcap_io import ros_decode_errors
 from sim_plumbing.msg_definitions import message_definition  # noqa: F401 - the recorder's schemas
 from sim_plumbing.record_feed import PipeReader
 from sim_plumbing.stepping import RateLimitedLog

@@ -1,6 +1,6 @@
 """Replay an MCAP recording on its original topics, with its original timing and /clock.
 
-    ros2 run scenario_runner replay output/default_demo.mcap [--rate 2] [--start-offset 30] [--loop]
+    ros2 run recording replay output/default_demo.mcap [--rate 2] [--start-offset 30] [--loop]
         [--topics '/tug/.*' /towline/state] [--exclude '.*/markers'] [--clock log|recorded|none]
 
 Every message goes out as the serialized CDR bytes of the recording (no re-serialisation), on
@@ -26,7 +26,7 @@ import sys
 import time
 from typing import Callable, Dict, List, Optional, Tuple
 
-from scenario_runner.mcap_io import (Channel, McapFile, McapReadError, locate_recording, message_class,
+from recording.mcap_io import (Channel, McapFile, McapReadError, locate_recording, message_class,
                                      ros_decode_errors)
 
 CLOCK_TOPIC = "/clock"

@@ -1,6 +1,6 @@
 """Turn a recording into the papers' figures (PNG) and a summary (JSON + CSV).
 
-    ros2 run scenario_runner analyze output/default_demo.mcap [-o output/default_demo_analysis]
+    ros2 run recording analyze output/default_demo.mcap [-o output/default_demo_analysis]
 
 Reads any MCAP recording that has the topic contract's topics (this project's recorder, a
 replay recorded again, rosbag2): /<vessel>/odom, /<vessel>/status, /<vessel>/command,
@@ -48,7 +48,7 @@ import numpy as np
 from sim_math.rotations import rpy_from_quaternion
 from sim_math import trials
 from sim_math.turning import turning_measures
-from scenario_runner.mcap_io import Decoder, McapFile, McapReadError, locate_recording
+from recording.mcap_io import Decoder, McapFile, McapReadError, locate_recording
 from scenario_format.particulars import particulars_from_metadata
 
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
