@@ -51,9 +51,9 @@ def one_host(scenario, duration, tmp, domain):
 
 
 def hosts_run(scenario, duration, tmp, domain, loss, delay):
-    from scenario_runner import conductor as cd
+    from scenario_runner import run_nodes
     from scenario_format.scenario import load_scenario
-    specs = cd.node_specs(load_scenario(scenario), scenario, "")
+    specs = run_nodes.node_specs(load_scenario(scenario), scenario, "")
     with hosts_harness.Hosts(["runner"] + [s.namespace.strip("/") for s in specs], loss_percent=loss,
                              delay_ms=delay) as hosts:
         env = hosts.env(ROS_DOMAIN_ID=str(domain))

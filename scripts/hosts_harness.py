@@ -207,9 +207,9 @@ class Hosts:
 
 
 def start_nodes(hosts: Hosts, specs, env: Dict[str, str], log_dir: str) -> Dict[str, subprocess.Popen]:
-    """Each scenario node (scenario_runner.conductor.NodeSpec) as `ros2 run` would start it, on the
+    """Each scenario node (scenario_runner.run_nodes.NodeSpec) as `ros2 run` would start it, on the
     host named like its namespace ("/tug/vessel" on host "tug"); logs in log_dir/<host>.log."""
-    from scenario_runner.conductor import executable_path
+    from scenario_runner.run_nodes import executable_path
     os.makedirs(log_dir, exist_ok=True)
     procs = {}
     for spec in specs:

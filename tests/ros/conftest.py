@@ -15,7 +15,8 @@ import time
 from typing import Callable, List
 
 import pytest
-from scenario_runner.conductor import DOMAIN_CHECK_WAIT_VARIABLE, executable_path  # noqa: F401  (tests import it from here)
+from scenario_runner.conductor import DOMAIN_CHECK_WAIT_VARIABLE  # noqa: F401  (tests import it from here)
+from scenario_runner.run_nodes import executable_path  # noqa: F401  (tests import it from here)
 
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.pop("ROS_STATIC_PEERS", None)

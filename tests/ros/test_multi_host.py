@@ -38,11 +38,11 @@ STALL_TIMEOUT = 5.0
 
 
 def _specs():
-    from scenario_runner import conductor as cd
+    from scenario_runner import run_nodes
     from scenario_format.particulars import scenario_path
     from scenario_format.scenario import load_scenario
     path = scenario_path(SCENARIO)
-    return cd.node_specs(load_scenario(path), path, "")  # no run_id: as started by hand on another PC
+    return run_nodes.node_specs(load_scenario(path), path, "")  # no run_id: as started by hand on another PC
 
 
 def _runner_args(out, *extra):
@@ -89,24 +89,24 @@ def one_host(tmp_path_factory):
 
 
 def test_which_topics_an_external_node_has_recorded_by_subscription():
-    from scenario_runner import conductor as cd
+    from scenario_runner import run_nodes
     from scenario_format.particulars import scenario_path
     from scenario_format.scenario import load_scenario
     sc = load_scenario(scenario_path(SCENARIO))
     specs = _specs()
-    assert cd.resolve_external(specs, ["all"]) == ["/tug/vessel", "/barge/vessel", "/towline/rope"]
-    assert cd.resolve_external(specs, ["barge", "/towline/rope", "/barge"]) == ["/barge/vessel", "/towline/rope"]
+    assert run_nodes.resolve_external(specs, ["all"]) == ["/tug/vessel", "/barge/vessel", "/towline/rope"]
+    assert run_nodes.resolve_external(specs, ["barge", "/towline/rope", "/barge"]) == ["/barge/vessel", "/towline/rope"]
     with pytest.raises(ValueError, match="no such node"):
-        cd.resolve_external(specs, ["pilot"])
-    fed = cd.fed_topics(sc, ["/barge/vessel"])
+        run_nodes.resolve_external(specs, ["pilot"])
+    fed = run_nodes.fed_topics(sc, ["/barge/vessel"])
     assert "/tug/odom" in fed and "/towline/state" in fed and "/clock" in fed
     assert not any(t.startswith("/barge/") for t in fed) and "/tf" not in fed and "/tf_static" not in fed
-    outputs, every_step = cd.external_outputs(sc, ["/barge/vessel"])
+    outputs, every_step = run_nodes.external_outputs(sc, ["/barge/vessel"])
     assert set(outputs) == {"/barge/odom", "/barge/attachments", "/barge/status", "/barge/markers", "/tf", "/tf_static"}
     assert set(every_step) == {"/barge/odom", "/barge/attachments", "/barge/status"}
-    assert set(cd.external_outputs(sc, ["/towline/rope"])[1]) == {"/towline/state", "/towline/end_a/wrench",
+    assert set(run_nodes.external_outputs(sc, ["/towline/rope"])[1]) == {"/towline/state", "/towline/end_a/wrench",
                                                                    "/towline/end_b/wrench"}
-    assert cd.fed_topics(sc) == cd.fed_topics(sc, [])  # no external node: everything fed, as before
+    assert run_nodes.fed_topics(sc) == run_nodes.fed_topics(sc, [])  # no external node: everything fed, as before
 
 
 @needs_hosts

@@ -87,7 +87,7 @@ def test_recording_holds_what_a_dds_subscriber_sees(tmp_path, rclpy_context):
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from rclpy.serialization import deserialize_message
-    from scenario_runner.conductor import contract_topics
+    from scenario_runner.run_nodes import contract_topics
     from scenario_format.scenario import load_scenario
     from ament_index_python.packages import get_package_share_directory
     import rclpy

@@ -51,7 +51,7 @@ def _write_bag(path: Path, storage: str) -> Path:
 
 
 def _analyze(*args):
-    from scenario_runner.conductor import executable_path
+    from scenario_runner.run_nodes import executable_path
     return subprocess.run([executable_path("recording", "analyze"), *map(str, args), "--no-figures"],
                           capture_output=True, text=True, timeout=120)
 

@@ -414,7 +414,7 @@ def load_scenario(path: str, check_files: bool = True) -> Scenario:
     return sc
 
 
-_RUNNER_PARAMS = ("vessel", "exchange_rate", "lockstep", "use_sim_time")  # conductor.node_specs sets these
+_RUNNER_PARAMS = ("vessel", "exchange_rate", "lockstep", "use_sim_time")  # scenario_runner.run_nodes.node_specs sets these
 
 
 def _check_runner_params(path: str, i: int, a: AutopilotSpec) -> None:

@@ -30,6 +30,8 @@ from rclpy.serialization import deserialize_message
 from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
+from scenario_runner import run_nodes
+from scenario_runner.node_processes import LAYOUTS
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
 from recording.recorder import McapRecorder, readable_extent
 from scenario_format.particulars import recording_metadata, scenario_path
@@ -177,7 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--output", help="MCAP file to write (default: output/<scenario name>.mcap)")
     parser.add_argument("--duration", type=float, help="simulate only this many seconds (shortened run)")
     parser.add_argument("--log-dir", help="where node logs go (default: next to the recording)")
-    parser.add_argument("--layout", choices=cd.LAYOUTS, default="processes",
+    parser.add_argument("--layout", choices=LAYOUTS, default="processes",
                         help="processes: every node its own process (as `ros2 run` starts them); "
                              "one_process: all nodes in this process on one executor")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
@@ -209,7 +211,7 @@ def node_commands(plan: "RunPlan", run_id: str = "") -> List[str]:
     on the other PCs). Without a run id the nodes join the first run that starts."""
     import shlex
     lines = []
-    for spec in cd.node_specs(plan.sc, plan.path, run_id):
+    for spec in run_nodes.node_specs(plan.sc, plan.path, run_id):
         args = spec.ros_args()
         if not run_id:
             i = args.index("run_id:=" + cd._yaml_value(""))
@@ -224,7 +226,7 @@ def live_topics(sc: Scenario) -> List[Tuple[str, str, bool]]:
     from rclpy.qos import DurabilityPolicy
     from sim_plumbing.msg_definitions import type_name
     topics = [(t, type_name(cls), qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)
-              for t, cls, qos in cd.contract_topics(sc)]
+              for t, cls, qos in run_nodes.contract_topics(sc)]
     extra = [(rc.TF_TOPIC, "tf2_msgs/msg/TFMessage", False), (rc.TF_STATIC_TOPIC, "tf2_msgs/msg/TFMessage", True)]
     extra += [(T.vessel_topic(v.name, T.MARKERS), "visualization_msgs/msg/MarkerArray", True) for v in sc.vessels]
     have = {t[0] for t in topics}
@@ -271,9 +273,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     # shut the context down under the running loop (an RCLError traceback, or exit 3).
     rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     try:
-        recorder = McapRecorder(plan.output, cd.contract_topics(plan.sc),
-                                fed_topics=cd.fed_topics(plan.sc, plan.external),
-                                by_stamp=cd.external_outputs(plan.sc, plan.external)[0],
+        recorder = McapRecorder(plan.output, run_nodes.contract_topics(plan.sc),
+                                fed_topics=run_nodes.fed_topics(plan.sc, plan.external),
+                                by_stamp=run_nodes.external_outputs(plan.sc, plan.external)[0],
                                 metadata=recording_metadata(plan.path, plan.sc)) if plan.record else None
     except OSError as exc:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
@@ -339,7 +341,7 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
         return None, 2
     try:
         wanted = ",".join(getattr(args, "external", None) or []).split(",")
-        external = cd.resolve_external(cd.node_specs(sc, path), wanted)
+        external = run_nodes.resolve_external(run_nodes.node_specs(sc, path), wanted)
     except ValueError as exc:
         sys.stderr.write(f"run_scenario: {exc}\n")
         return None, 2

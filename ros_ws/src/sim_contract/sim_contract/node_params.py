@@ -4,7 +4,7 @@ type), description, range and unit, and whether it may change while the node run
 The nodes declare their ROS parameters from these tables (sim_plumbing.ros_common.declare_table:
 a number with a range gets a floating-point or integer range descriptor, the unit in its
 description), the scenario format takes its ranges and defaults from them, and the runner maps
-a scenario onto them (conductor.node_specs sets only names a table holds). Adding a parameter is
+a scenario onto them (scenario_runner.run_nodes.node_specs sets only names a table holds). Adding a parameter is
 one row here; the docs' parameter reference is generated from these tables.
 """
 from __future__ import annotations
