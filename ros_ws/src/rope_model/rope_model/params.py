@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sim_math.data_files import package_data_dir
+
 from .schema import (RopeFile, RopeParamsError, check_breaking_strain, check_density,
                      read_yaml_mapping, validate_file)
 
@@ -276,12 +278,8 @@ def seabed_params(sb) -> SeabedParams:
 
 
 def shipped_rope_file(name: str) -> str:
-    """Path of a rope file shipped in ropes/ (source tree, or next to the installed package)."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    for cand in (os.path.join(here, "..", "ropes", name), os.path.join(here, "ropes", name)):
-        if os.path.isfile(cand):
-            return os.path.normpath(cand)
-    return os.path.normpath(os.path.join(here, "..", "ropes", name))
+    """Path of a rope file shipped in ropes/ (sim_math.data_files: the source tree, or the share)."""
+    return os.path.join(package_data_dir("rope_model", "ropes"), name)
 
 
 def default_rope_path() -> str:

@@ -26,9 +26,9 @@ from pydantic import ValidationError
 from . import maneuvering as mv
 from . import ship_schema as schema
 from .vessel import Vessel, VesselState
+from sim_math.data_files import package_data_dir
 from sim_math.input_files import YamlInputError, load_yaml
 
-SHIPS_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "ships")
 G = 9.80665
 
 
@@ -37,14 +37,8 @@ class ShipFileError(ValueError):
 
 
 def ships_dir() -> str:
-    """The ships directory: the source tree's ships/, else the installed share/tug_dynamics/ships."""
-    if os.path.isdir(SHIPS_DIR):
-        return SHIPS_DIR
-    try:
-        from ament_index_python.packages import get_package_share_directory  # optional, ROS installs
-        return os.path.join(get_package_share_directory("tug_dynamics"), "ships")
-    except Exception:  # noqa: BLE001 - no ROS: fall back to the source layout
-        return SHIPS_DIR
+    """The ships directory (sim_math.data_files: the source tree's ships/, else the share's)."""
+    return package_data_dir("tug_dynamics", "ships")
 
 
 def list_ship_files() -> List[str]:
