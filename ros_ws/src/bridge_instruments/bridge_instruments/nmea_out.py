@@ -29,13 +29,11 @@ import socket
 import sys
 from typing import Dict, List, Optional, Tuple
 
-import rclpy
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 from nav_msgs.msg import Odometry
 from geometry_msgs.msg import WrenchStamped
 from tug_msgs.msg import VesselStatus
-from rcl_interfaces.msg import ParameterDescriptor
 
 from sim_math.rotations import matrix_from_quaternion, rpy_from_quaternion
 from sim_plumbing import cdr
@@ -43,11 +41,10 @@ from sim_plumbing import ros_common as rc
 from bridge_instruments import sentences as S
 from sim_contract import geo
 from sim_contract import topics as T
-from sim_contract.equipment import check_mmsi, parse_utc
+from sim_contract.equipment import NMEA_UDP_PORT, check_mmsi, parse_utc
+from sim_contract.node_params import NMEA_OUT
 from scenario_format.particulars import hull_dimensions, scenario_path, scenario_ships
 
-DEFAULT_PORT = 10110  # the port IEC 61162-450-less NMEA over UDP uses by convention (OpenCPN, gpsd)
-DEFAULT_UTC_START = "2026-06-01T08:00:00Z"
 _HOST = re.compile(r"^(?=.{1,253}$)[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?(\.[A-Za-z0-9]([A-Za-z0-9-]{0,61}"
                    r"[A-Za-z0-9])?)*\.?$|^[0-9A-Fa-f:.]+$")
 _KEEP_STEPS = 16  # stamps held while waiting for every topic of a due step
@@ -59,7 +56,7 @@ def parse_output(text: str) -> Tuple[str, str, int]:
     vessel, sep, dest = text.partition("@")
     if not sep or not vessel:
         raise ValueError(f"output {text!r}: expected 'vessel@host:port'")
-    host, port = dest, DEFAULT_PORT
+    host, port = dest, NMEA_UDP_PORT
     m = re.fullmatch(r"\[([^\]]*)\](?::(.*))?|([^:]*)(?::(.*))?", dest)
     if m:
         host = m.group(1) if m.group(1) is not None else m.group(3)
@@ -156,25 +153,7 @@ def _stamp_ns(data: bytes) -> Optional[int]:
 class NmeaOut(Node):
     def __init__(self, name: str = "nmea_out", **kwargs):
         super().__init__(name, **kwargs)
-        text = ParameterDescriptor(read_only=True)
-        self.declare_parameter("vessels", [""], text)  # every vessel of the run
-        self.declare_parameter("outputs", [""], text)  # own vessels: "vessel@host:port"
-        self.declare_parameter("ropes", [""], text)  # "rope=<end_a>,<end_b>" as in the scenario
-        self.declare_parameter("ship_files", [""], text)  # "vessel=path" (AIS dimensions)
-        # the run's scenario file: its vessels' ship files (where ship_files names none) and ship_overrides
-        self.declare_parameter("scenario", "", text)
-        self.declare_parameter("mmsi", [""], text)  # "vessel=244990001"
-        self.declare_parameter("gear_ratios", [""], text)  # "vessel=5.2": engine rpm / shaft rpm (default 1)
-        self.declare_parameter("rate", 1.0, rc.float_param("sentences per second of simulation time", 0.01, 50.0,
-                                                           "Hz"))
-        self.declare_parameter("exchange_rate", 50.0, rc.float_param("the run's step rate", 1.0, 1000.0, "Hz"))
-        self.declare_parameter("origin_latitude", geo.DEFAULT_ORIGIN.latitude,
-                               rc.float_param("latitude of the map origin (WGS-84)", -90.0, 90.0, "deg"))
-        self.declare_parameter("origin_longitude", geo.DEFAULT_ORIGIN.longitude,
-                               rc.float_param("longitude of the map origin (WGS-84)", -180.0, 180.0, "deg"))
-        self.declare_parameter("origin_height", 0.0, rc.float_param("ellipsoid height of the water", -1e3, 1e4, "m"))
-        self.declare_parameter("utc_start", DEFAULT_UTC_START, rc.text_param("UTC of simulation time 0 (ISO 8601)"))
-        self.declare_parameter("static_every", 10, rc.int_param("AIS type 5 every n-th report", 1, 100000))
+        rc.declare_table(self, NMEA_OUT)
         gp = self.get_parameter
         self.vessels = [v for v in gp("vessels").value if v]
         if not self.vessels:

@@ -48,8 +48,6 @@ from sim_contract.geo import KNOT, compass_deg
 from scenario_format.particulars import breaking_loads_from
 from sim_math.rotations import rpy_from_quaternion
 
-DEFAULT_HTTP_PORT = 8080
-DEFAULT_HTTP_RATE = 10.0  # Hz: samples, so the page's display period is 100 ms
 HISTORY_SECONDS = 180.0  # s of simulated time kept for the tension plot
 MAX_BODY = client_input.MAX_MESSAGE_BYTES
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]", "::1")

@@ -47,12 +47,12 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from live_view import client_input, instructor
+from sim_contract.node_params import LIVE_VIEW
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from sim_plumbing.msg_definitions import message_definition
 from sim_plumbing.stepping import RateLimitedLog
 
-DEFAULT_PORT = 8765
 STATIC_RESEND = 1.0  # s: latched topics (/tf_static) go out again so a client that joins late has them
 MAX_QUEUED = 1000  # messages of an every-message topic held between two sends
 MAX_CLIENT_CHANNELS = 64  # channels one client may advertise
@@ -271,24 +271,7 @@ class LiveViewNode(Node):
     def __init__(self, node_name: str = "live_view", *, topics: Sequence[Tuple[str, str, bool]] = (),
                  offered_topics: Sequence[str] = (), **kwargs):
         super().__init__(node_name, **kwargs)
-        self.declare_parameter("host", "127.0.0.1", rc.text_param("Address the WebSocket server listens on"))
-        self.declare_parameter("port", DEFAULT_PORT, rc.int_param("WebSocket port (0: any free port)", 0, 65535))
-        self.declare_parameter("rate", 20.0, rc.float_param("Rate at which new messages go to the clients",
-                                                            0.5, 200.0, "Hz"))
-        self.declare_parameter("input_rate", 20.0, rc.float_param(
-            "Client messages accepted per second and client (more are refused and counted)", 0.1, 1000.0, "1/s"))
-        self.declare_parameter("discover", not topics, rc.text_param(
-            "true: serve every topic on the ROS graph of a known type (looked up every 2 s)"))
-        self.declare_parameter("http_port", instructor.DEFAULT_HTTP_PORT, rc.int_param(
-            "Port of the browser instructor station (0: any free port, -1: none)", -1, 65535))
-        self.declare_parameter("http_rate", instructor.DEFAULT_HTTP_RATE, rc.float_param(
-            "Rate at which the instructor station samples the simulation (its display period is 1/rate)",
-            1.0, 50.0, "Hz"))
-        self.declare_parameter("particulars", "", rc.text_param(
-            "Where the instructor station finds the ropes' breaking loads when no rope node answers (a replay): "
-            "a scenario file (path or library name) or a recording (.mcap, its 'tugsim' metadata)"))
-        self.declare_parameter("web_root", "", rc.text_param(
-            "Folder of the instructor station's page (default: share/live_view/web)"))
+        rc.declare_table(self, LIVE_VIEW)
         self.complaints = RateLimitedLog(self.get_logger())
         self.slots: Dict[str, TopicSlot] = {}
         self.offered = set(offered_topics)
@@ -318,7 +301,7 @@ class LiveViewNode(Node):
         self.port = self.server.port
         self.sender = Sender(self.send, self.get_parameter("rate").value,
                              lambda exc: self.complaints("send", f"sending failed: {exc!r}", "warning"))
-        if self.get_parameter("discover").value:
+        if self.get_parameter("discover").value and not topics:
             self._discover_timer = self.create_timer(
                 2.0, self.discover, clock=rclpy.clock.Clock(clock_type=rclpy.clock.ClockType.STEADY_TIME))
             self.discover()

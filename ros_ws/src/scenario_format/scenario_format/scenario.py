@@ -43,9 +43,9 @@ from typing import Any, Dict, List, Literal, Optional
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
 
-from sim_contract.equipment import check_mmsi, parse_utc
+from sim_contract.equipment import DEFAULT_UTC_START, NMEA_UDP_PORT, check_mmsi, parse_utc
 from sim_contract.geo import DEFAULT_ORIGIN, KNOT
-from sim_contract.node_params import CONTACT_NODE, CURRENT_EAST, ROPE_NODE, VESSEL_NODE
+from sim_contract.node_params import CONTACT_NODE, CURRENT_EAST, NMEA_OUT, ROPE_NODE, VESSEL_NODE
 from sea_environment.environment import DepthGridSpec, EnvironmentSpec
 from sim_math import data_files
 from sim_math.input_files import YamlInputError, load_yaml
@@ -290,16 +290,16 @@ class GeoOrigin(_Strict):
 class NmeaOutput(_Strict):
     vessel: str  # the own vessel whose bridge this destination is
     host: str = Field("127.0.0.1", min_length=1, max_length=253)  # checked by the node: reported, not fatal
-    port: int = Field(10110, ge=1, le=65535)
+    port: int = Field(NMEA_UDP_PORT, ge=1, le=65535)
 
 
 class NmeaSpec(_Strict):
     """Starts `bridge_instruments nmea_out` beside the run: NMEA 0183 of each output's vessel and
     AIS of every other vessel over UDP (README, "Bridge instruments")."""
     outputs: List[NmeaOutput] = Field(min_length=1)
-    rate: float = Field(1.0, ge=0.01, le=50.0)  # Hz of simulation time
-    utc_start: str = "2026-06-01T08:00:00Z"  # UTC of t = 0 (ISO 8601, whole hundredths of a second)
-    static_every: int = Field(10, ge=1, le=100000)  # AIS type 5 with every n-th report
+    rate: float = _within(NMEA_OUT["rate"], NMEA_OUT["rate"].default)  # Hz of simulation time
+    utc_start: str = DEFAULT_UTC_START  # UTC of t = 0 (ISO 8601, whole hundredths of a second)
+    static_every: int = _within(NMEA_OUT["static_every"], NMEA_OUT["static_every"].default)  # AIS type 5 every n-th
     mmsi: Dict[str, int] = Field(default_factory=dict)  # vessel -> MMSI (default 244990001, 244990002, ...)
     gear_ratios: Dict[str, Annotated[float, Field(gt=0.0, le=100.0)]] = Field(default_factory=dict)  # engine/shaft rpm
 

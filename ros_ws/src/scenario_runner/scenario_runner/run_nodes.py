@@ -213,6 +213,7 @@ def instrument_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
               "static_every": int(n.static_every), "origin_latitude": float(sc.origin.latitude),
               "origin_longitude": float(sc.origin.longitude), "origin_height": float(sc.origin.height),
               "scenario": os.path.abspath(scenario_path)}   # AIS dimensions with the ship_overrides
+    NODE_TABLES["nmea_out"].check_names(params)
     return [NodeSpec("/bridge", "nmea_out", "bridge_instruments", "nmea_out", params)]
 
 

@@ -37,6 +37,7 @@ from recording.recorder import McapRecorder, readable_extent
 from scenario_format.particulars import recording_metadata, scenario_path
 from scenario_format.scenario import Scenario, ScenarioError, load_scenario
 from sim_contract import topics as T
+from sim_contract.node_params import LIVE_VIEW
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 
@@ -186,7 +187,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("--live", action="store_true",
                         help="serve the run to Foxglove / Lichtblick on a WebSocket (live_view package)")
-    parser.add_argument("--live-port", type=int, default=8765, help="WebSocket port of --live (default 8765)")
+    parser.add_argument("--live-port", type=int, default=LIVE_VIEW["port"].default,
+                        help=f"WebSocket port of --live (default {LIVE_VIEW['port'].default})")
     parser.add_argument("--live-host", default="127.0.0.1", help="address --live listens on (default 127.0.0.1)")
     parser.add_argument("--live-rate", type=float, default=20.0,
                         help="rate at which --live sends new messages to its clients, Hz (default 20)")

@@ -6,6 +6,8 @@ from __future__ import annotations
 import datetime as _dt
 from typing import Optional
 
+NMEA_UDP_PORT = 10110  # the port NMEA 0183 over UDP uses by convention (OpenCPN, gpsd)
+DEFAULT_UTC_START = "2026-06-01T08:00:00Z"  # UTC of simulation time 0 unless a scenario says
 
 def parse_utc(text: str) -> _dt.datetime:
     """An ISO 8601 UTC time ('2026-06-01T08:00:00Z'), whole hundredths of a second."""

@@ -13,6 +13,9 @@ import math
 from dataclasses import dataclass
 from typing import Any, Dict, Iterator, Optional, Tuple
 
+from sim_contract.equipment import DEFAULT_UTC_START, NMEA_UDP_PORT
+from sim_contract.geo import DEFAULT_ORIGIN
+
 
 @dataclass(frozen=True)
 class Param:
@@ -26,6 +29,7 @@ class Param:
     choices: Tuple[str, ...] = ()  # the values a string may take (checked by the node and the scenario)
     dynamic: bool = False  # any type (e.g. a list of numbers or the same as a string)
     kind: str = ""  # the ROS type of a parameter without a default (default None: used only when given)
+    read_only: bool = False  # set once at start-up by whoever starts the node (ros2 param set refused)
 
     @property
     def ros_type(self) -> str:
@@ -189,6 +193,49 @@ CONTACT_NODE = ParamTable(
     P("friction", 0.3, "Coulomb friction coefficient, fender on hull", 0.0, 2.0),
 )
 
-# The tables of the stepped nodes as a node declares them: its own, then the stepping ones.
+# bridge_instruments nmea_out: NMEA 0183 / AIS over UDP beside a run (the runner sets the lists
+# from the scenario's `nmea` key; the scenario's defaults and ranges are these).
+NMEA_OUT = ParamTable(
+    "bridge_instruments/nmea_out",
+    P("vessels", [""], "Every vessel of the run (their namespaces)", read_only=True),
+    P("outputs", [""], "Own vessels and where their sentences go: \"vessel@host:port\" (port default "
+                       f"{NMEA_UDP_PORT})", read_only=True),
+    P("ropes", [""], "The run's ropes as in the scenario: \"rope=<end_a>,<end_b>\"", read_only=True),
+    P("ship_files", [""], "\"vessel=path\": the ship files of the AIS dimensions", read_only=True),
+    P("scenario", "", "The run's scenario file: its vessels' ship files (where ship_files names none) and "
+                      "ship_overrides", read_only=True),
+    P("mmsi", [""], "\"vessel=244990001\" (default 244990001, 244990002, ... in the order of vessels)",
+      read_only=True),
+    P("gear_ratios", [""], "\"vessel=5.2\": engine rpm / shaft rpm (default 1)", read_only=True),
+    P("rate", 1.0, "sentences per second of simulation time", 0.01, 50.0, "Hz"),
+    P("exchange_rate", 50.0, "the run's step rate", 1.0, 1000.0, "Hz"),
+    P("origin_latitude", DEFAULT_ORIGIN.latitude, "latitude of the map origin (WGS-84)", -90.0, 90.0, "deg"),
+    P("origin_longitude", DEFAULT_ORIGIN.longitude, "longitude of the map origin (WGS-84)", -180.0, 180.0, "deg"),
+    P("origin_height", 0.0, "ellipsoid height of the water", -1e3, 1e4, "m"),
+    P("utc_start", DEFAULT_UTC_START, "UTC of simulation time 0 (ISO 8601)"),
+    P("static_every", 10, "AIS type 5 every n-th report", 1, 100000),
+)
+
+# live_view live_view: the Foxglove WebSocket server and the browser instructor station (in the
+# runner's process with run_scenario --live, which gives it its topics).
+LIVE_VIEW = ParamTable(
+    "live_view/live_view",
+    P("host", "127.0.0.1", "Address the WebSocket server listens on"),
+    P("port", 8765, "WebSocket port (0: any free port)", 0, 65535),
+    P("rate", 20.0, "Rate at which new messages go to the clients", 0.5, 200.0, "Hz"),
+    P("input_rate", 20.0, "Client messages accepted per second and client (more are refused and counted)",
+      0.1, 1000.0, "1/s"),
+    P("discover", True, "true: serve every topic on the ROS graph of a known type (looked up every 2 s); "
+                        "a live view given its topics (run_scenario --live) serves those"),
+    P("http_port", 8080, "Port of the browser instructor station (0: any free port, -1: none)", -1, 65535),
+    P("http_rate", 10.0, "Rate at which the instructor station samples the simulation (its display period is "
+                         "1/rate)", 1.0, 50.0, "Hz"),
+    P("particulars", "", "Where the instructor station finds the ropes' breaking loads when no rope node "
+                         "answers (a replay): a scenario file (path or library name) or a recording (.mcap, its "
+                         "particulars)"),
+    P("web_root", "", "Folder of the instructor station's page (default: share/live_view/web)"),
+)
+
+# Every node's table as it declares it (the stepped nodes: their own, then the stepping ones).
 NODE_TABLES = {"vessel_node": VESSEL_NODE + STEPPING, "rope_node": ROPE_NODE + STEPPING,
-               "contact_node": CONTACT_NODE + STEPPING}
+               "contact_node": CONTACT_NODE + STEPPING, "nmea_out": NMEA_OUT, "live_view": LIVE_VIEW}

@@ -83,6 +83,8 @@ def descriptor(param) -> ParameterDescriptor:
     with a range gets a range (the unit in its description), anything else its description."""
     if param.dynamic:
         return ParameterDescriptor(description=param.description, dynamic_typing=True)
+    if param.read_only:
+        return ParameterDescriptor(description=param.description, read_only=True)
     if param.lo is not None and param.ros_type == "double":
         return float_param(param.description, param.lo, param.hi, param.unit)
     if param.lo is not None and param.ros_type == "integer":
