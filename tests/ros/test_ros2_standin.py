@@ -210,6 +210,8 @@ def test_hz_reports_the_exchange_rate(vessel_and_observer):
     assert all(reports), results
     assert "".join(m.group(0) for m in pattern.finditer(results[0][0])) == results[0][0], results[0][0]
     rate, lo, hi, std, window = reports[0][-1]
+    # a wall-clock rate on purpose: `ros2 topic hz` reports the arrival rate of a free-running
+    # node's wall-clock timer (its window averages over a loaded host's stalls)
     assert abs(float(rate) - RATE) < 0.10 * RATE, results[0][0]
     # min and max are printed to 1 ms: the mean period may round onto either of them
     assert float(lo) - 0.0005 <= 1.0 / float(rate) <= float(hi) + 0.0005 and int(window) > 2 * RATE
