@@ -106,3 +106,28 @@ def test_rope_marker_rate_changes_while_running(start_node, rclpy_context):
         assert measured(10) == pytest.approx(10.0, rel=1e-6)
     finally:
         node.destroy_node()
+
+
+def test_nodes_refuse_a_change_they_would_not_apply(rclpy_context, tmp_path):
+    """The live view and nmea_out read their parameters at start-up (the sender's rate, the
+    sentence rate, the origin...): `ros2 param set` of one is refused with the reason and the old
+    value stays; the live view's input_rate, read for each new client, is accepted. Nodes built in
+    this process: the set goes through the same on-set callback the parameter service calls."""
+    from rclpy.parameter import Parameter
+    from bridge_instruments.nmea_out import NmeaOut
+    from live_view.live_view_node import LiveViewNode
+    view = LiveViewNode(context=rclpy_context, parameter_overrides=[
+        Parameter("port", value=0), Parameter("http_port", value=-1), Parameter("discover", value=False)])
+    nmea = NmeaOut(context=rclpy_context, parameter_overrides=[Parameter("vessels", value=["tug"])])
+    try:
+        for node, name, value in ((view, "rate", 5.0), (view, "host", "0.0.0.0"), (nmea, "rate", 2.0),
+                                  (nmea, "origin_latitude", 10.0)):
+            old = node.get_parameter(name).value
+            [result] = node.set_parameters([Parameter(name, value=value)])
+            assert not result.successful and f"{name}: fixed at start-up" in result.reason, (node, name)
+            assert node.get_parameter(name).value == old
+        [result] = view.set_parameters([Parameter("input_rate", value=5.0)])
+        assert result.successful and view.get_parameter("input_rate").value == 5.0
+    finally:
+        view.destroy_node()
+        nmea.destroy_node()

@@ -154,6 +154,7 @@ class NmeaOut(Node):
     def __init__(self, name: str = "nmea_out", **kwargs):
         super().__init__(name, **kwargs)
         rc.declare_table(self, NMEA_OUT)
+        rc.refuse_fixed_parameters(self, NMEA_OUT)
         gp = self.get_parameter
         self.vessels = [v for v in gp("vessels").value if v]
         if not self.vessels:

@@ -272,6 +272,7 @@ class LiveViewNode(Node):
                  offered_topics: Sequence[str] = (), **kwargs):
         super().__init__(node_name, **kwargs)
         rc.declare_table(self, LIVE_VIEW)
+        rc.refuse_fixed_parameters(self, LIVE_VIEW)
         self.complaints = RateLimitedLog(self.get_logger())
         self.slots: Dict[str, TopicSlot] = {}
         self.offered = set(offered_topics)

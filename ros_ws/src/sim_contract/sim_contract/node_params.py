@@ -223,8 +223,9 @@ LIVE_VIEW = ParamTable(
     P("host", "127.0.0.1", "Address the WebSocket server listens on"),
     P("port", 8765, "WebSocket port (0: any free port)", 0, 65535),
     P("rate", 20.0, "Rate at which new messages go to the clients", 0.5, 200.0, "Hz"),
-    P("input_rate", 20.0, "Client messages accepted per second and client (more are refused and counted)",
-      0.1, 1000.0, "1/s"),
+    P("input_rate", 20.0, "Client messages accepted per second and client (more are refused and counted; "
+                          "a change applies to the clients that connect after it)",
+      0.1, 1000.0, "1/s", live=True),
     P("discover", True, "true: serve every topic on the ROS graph of a known type (looked up every 2 s); "
                         "a live view given its topics (run_scenario --live) serves those"),
     P("http_port", 8080, "Port of the browser instructor station (0: any free port, -1: none)", -1, 65535),

@@ -11,7 +11,7 @@ import time
 from typing import Callable, Optional
 
 from builtin_interfaces.msg import Time
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -100,6 +100,26 @@ def declare_table(node, table) -> None:
     for param in table:
         value = without_default[param.kind] if param.default is None else param.default
         node.declare_parameter(param.name, value, descriptor(param))
+
+
+def refuse_fixed_parameters(node, table) -> None:
+    """`ros2 param set` of a parameter the table does not call live is refused: the node reads it
+    at start-up only, so a change would be accepted and never applied (stepped nodes do this in
+    SteppedNode, which also hands live changes to the model)."""
+    live = table.live
+    node.add_on_set_parameters_callback(
+        lambda params: fixed_parameters_refused(params, live) or SetParametersResult(successful=True))
+
+
+def fixed_parameters_refused(params, live) -> Optional[SetParametersResult]:
+    """The refusal of a parameter change naming the parameters in it that are not live (fixed at
+    start-up), or None when every one of them may change while the node runs."""
+    fixed = sorted(p.name for p in params if p.name not in live)
+    if not fixed:
+        return None
+    return SetParametersResult(successful=False, reason=(
+        f"{', '.join(fixed)}: fixed at start-up (restart the node to change it); parameters that "
+        f"change while running: {', '.join(live) or 'none'}"))
 
 
 # ---------------------------------------------------------------------------------------

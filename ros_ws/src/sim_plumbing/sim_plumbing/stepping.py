@@ -157,12 +157,9 @@ class SteppedNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
     def _on_set_parameters(self, params) -> SetParametersResult:
-        fixed = sorted(p.name for p in params if p.name not in self.LIVE_PARAMETERS)
-        if fixed:
-            live = ", ".join(self.LIVE_PARAMETERS) or "none"
-            return SetParametersResult(successful=False, reason=(
-                f"{', '.join(fixed)}: fixed at start-up (restart the node to change it); parameters that "
-                f"change while running: {live}"))
+        refused = rc.fixed_parameters_refused(params, self.LIVE_PARAMETERS)
+        if refused:
+            return refused
         changes = {p.name: p.value for p in params}
         try:
             self.on_live_parameters(changes)
