@@ -30,6 +30,8 @@ from sim_plumbing.sim_time import SimClock
 # on wall time. And s to wait for the first /clock once one is known.
 CLOCK_DISCOVERY = 3.0
 CLOCK_TIMEOUT = 4.0
+# s the readers of the command topic must stay all matched, no new one discovered, before the send
+SETTLE = 0.3
 
 ANCHOR_ORDERS = {"none": VesselCommand.ANCHOR_NO_CHANGE, "let_go": VesselCommand.ANCHOR_LET_GO,
                  "heave_up": VesselCommand.ANCHOR_HEAVE_UP}
@@ -47,6 +49,25 @@ def parse_args(argv):
     return p.parse_args(argv)
 
 
+def _wait_for_readers(node, pub, topic: str, deadline: float, spin) -> bool:
+    """Wait until every reader of topic the graph knows of (the vessel, a recorder, a console) has
+    matched, and the graph has shown no new one for SETTLE s: a volatile sample published before a
+    reader matches never reaches it. False if no reader matched by the deadline (with the vessel
+    matched, a reader still discovering at the deadline gets nothing)."""
+    settled_since = None
+    while True:
+        now = time.monotonic()
+        if 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
+            settled_since = settled_since or now
+            if now - settled_since >= SETTLE:
+                return True
+        else:
+            settled_since = None
+        if now > deadline:
+            return pub.get_subscription_count() > 0
+        spin(0.05)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(rclpy.utilities.remove_ros_args(argv))
@@ -60,21 +81,17 @@ def main(argv=None) -> int:
         topic = f"/{args.vessel.strip('/')}/command"
         pub = node.create_publisher(VesselCommand, topic, rc.COMMAND_QOS)
         clock = SimClock(node)
-        deadline = time.monotonic() + args.wait
-        # Wait until every reader the graph knows of has matched (the vessel, and a recorder or a
-        # console too): a volatile sample published before a reader matches never reaches it.
-        while not 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
-            if time.monotonic() > deadline:
-                if pub.get_subscription_count() > 0:
-                    break   # the vessel has matched; a reader still discovering gets nothing
-                sys.stderr.write(f"send_command: no subscriber on {topic} after {args.wait:g} s "
-                                 f"(is the vessel node for '{args.vessel}' running, same ROS_DOMAIN_ID?)\n")
-                return 1
-            rclpy.spin_once(node, timeout_sec=0.05)
+        spin = lambda timeout_sec: rclpy.spin_once(node, timeout_sec=timeout_sec)  # noqa: E731
+        # The clock first: once its publisher (the runner) is discovered, so are the runner's readers
+        # (its recorder) in all but a rare case, which the settling below covers.
+        clock.wait(spin, timeout=CLOCK_TIMEOUT, discovery=CLOCK_DISCOVERY)
+        if not _wait_for_readers(node, pub, topic, time.monotonic() + args.wait, spin):
+            sys.stderr.write(f"send_command: no subscriber on {topic} after {args.wait:g} s "
+                             f"(is the vessel node for '{args.vessel}' running, same ROS_DOMAIN_ID?)\n")
+            return 1
         msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
                             anchor=ANCHOR_ORDERS[args.anchor])
-        clock.wait(lambda timeout_sec: rclpy.spin_once(node, timeout_sec=timeout_sec), timeout=CLOCK_TIMEOUT,
-                   discovery=CLOCK_DISCOVERY)
+        spin(0.0)
         msg.header.stamp = clock.now()
         pub.publish(msg)
         # Reliable delivery: wait for the subscribers' acknowledgement before the process ends.
