@@ -175,7 +175,7 @@ def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
         max(rope["tension_a_max"], rope["tension_b_max"], rope["tension_max_anywhere"]) / rope_file["breaking_load"])
     # the towline angle: the barge lies dead astern of the tug at the start, so the line leaves
     # the tug's winch astern (+-180 deg) and the barge's bow bollard ahead (0 deg)
-    from recording.analysis import towline_angle
+    from recording.measures import towline_angle
     from recording.recorded_run import Recording
     rec = Recording(str(demo_recording))
     vessel_a, _, angle_a = towline_angle(rec, "towline", "a")

@@ -269,7 +269,7 @@ class Recording:
                 f"({lo + 1.0:.2f} .. {hi - 1.0:.2f} s; wall-clock stamps of an outside tool?); the orders of {name} "
                 f"are taken from the commanded engine order and steering angle in /{name}/status instead")
 
-    # -- manoeuvres -----------------------------------------------------------------------
+    # -- the orders given -----------------------------------------------------------------
     def _orders(self, name: str, command_column: int, status_field: str):
         """(times, values) of one order given to a vessel: from its command topic (order stamps),
         else from its status topic (the time of the last state before the held order changed)."""
@@ -289,48 +289,3 @@ class Recording:
     def engine_orders(self, name: str):
         """(times, engine orders) given to a vessel (_orders)."""
         return self._orders(name, 0, "engine_order")
-
-    def find_zigzag(self, name: str):
-        """(order times, order angles) of a zig-zag: from the first helm order of at least 5 deg,
-        the helm orders that alternate side at the same angle (within 0.5 deg); None unless
-        there is at least one reversal."""
-        t, d = self.steering_orders(name)
-        keep_t, keep_d = [], []
-        for ti, di in zip(t, d):
-            if not keep_t:
-                if abs(di) >= math.radians(5.0):
-                    keep_t, keep_d = [float(ti)], [float(di)]
-                continue
-            if abs(di - keep_d[-1]) < 1e-9:
-                continue  # the same order repeated
-            if abs(abs(di) - abs(keep_d[0])) <= math.radians(0.5) and di * keep_d[-1] < 0:
-                keep_t.append(float(ti))
-                keep_d.append(float(di))
-            else:
-                break  # midships or another angle: the zig-zag is over
-        return (keep_t, keep_d) if len(keep_t) >= 2 else None
-
-    def find_stop(self, name: str, min_speed: float = 0.3):
-        """Time of the first astern order (engine order <= -0.5) given from ahead (engine order
-        >= 0 before it) while making headway above min_speed; None if there is none."""
-        t, e = self.engine_orders(name)
-        v = self.vessels[name]
-        for i in range(t.size):
-            # the order before the first one on the command topic is not on it: headway tells
-            ahead_before = e[i - 1] >= 0.0 if i else True
-            if e[i] <= -0.5 and ahead_before and np.interp(t[i], v["t"], v["u"]) > min_speed:
-                return float(t[i])
-        return None
-
-    def find_turn(self, name: str, min_steering_deg: float = 1.0):
-        """(t0, t1) of the first turn: from the first helm order of at least min_steering_deg
-        to the next change of the helm order (or the end of the data); None if there is none."""
-        t, d = self.steering_orders(name)
-        prev = 0.0
-        for i in range(t.size):
-            if abs(d[i]) >= math.radians(min_steering_deg) and abs(d[i] - prev) > 1e-9:
-                later = np.nonzero(np.abs(d[i + 1:] - d[i]) > 1e-9)[0]
-                t1 = float(t[i + 1 + later[0]]) if later.size else float(self.vessels[name]["t"][-1])
-                return float(t[i]), t1
-            prev = d[i]
-        return None
