@@ -27,9 +27,12 @@ Writes to the output directory (default: <recording without .mcap>_analysis/):
                        tactical diameter and the fitted steady circle
   summary.json, summary.csv (entity, quantity, value, unit), vessel_<name>.csv, rope_<name>.csv
 
-The manoeuvre measures are defined once in sim_math/turning.py and sim_math/trials.py (zig-zag,
-stopping, the IMO MSC.137(76) criteria; docs/tools.md). Vessel lengths and breaking loads come
-from the runner's "tugsim" metadata record, or --length / --breaking-load.
+This module is the command (its arguments, what it prints); the recording is read into arrays
+by recorded_run.py, measured by measures.py, drawn by figures.py and written out by
+summary_files.py. The manoeuvre measures are defined once in sim_math/turning.py and
+sim_math/trials.py (zig-zag, stopping, the IMO MSC.137(76) criteria; docs/tools.md). Vessel
+lengths and breaking loads come from the runner's "tugsim" metadata record, or --length /
+--breaking-load.
 Exit status: 0 done; 1 done on the readable part of a damaged file; 2 nothing to analyse.
 """
 from __future__ import annotations
