@@ -175,7 +175,8 @@ def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
         max(rope["tension_a_max"], rope["tension_b_max"], rope["tension_max_anywhere"]) / rope_file["breaking_load"])
     # the towline angle: the barge lies dead astern of the tug at the start, so the line leaves
     # the tug's winch astern (+-180 deg) and the barge's bow bollard ahead (0 deg)
-    from recording.analysis import Recording, towline_angle
+    from recording.measures import towline_angle
+    from recording.recorded_run import Recording
     rec = Recording(str(demo_recording))
     vessel_a, _, angle_a = towline_angle(rec, "towline", "a")
     vessel_b, _, angle_b = towline_angle(rec, "towline", "b")
@@ -286,20 +287,21 @@ def test_undecodable_messages_are_reported_with_their_topic_and_count(tmp_path, 
 
 
 def test_a_programming_error_while_reading_is_not_turned_into_a_note(tmp_path, monkeypatch):
-    from recording import analysis
+    from recording.recorded_run import Recording
     path = _write_odom_recording(str(tmp_path / "rec.mcap"))
 
     def typo(msg):
         return msg.pose.pose.positon  # AttributeError, as a typo in the reader would raise
-    monkeypatch.setattr(analysis.Recording, "_odom_row", staticmethod(typo))
+    monkeypatch.setattr(Recording, "_odom_row", staticmethod(typo))
     with pytest.raises(AttributeError, match="positon"):
-        analysis.Recording(path)
+        Recording(path)
 
 
 def test_an_older_message_without_a_field_read_is_left_out_with_a_note(tmp_path, monkeypatch):
     """A type that does not import here is decoded with the file's own schema; an older version
     of it lacks fields the analysis reads: its topic is left out, and a note names the fields."""
-    from recording import analysis, mcap_io
+    from recording import mcap_io
+    from recording.recorded_run import Recording
     installed = mcap_io.message_class
 
     def without_tug_msgs(type_name):
@@ -307,7 +309,7 @@ def test_an_older_message_without_a_field_read_is_left_out_with_a_note(tmp_path,
             raise ImportError(f"type {type_name} is not importable here")
         return installed(type_name)
     monkeypatch.setattr(mcap_io, "message_class", without_tug_msgs)
-    rec = analysis.Recording(_write_odom_recording(str(tmp_path / "rec.mcap"), old_status=True))
+    rec = Recording(_write_odom_recording(str(tmp_path / "rec.mcap"), old_status=True))
     assert "status" not in rec.vessels["tug"] and rec.vessels["tug"]["t"].size == 50
     note = [n for n in rec.decoder.notes if n.startswith("/tug/status: its tug_msgs/msg/VesselStatus")]
     assert note and "girting_ratio" in note[0] and "not analysed" in note[0], rec.decoder.notes

@@ -158,6 +158,8 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain, cap
     # (-5 deg, stamped t(mine[2])): the tug applies an order from the step after its stamp, or a
     # few steps later when the console's newest /clock lags (0.1 s: the next helm key came later)
     from recording import analysis
+    from recording.measures import find_turn
+    from recording.recorded_run import Recording
     wall = tmp_path / "girt_wall_stamped.mcap"
     _wall_stamped_copy(str(out), str(wall), "/tug/command")
     capsys.readouterr()
@@ -165,9 +167,9 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain, cap
     said = capsys.readouterr().err
     assert "/tug/command: " in said and "stamped outside the recording's time" in said, said
     assert "taken from the commanded engine order and steering angle in /tug/status instead" in said, said
-    late = analysis.Recording(str(wall))
+    late = Recording(str(wall))
     assert "command" not in late.vessels["tug"]
-    t0, _ = late.find_turn("tug")
+    t0, _ = find_turn(late, "tug")
     assert t(mine[2]) < t0 <= t(mine[2]) + 0.1 + 1e-9, (t0, t(mine[2]))
     orders_t, orders = late.steering_orders("tug")
     assert [round(math.degrees(o), 6) for o in orders[orders_t >= t0 - 1e-9][:2]] == [-5.0, -10.0]
