@@ -643,7 +643,7 @@ def _attachment_point(io, end, t):
 def _drum_sliding(S, Vp, Pn, Vn, payout_a, t):
     """Winch at end a (drum connection c = 0): rope slides through the drum at the pay-out
     rate, and the drum end of element 0 extends (retracts) along it during the call;
-    chain._winch then grows (shrinks) the element by that length, so the drum connection
+    winch.Winch.wind then grows (shrinks) the element by that length, so the drum connection
     never sees the flow of rope. Returns g (the next point's velocity relative to the
     attachment without the sliding, J nu) and the next point moved on by the sliding."""
     e0 = S[0, SE]
