@@ -283,7 +283,7 @@ class RopeChain:
                                                 K.IO_MEAN + 1))
         self._ev_buf = io[K.IO_EVENTS:]
         self._info = io[K.IO_INFO, 0:2]  # divergence: sub-step, element
-        self._nev = io[K.IO_INFO, 2:3]  # parting events recorded by the kernel
+        self._nev = io[K.IO_NEV[0], K.IO_NEV[1]:K.IO_NEV[1] + 1]  # parting events recorded by the kernel
 
     def __getstate__(self):  # copy / pickle: views are rebuilt, the state repacked
         state = {k: v for k, v in self.__dict__.items() if k not in self._IO_VIEWS}
@@ -323,12 +323,15 @@ class RopeChain:
         self._io[K.IO_CUR] = _vec3(value, "current")
 
     # ------------------------------------------------------------------ environment
-    ENV_CUR, ENV_WIND, ENV_DEPTH = 0, 3, 6  # columns of env
+    # columns of env, the kernel state's S[:N, SCUR:SDEPTH + 1] (see _pack): current (3),
+    # wind (3), seabed depth
+    ENV_CUR, ENV_WIND, ENV_DEPTH = 0, K.SWIND - K.SCUR, K.SDEPTH - K.SCUR
+    ENV_COLS = K.SDEPTH + 1 - K.SCUR
 
-    @staticmethod
-    def _calm_env(n):
-        env = np.zeros((n, 7))
-        env[:, 6] = math.inf
+    @classmethod
+    def _calm_env(cls, n):
+        env = np.zeros((n, cls.ENV_COLS))
+        env[:, cls.ENV_DEPTH] = math.inf
         return env
 
     def element_centres(self):
@@ -379,17 +382,18 @@ class RopeChain:
         dep = self._env_depths(seabed_depth, n)
         env = self.env
         io = self._io
+        c0, w0 = self.ENV_CUR, self.ENV_WIND
         if cur is None:
             io[K.IO_CUR] = 0.0
-            env[:, 0:3] = 0.0
+            env[:, c0:c0 + 3] = 0.0
         elif cur.ndim == 1:
             io[K.IO_CUR] = cur
-            env[:, 0:3] = 0.0
+            env[:, c0:c0 + 3] = 0.0
         else:
             io[K.IO_CUR] = 0.0
-            env[:, 0:3] = cur
-        env[:, 3:6] = 0.0 if wnd is None else wnd
-        env[:, 6] = math.inf if dep is None else dep
+            env[:, c0:c0 + 3] = cur
+        env[:, w0:w0 + 3] = 0.0 if wnd is None else wnd
+        env[:, self.ENV_DEPTH] = math.inf if dep is None else dep
 
     @staticmethod
     def _env_vectors(v, what, n):
@@ -426,16 +430,16 @@ class RopeChain:
     @property
     def wind(self):
         """(N, 3) wind at the elements, m/s (a copy)."""
-        return self.env[:, 3:6].copy()
+        return self.env[:, self.ENV_WIND:self.ENV_WIND + 3].copy()
 
     @property
     def seabed_depth(self):
         """(N,) seabed depth at the elements, m (inf: none; a copy)."""
-        return self.env[:, 6].copy()
+        return self.env[:, self.ENV_DEPTH].copy()
 
     def element_currents(self):
         """(N, 3) current at each element, m/s: the uniform part plus the per-element one."""
-        return self.env[:, 0:3] + self._io[K.IO_CUR]
+        return self.env[:, self.ENV_CUR:self.ENV_CUR + 3] + self._io[K.IO_CUR]
 
     # ------------------------------------------------------------------ factories
     @classmethod
@@ -691,7 +695,7 @@ class RopeChain:
         L = d["_L"]
         n = L.shape[0]
         S = np.zeros((n + 1, K.S_COLS))
-        F = np.zeros((n + 1, 2), dtype=np.int64)
+        F = np.zeros((n + 1, K.F_COLS), dtype=np.int64)
         for key, col in (("_X", K.SX), ("_E", K.SE), ("_V", K.SV), ("_W", K.SW)):
             S[:n, col:col + 3] = d[key]
             d[key] = S[:n, col:col + 3]
@@ -702,7 +706,7 @@ class RopeChain:
         for key, col in (("_breaking_load", K.SB), ("_tensions", K.ST)):
             S[:, col] = d[key]
             d[key] = S[:, col]
-        for key, col in (("_conn_ok", 0), ("_armed", 1)):
+        for key, col in (("_conn_ok", K.F_OK), ("_armed", K.F_ARMED)):
             F[:, col] = d[key]
             d[key] = F[:, col]
         self._S, self._F = S, F

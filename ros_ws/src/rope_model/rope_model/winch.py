@@ -384,7 +384,7 @@ class Winch:
         c.W = np.vstack([w, c.W[2:]])
         c.L = np.concatenate([[ln], c.L[2:]])
         env = c.env
-        merged = (L0 * env[0] + L1 * env[1]) / ln if np.isfinite(env[:2, 6]).all() else env[1]
+        merged = (L0 * env[0] + L1 * env[1]) / ln if np.isfinite(env[:2, c.ENV_DEPTH]).all() else env[1]
         c.env = np.vstack([merged, env[2:]])
         c.conn_ok = np.delete(c.conn_ok, 1)
         c.armed = np.delete(c.armed, 1)
