@@ -797,7 +797,7 @@ class RopeChain:
             if c is not None:
                 T, Te = float(self._io[K.IO_DIAG, 1]), float(self._io[K.IO_DIAG, 2])
                 n = self.n_elements
-                pair = (f"attachment a and element 0" if c == 0 else f"element {n - 1} and "
+                pair = ("attachment a and element 0" if c == 0 else f"element {n - 1} and "
                         f"attachment b" if c == n else f"elements {c - 1} and {c}")
                 raise RopeDivergedError(
                     f"rope diverged at {where}, connection {c} ({pair}): "
