@@ -129,7 +129,7 @@ def node_terms(H, Hold, P, cur, use_k, L, g):
 def k_matrix(H, P, K):
     """K(H) (Eq 12, re-derived from Eq 2 and 4): coefficient of H_dot in row i."""
     m, ma, mr, EA = P[P_M], P[P_MA], P[P_MR], P[P_EA]
-    vt, vn, vb, ph, th = H[3], H[4], H[5], H[6], H[7]
+    vt, vn, vb, th = H[3], H[4], H[5], H[7]
     ct, st = math.cos(th), math.sin(th)
     e1 = 1.0 + H[0] / EA
     K[:, :] = 0.0
