@@ -1,7 +1,8 @@
 """RopeChain: the towing rope as a chain of rigid cylinders after Yoon, Lee, Park, Kim,
 "Dynamic Modeling and Simulation of a Towing Rope using Multiple Finite Element Method"
-(2012). No ROS here. The sub-steps run in kernels.run_substeps; the winch's link insertion
-and removal (_winch, _split0, _merge01, _drop0, _halve) happen here between kernel calls.
+(2012). No ROS here. The sub-steps run in kernels.run_substeps; the winch at end a
+(winch.Winch: the drum, the pay-out and the link insertion and removal between kernel calls)
+works on the chain's arrays.
 
 See rope_model/__init__.py for the API summary and README.md for the model.
 """
@@ -16,6 +17,7 @@ from . import kernels as K
 from .layout import (catenary_curve, close_with_fabrik, close_with_triangle, elements_from_joints,
                      joints_on_curve, polygon_on_catenary, straight_joints)
 from .params import RopeParams, finite_vec3
+from .winch import Winch
 
 END_MODES = ("pinned", "fixed", "free")
 
@@ -61,6 +63,18 @@ def _state_array(name, doc):
     def set(self, value):
         self.__dict__[key] = value
         self._packed = False
+
+    return property(get, set, doc=doc)
+
+
+def _on_drum(name, doc):
+    """A RopeChain attribute that lives on its winch (RopeChain.drum, a winch.Winch)."""
+
+    def get(self):
+        return getattr(self.drum, name)
+
+    def set(self, value):
+        setattr(self.drum, name, value)
 
     return property(get, set, doc=doc)
 
@@ -132,6 +146,18 @@ class RopeChain:
     env = _state_array("env", "environment per element (N, 7): current (3, added to the uniform "
                        "current), wind (3), seabed depth (inf: none); see set_environment")
 
+    # the winch's drum state and settings, on self.drum (winch.Winch)
+    winch = _on_drum("fitted", "True: end a is on a winch (wound_on_winch) that takes orders")
+    winch_mode = _on_drum("mode", "the winch mode, one of WINCH_MODES (set_winch)")
+    payout_rate = _on_drum("payout_rate", "the drum's pay-out rate now, m/s (+ out)")
+    speed_order = _on_drum("speed_order", "the last 'speed' order, m/s (set_payout_rate)")
+    set_tension = _on_drum("set_tension", "constant_tension: renders above this drum tension, N")
+    recover_tension = _on_drum("recover_tension", "constant_tension: recovers below this drum "
+                               "tension, N")
+    brake_load = _on_drum("brake_load", "hold: the brake slips above this drum tension, N")
+    winch_gain = _on_drum("gain", "the drum laws' gain, m/s per N")
+    l_nom = _on_drum("l_nom", "nominal element length, m (element 0 kept within 0.5..1.5 of it)")
+
     def __init__(self, params: RopeParams, X, E, lengths, *, end_a="pinned", end_b="pinned",
                  p_a=None, p_b=None, winch=False, max_substep=0.01, theta=0.55,
                  relaxation=0.0, current=(0.0, 0.0, 0.0), nominal_element_length=None):
@@ -199,22 +225,11 @@ class RopeChain:
         self.breaking_load = np.full(n + 1, float(self.params.breaking_load))
 
     def _init_winch(self, winch, nominal_element_length):
-        """The winch at end a, its drum stopped, in the mode and with the settings of the rope
-        file's winch: section (set_winch changes them later)."""
-        params = self.params
-        self.winch = bool(winch)
-        if self.winch and self.end_modes[0] == "free":
+        """The winch at end a (self.drum), its drum stopped, in the mode and with the settings
+        of the rope file's winch: section (set_winch changes them later)."""
+        if winch and self.end_modes[0] == "free":
             raise ValueError("a winch needs end a attached ('pinned' or 'fixed')")
-        self.l_nom = float(nominal_element_length or params.nominal_element_length)
-        self.payout_rate = 0.0  # the drum's pay-out rate now, m/s (+ out): the order in 'speed'
-        self._paying = False  # pay-out active in the current sub-step (not at a limit)
-        w = params.winch.resolved(params.breaking_load, params.winch_max_payout_speed)
-        self.winch_mode = w["mode"]
-        self.set_tension = w["set_tension"]
-        self.recover_tension = w["recover_tension"]
-        self.brake_load = w["brake_load"]
-        self.winch_gain = w["gain"]
-        self.speed_order = 0.0  # the last 'speed' order, m/s
+        self.drum = Winch(self.params, winch, nominal_element_length)
 
     def _init_stepping(self, max_substep, theta, relaxation, current):
         """Integration settings, the clock, the event log and the kernel's outputs and
@@ -268,7 +283,7 @@ class RopeChain:
                                                 K.IO_MEAN + 1))
         self._ev_buf = io[K.IO_EVENTS:]
         self._info = io[K.IO_INFO, 0:2]  # divergence: sub-step, element
-        self._nev = io[K.IO_INFO, 2:3]  # parting events recorded by the kernel
+        self._nev = io[K.IO_NEV[0], K.IO_NEV[1]:K.IO_NEV[1] + 1]  # parting events recorded by the kernel
 
     def __getstate__(self):  # copy / pickle: views are rebuilt, the state repacked
         state = {k: v for k, v in self.__dict__.items() if k not in self._IO_VIEWS}
@@ -308,12 +323,15 @@ class RopeChain:
         self._io[K.IO_CUR] = _vec3(value, "current")
 
     # ------------------------------------------------------------------ environment
-    ENV_CUR, ENV_WIND, ENV_DEPTH = 0, 3, 6  # columns of env
+    # columns of env, the kernel state's S[:N, SCUR:SDEPTH + 1] (see _pack): current (3),
+    # wind (3), seabed depth
+    ENV_CUR, ENV_WIND, ENV_DEPTH = 0, K.SWIND - K.SCUR, K.SDEPTH - K.SCUR
+    ENV_COLS = K.SDEPTH + 1 - K.SCUR
 
-    @staticmethod
-    def _calm_env(n):
-        env = np.zeros((n, 7))
-        env[:, 6] = math.inf
+    @classmethod
+    def _calm_env(cls, n):
+        env = np.zeros((n, cls.ENV_COLS))
+        env[:, cls.ENV_DEPTH] = math.inf
         return env
 
     def element_centres(self):
@@ -364,17 +382,18 @@ class RopeChain:
         dep = self._env_depths(seabed_depth, n)
         env = self.env
         io = self._io
+        c0, w0 = self.ENV_CUR, self.ENV_WIND
         if cur is None:
             io[K.IO_CUR] = 0.0
-            env[:, 0:3] = 0.0
+            env[:, c0:c0 + 3] = 0.0
         elif cur.ndim == 1:
             io[K.IO_CUR] = cur
-            env[:, 0:3] = 0.0
+            env[:, c0:c0 + 3] = 0.0
         else:
             io[K.IO_CUR] = 0.0
-            env[:, 0:3] = cur
-        env[:, 3:6] = 0.0 if wnd is None else wnd
-        env[:, 6] = math.inf if dep is None else dep
+            env[:, c0:c0 + 3] = cur
+        env[:, w0:w0 + 3] = 0.0 if wnd is None else wnd
+        env[:, self.ENV_DEPTH] = math.inf if dep is None else dep
 
     @staticmethod
     def _env_vectors(v, what, n):
@@ -411,16 +430,16 @@ class RopeChain:
     @property
     def wind(self):
         """(N, 3) wind at the elements, m/s (a copy)."""
-        return self.env[:, 3:6].copy()
+        return self.env[:, self.ENV_WIND:self.ENV_WIND + 3].copy()
 
     @property
     def seabed_depth(self):
         """(N,) seabed depth at the elements, m (inf: none; a copy)."""
-        return self.env[:, 6].copy()
+        return self.env[:, self.ENV_DEPTH].copy()
 
     def element_currents(self):
         """(N, 3) current at each element, m/s: the uniform part plus the per-element one."""
-        return self.env[:, 0:3] + self._io[K.IO_CUR]
+        return self.env[:, self.ENV_CUR:self.ENV_CUR + 3] + self._io[K.IO_CUR]
 
     # ------------------------------------------------------------------ factories
     @classmethod
@@ -534,14 +553,15 @@ class RopeChain:
         before; nothing of the settling remains but the state. ValueError if the rope parts or
         does not settle within SETTLE_MAX_TIME (the ends too far apart, or a blow-up)."""
         va, vb = _vec3(velocity_a, "velocity_a"), _vec3(velocity_b, "velocity_b")
-        if self.winch and self.winch_mode == "speed" and self.payout_rate != 0.0:
+        drum = self.drum
+        if drum.fitted and drum.mode == "speed" and drum.payout_rate != 0.0:
             raise ValueError("settle: the winch must be stopped while settling")
-        mode = self.winch_mode  # 'hold' and 'constant_tension' settle with the drum locked
-        self.winch_mode, self.payout_rate = "speed", 0.0
+        mode = drum.mode  # 'hold' and 'constant_tension' settle with the drum locked
+        drum.mode, drum.payout_rate = "speed", 0.0
         try:
             return self._settle(va, vb)
         finally:
-            self.winch_mode = mode
+            drum.mode = mode
 
     def _settle(self, va, vb):
         ends = [v if m == "pinned" else np.zeros(3) for v, m in zip((va, vb), self.end_modes)]
@@ -626,34 +646,17 @@ class RopeChain:
         o = 3 * (K.IO_VEL + i)
         io[o], io[o + 1], io[o + 2] = vx, vy, vz
 
+    # ------------------------------------------------------------------ winch (winch.Winch)
+    WINCH_MODES = Winch.MODES
+    MIN_WINCH_ELEMENTS = Winch.MIN_ELEMENTS
+
     def set_payout_rate(self, rate_m_per_s):
         """Winch at end a: positive pays out, negative heaves in (m/s). Length stays within
         [params.min_deployed_length, params.length]. Like any winch order the rate is clamped
         to params.winch_max_payout_speed / winch_max_heave_speed; returns a list of
         human-readable notes, one per clamp (empty: taken as given). NaN / inf: ValueError,
         nothing changed."""
-        r = float(rate_m_per_s)
-        if not math.isfinite(r):
-            raise ValueError(f"payout rate must be finite, got {rate_m_per_s!r}")
-        if not self.winch:
-            raise ValueError("this rope has no winch (use RopeChain.wound_on_winch)")
-        p = self.params
-        notes = []
-        if r > p.winch_max_payout_speed:
-            notes.append(f"payout_rate {r:g} m/s clamped to {p.winch_max_payout_speed:g} m/s "
-                         f"(winch_max_payout_speed)")
-            r = float(p.winch_max_payout_speed)
-        elif r < -p.winch_max_heave_speed:
-            notes.append(f"payout_rate {r:g} m/s clamped to {-p.winch_max_heave_speed:g} m/s "
-                         f"(winch_max_heave_speed)")
-            r = -float(p.winch_max_heave_speed)
-        self.speed_order = r
-        if self.winch_mode == "speed":
-            self.payout_rate = r
-        return notes
-
-    # winch modes (README "Winch"): what the drum does in each
-    WINCH_MODES = ("speed", "hold", "constant_tension")
+        return self.drum.set_payout_rate(rate_m_per_s)
 
     def set_winch(self, mode=None, *, payout_rate=None, set_tension=None, recover_tension=None,
                   brake_load=None):
@@ -669,106 +672,19 @@ class RopeChain:
         changed. A set or recover tension above the breaking load, a brake load above twice
         it, and pay-out rates beyond the winch's speeds are clamped; returns the notes (one
         per clamp)."""
-        if not self.winch:
-            raise ValueError("this rope has no winch (use RopeChain.wound_on_winch)")
-        if mode is not None and mode not in self.WINCH_MODES:
-            raise ValueError(f"winch mode: expected one of {', '.join(self.WINCH_MODES)}, got {mode!r}")
-
-        def value(name, v, allow_zero):
-            if v is None:
-                return None
-            try:
-                x = float(v)
-            except (TypeError, ValueError):
-                raise ValueError(f"winch {name}: expected a number (N), got {v!r}") from None
-            if not math.isfinite(x) or x < 0.0 or (x == 0.0 and not allow_zero):
-                raise ValueError(f"winch {name}: expected a finite {'non-negative' if allow_zero else 'positive'} "
-                                 f"tension (N), got {v!r}")
-            return x
-
-        ts = value("set_tension", set_tension, False)
-        tr = value("recover_tension", recover_tension, True)
-        tb = value("brake_load", brake_load, False)
-        if payout_rate is not None:
-            r = float(payout_rate)
-            if not math.isfinite(r):
-                raise ValueError(f"payout rate must be finite, got {payout_rate!r}")
-        notes = []
-        bl = float(self.params.breaking_load)
-        if ts is not None and ts > bl:
-            notes.append(f"set_tension {ts:g} N clamped to {bl:g} N (breaking_load)")
-            ts = bl
-        if tr is not None and tr > bl:
-            notes.append(f"recover_tension {tr:g} N clamped to {bl:g} N (breaking_load)")
-            tr = bl
-        if tb is not None and tb > 2.0 * bl:
-            notes.append(f"brake_load {tb:g} N clamped to {2.0 * bl:g} N (2 x breaking_load)")
-            tb = 2.0 * bl
-        new_ts = self.set_tension if ts is None else ts
-        new_tr = self.recover_tension if tr is None else tr
-        if new_tr > new_ts:
-            raise ValueError(f"winch recover_tension {new_tr:g} N is above set_tension {new_ts:g} N: "
-                             f"the lower (recover) tension must not exceed the set (render) tension")
-        if payout_rate is not None:
-            notes += self.set_payout_rate(payout_rate)
-        self.set_tension, self.recover_tension = new_ts, new_tr
-        if tb is not None:
-            self.brake_load = tb
-        if mode is not None and mode != self.winch_mode:
-            self.winch_mode = mode
-            self.payout_rate = self.speed_order if mode == "speed" else 0.0
-        return notes
+        return self.drum.order(mode, payout_rate=payout_rate, set_tension=set_tension,
+                               recover_tension=recover_tension, brake_load=brake_load)
 
     def drum_rate(self, tension=None):
         """Pay-out rate (m/s, + out) the winch mode gives for the drum tension (N; default
         the present tension at end a, connection 0): the laws of set_winch."""
-        mode = self.winch_mode
-        if mode == "speed":
-            return self.speed_order
-        if not self.conn_ok[0]:
-            return 0.0
-        T = float(self.tensions[0]) if tension is None else float(tension)
-        p, g = self.params, self.winch_gain
-        if mode == "hold":
-            return min(g * (T - self.brake_load), p.winch_max_payout_speed) if T > self.brake_load else 0.0
-        if T > self.set_tension:
-            return min(g * (T - self.set_tension), p.winch_max_payout_speed)
-        if T < self.recover_tension:
-            return -min(g * (self.recover_tension - T), p.winch_max_heave_speed)
-        return 0.0
-
-    def _auto_rate(self, h):
-        """The drum rate for the next sub-step h in 'hold' / 'constant_tension': drum_rate()
-        taken implicitly for the drum connection's own response. Paying out dv faster lowers
-        the drum tension within the sub-step by about K dv, K = theta h k0 + c0 (the drum
-        connection's spring k0 = EA / (L0 / 2) over the theta point and its damper c0 =
-        2 zeta_x sqrt(k0 mu L0), kernels._connection_constants); solving v = law(T - K (v -
-        v_last)) instead of v = law(T) keeps the loop stable however short the drum link
-        (the explicit law gives G k0 h > 2 from about N = 50 up and chatters) and changes no
-        steady state: v_n = (law(T_n) + G K v_last) / (1 + G K), a lag of G K h per step."""
-        v = self.drum_rate()
-        if not self.conn_ok[0]:
-            return v
-        p = self.params
-        l0 = float(self.L[0])
-        k0 = p.ea / (0.5 * l0)
-        c0 = 2.0 * p.damping_ratio_axial * math.sqrt(k0 * p.mass_per_length * l0)
-        a = self.winch_gain * (self.theta * h * k0 + c0)
-        return (v + a * self.payout_rate) / (1.0 + a)
+        return self.drum.drum_rate(self, tension)
 
     @property
     def winch_state(self):
         """What the drum does now: 'locked' (speed 0), 'paying out', 'heaving in' (speed
         order), 'held', 'slipping' (hold), 'rendering', 'recovering' (constant tension)."""
-        r = self.payout_rate if self._winch_running() else 0.0
-        mode = self.winch_mode
-        if mode == "speed":
-            return "locked" if r == 0 else ("paying out" if r > 0 else "heaving in")
-        if r == 0:
-            return "held"
-        if mode == "hold":
-            return "slipping"
-        return "rendering" if r > 0 else "recovering"
+        return self.drum.state(self)
 
     # ------------------------------------------------------------------ stepping
     def _pack(self):
@@ -779,7 +695,7 @@ class RopeChain:
         L = d["_L"]
         n = L.shape[0]
         S = np.zeros((n + 1, K.S_COLS))
-        F = np.zeros((n + 1, 2), dtype=np.int64)
+        F = np.zeros((n + 1, K.F_COLS), dtype=np.int64)
         for key, col in (("_X", K.SX), ("_E", K.SE), ("_V", K.SV), ("_W", K.SW)):
             S[:n, col:col + 3] = d[key]
             d[key] = S[:n, col:col + 3]
@@ -790,7 +706,7 @@ class RopeChain:
         for key, col in (("_breaking_load", K.SB), ("_tensions", K.ST)):
             S[:, col] = d[key]
             d[key] = S[:, col]
-        for key, col in (("_conn_ok", 0), ("_armed", 1)):
+        for key, col in (("_conn_ok", K.F_OK), ("_armed", K.F_ARMED)):
             F[:, col] = d[key]
             d[key] = F[:, col]
         self._S, self._F = S, F
@@ -852,13 +768,14 @@ class RopeChain:
             n_sub = max(1, int(math.ceil(dt / self.max_substep - 1e-9)))
             h = dt / n_sub
             self._split = (dt, self.max_substep, n_sub, h)
-        if self.winch and (self.payout_rate != 0.0 or self.winch_mode != "speed"):
+        drum = self.drum
+        if drum.fitted and (drum.payout_rate != 0.0 or drum.mode != "speed"):
             if self._environment is not None:    # at the step's start, as the kernel's path below
                 if not self._packed:
                     self._pack()
                 K.sample_environment(self._S, self._io, self._environment)
                 self._environment[K.P_TIME] += dt
-            st = self._step_winch(dt, n_sub, h)
+            st = drum.step(self, dt, n_sub, h)
         else:  # the kernel restores the last good state itself on divergence, moves the
             # attachments on and writes the mean end force (impulse / dt)
             if not self._packed:
@@ -880,7 +797,7 @@ class RopeChain:
             if c is not None:
                 T, Te = float(self._io[K.IO_DIAG, 1]), float(self._io[K.IO_DIAG, 2])
                 n = self.n_elements
-                pair = (f"attachment a and element 0" if c == 0 else f"element {n - 1} and "
+                pair = ("attachment a and element 0" if c == 0 else f"element {n - 1} and "
                         f"attachment b" if c == n else f"elements {c - 1} and {c}")
                 raise RopeDivergedError(
                     f"rope diverged at {where}, connection {c} ({pair}): "
@@ -895,214 +812,6 @@ class RopeChain:
                 f"state left at t = {self.time:.6f} s", self.step_count + 1, t_fail, j)
         self.time += dt
         self.step_count += 1
-
-    def _step_winch(self, dt, n_sub, h):
-        """step() with the winch running: one kernel call per sub-step, the winch changes
-        the arrays in between."""
-        info = self._info
-        snap = self._snapshot()
-        rate0 = self.payout_rate
-        imp_total = np.zeros((2, 3))
-        pos0 = self.att_pos.copy()
-        st = K.OK
-        auto = self.winch_mode != "speed"
-        for k in range(n_sub):
-            self.att_pos[:] = pos0 + self.att_vel * (k * h)
-            if auto:  # hold / constant tension: the rate from the drum tension of the last evaluation
-                self.payout_rate = self._auto_rate(h)
-            self._paying = self._winch_running()
-            st = self._kernel(h, 1, self.payout_rate if self._paying else 0.0, 0.0) & ~K.PARTED
-            self._collect_events(self.time + k * h)
-            if st != K.OK:
-                info[0] = k
-                self._restore(snap)
-                self.payout_rate = rate0
-                break
-            imp_total += self._imp
-            self._winch(self.payout_rate * h, h)
-        self._paying = False
-        if st == K.OK:
-            # tensions at the end of the step: the attachments where they are then, the rope
-            # still sliding through the drum
-            self.att_pos[:] = pos0 + self.att_vel * dt
-            st = self._refresh(self.time + dt, self.payout_rate if self._winch_running() else 0.0) & ~K.PARTED
-            if st != K.OK:
-                info[0] = n_sub - 1
-                self._restore(snap)
-                self.payout_rate = rate0
-                self.att_pos[:] = pos0
-            else:
-                self._mean_end_force[:] = imp_total * (1.0 / dt)
-        else:
-            self.att_pos[:] = pos0
-        return st
-
-    def _winch_running(self):
-        """True while the winch turns: a pay-out rate is set, the rope is whole at the drum
-        and the deployed length is inside its limits in the direction of the rate."""
-        dep = float(self.L.sum())
-        return bool(self.conn_ok[0]) and (
-            (self.payout_rate > 0 and dep < self.params.length) or
-            (self.payout_rate < 0 and dep > self.params.min_deployed_length))
-
-    # ------------------------------------------------------------------ winch
-    TINY = 1e-3  # element 0 is wound in completely below this fraction of a nominal length
-
-    def _winch(self, dl, h):
-        p = self.params
-        if not self.conn_ok[0]:  # the rope has parted at the drum: nothing to wind
-            return
-        dep = float(self.L.sum())
-        tgt = min(max(dep + dl, p.min_deployed_length), p.length)
-        dl = tgt - dep
-        tiny = self.TINY * self.l_nom
-        can_drop = self.n_elements >= 2 and bool(self.conn_ok[1])
-        if dl < 0.0:  # element 0 never shrinks below 'tiny' (then it is dropped)
-            dl = max(dl, (tiny if can_drop else 0.5 * min(self.l_nom, self.L[0])) - self.L[0])
-        if dl == 0.0:
-            return
-        l0 = self.L[0]
-        l_new = l0 + dl
-        # rope leaves / enters at the winch end of element 0: its far end stays (a material
-        # point) and the element grows / shrinks along its axis at the drum end. The rope
-        # slides out of the drum at the pay-out rate: new rope leaves with the drum velocity
-        # minus rate * e, and the kernel gives the end connection the same sliding velocity,
-        # so the end spring-damper sees no spurious motion.
-        e = self.E[0]
-        aft = self.X[0] - 0.5 * l0 * e
-        m0 = p.mass_per_length * l0
-        if dl > 0:
-            v_new = self.att_vel[0] - (dl / h) * e
-            self.V[0] = (m0 * self.V[0] + p.mass_per_length * dl * v_new) / (
-                p.mass_per_length * l_new)
-        self.X[0] = aft + 0.5 * l_new * e
-        self.L[0] = l_new
-        # slack rope piles up behind the drum: the drum end may not pass the drum
-        drum = self.att_pos[0] + self.att_vel[0] * h  # attachment at the end of the sub-step
-        over = (self.X[0] + 0.5 * l_new * e - drum) @ e
-        if over > 0.0:
-            self.X[0] -= over * e
-        while self.L[0] > 1.5 * self.l_nom:
-            self._split0()
-        if dl < 0.0 and can_drop:
-            if self.L[0] <= tiny * (1.0 + 1e-9):
-                # wound in completely: element 1 now hangs from the drum, its front within
-                # 'tiny' of it (merging two links at an angle would jump the geometry)
-                self._drop0()
-            elif (self.L[0] < 0.5 * self.l_nom and self.E[0] @ self.E[1] > 0.98
-                  and self.n_elements > self.MIN_WINCH_ELEMENTS):
-                self._merge01()  # nearly straight: merging moves nothing noticeably
-            elif self.L[0] < 0.1 * self.L[1]:
-                # a link much shorter than its neighbour is stiff and light (its axial
-                # frequency grows as 1/length): merged even at an angle before it spins up
-                self._merge01()
-        if dl < 0.0:
-            # a short rope of few long rigid links cannot fold between close bollards (two
-            # 9 m links hung from bollards 3 m apart lock up and part): heave-in keeps at
-            # least MIN_WINCH_ELEMENTS links, none longer than 1.25 times their share
-            while True:
-                j = int(np.argmax(self.L))
-                dep = float(self.L.sum())
-                if self.L[j] < 4.0 * tiny or (self.n_elements >= self.MIN_WINCH_ELEMENTS
-                                              and self.L[j] <= 1.25 * dep / self.MIN_WINCH_ELEMENTS):
-                    break
-                self._halve(j)
-
-    MIN_WINCH_ELEMENTS = 4  # heave-in keeps at least this many links (see _winch)
-
-    def _halve(self, j):
-        """Split element j into two collinear halves moving as the rigid element did: mass,
-        momentum and angular momentum unchanged, the new joint whole and unloaded."""
-        l, e, x, v, w = self.L[j], self.E[j].copy(), self.X[j].copy(), self.V[j].copy(), self.W[j].copy()
-        q = 0.25 * l * e  # centre of each half from the element centre (front half towards end a)
-        self.X = np.vstack([self.X[:j], x + q, x - q, self.X[j + 1:]])
-        self.E = np.vstack([self.E[:j], e, e, self.E[j + 1:]])
-        self.V = np.vstack([self.V[:j], v + np.cross(w, q), v - np.cross(w, q), self.V[j + 1:]])
-        self.W = np.vstack([self.W[:j], w, w, self.W[j + 1:]])
-        self.L = np.concatenate([self.L[:j], [0.5 * l, 0.5 * l], self.L[j + 1:]])
-        self.env = np.insert(self.env, j + 1, self.env[j], axis=0)
-        self.conn_ok = np.insert(self.conn_ok, j + 1, 1)
-        self.armed = np.insert(self.armed, j + 1, 1)
-        self.breaking_load = np.insert(self.breaking_load, j + 1, self.params.breaking_load)
-        self.tensions = np.insert(self.tensions, j + 1, 0.0)
-
-    def _drop0(self):
-        self.X, self.E, self.V, self.W = self.X[1:], self.E[1:], self.V[1:], self.W[1:]
-        self.L = self.L[1:].copy()
-        self.X, self.E = self.X.copy(), self.E.copy()
-        self.V, self.W = self.V.copy(), self.W.copy()
-        self.env = self.env[1:].copy()
-        self.conn_ok = np.delete(self.conn_ok, 1)
-        self.armed = np.delete(self.armed, 1)
-        self.breaking_load = np.delete(self.breaking_load, 1)
-        self.tensions = np.delete(self.tensions, 1)
-
-    def _split0(self):
-        l0, ln = self.L[0], self.l_nom
-        e, x0, v0, w0 = self.E[0].copy(), self.X[0].copy(), self.V[0].copy(), self.W[0].copy()
-        front = x0 + 0.5 * l0 * e
-        c_near = front - 0.5 * (l0 - ln) * e
-        c_far = front - (l0 - ln) * e - 0.5 * ln * e
-        # under tension (paying out a taut line: render, brake slip) the connections' gaps
-        # hold the stretch of the half elements beside them (compliance l_rep / EA, l_rep the
-        # two half lengths): redistribute them along e so that every tension is kept, the new
-        # inner connection taking the drum tension; splitting with the gaps unchanged would
-        # triple the drum connection's tension (its l_rep drops from l0/2 to (l0 - ln)/2)
-        T0 = float(self.tensions[0]) if self.conn_ok[0] else 0.0
-        T1 = float(self.tensions[1]) if self.conn_ok[1] else 0.0
-        if T0 > 0.0 or T1 > 0.0:
-            ea = self.params.ea
-            back = T1 * 0.5 * (l0 - ln) / ea  # old connection 1: l_rep l0/2 + .. -> ln/2 + ..
-            fwd = T0 * 0.5 * l0 / ea - back  # the new inner connection's gap, minus that shift
-            if self.att_on[0] and self.conn_ok[0]:  # never past the drum
-                fwd = min(fwd, max(0.0, float((self.att_pos[0] - front) @ e)))
-            c_far = c_far - back * e
-            c_near = c_near + max(fwd, -back) * e
-        v_near = v0 + np.cross(w0, c_near - x0)
-        v_far = v0 + np.cross(w0, c_far - x0)
-        self.X = np.vstack([c_near, c_far, self.X[1:]])
-        self.E = np.vstack([e, e, self.E[1:]])
-        self.V = np.vstack([v_near, v_far, self.V[1:]])
-        self.W = np.vstack([w0, w0, self.W[1:]])
-        self.L = np.concatenate([[l0 - ln, ln], self.L[1:]])
-        self.env = np.insert(self.env, 1, self.env[0], axis=0)
-        self.conn_ok = np.insert(self.conn_ok, 1, 1)
-        self.armed = np.insert(self.armed, 1, 1)
-        self.breaking_load = np.insert(self.breaking_load, 1, self.params.breaking_load)
-        self.tensions = np.insert(self.tensions, 1, self.tensions[0])
-
-    def _merge01(self):
-        mu = self.params.mass_per_length
-        L0, L1 = self.L[0], self.L[1]
-        front = self.X[0] + 0.5 * L0 * self.E[0]
-        aft = self.X[1] - 0.5 * L1 * self.E[1]
-        ln = L0 + L1
-        # aim the merged element from the joint with element 2 (kept) at the drum, so that
-        # any excess length is axial (slack), never a sideways jump
-        d = (self.att_pos[0] if (self.att_on[0] and self.conn_ok[0]) else front) - aft
-        nd = np.linalg.norm(d)
-        e = d / nd if nd > 1e-9 else self.E[1].copy()
-        m0, m1 = mu * L0, mu * L1
-        v = (m0 * self.V[0] + m1 * self.V[1]) / (m0 + m1)
-        # momentum kept (v); the rotation rate makes the kept joint move on as before, so
-        # that its spring-damper sees no jump
-        v_aft = self.V[1] + np.cross(self.W[1], aft - self.X[1])
-        dv = v_aft - v
-        dv -= (dv @ e) * e
-        w = -(2.0 / ln) * np.cross(e, dv)
-        x = aft + 0.5 * ln * e  # the joint with element 2 stays; any excess is at the drum
-        self.X = np.vstack([x, self.X[2:]])
-        self.E = np.vstack([e, self.E[2:]])
-        self.V = np.vstack([v, self.V[2:]])
-        self.W = np.vstack([w, self.W[2:]])
-        self.L = np.concatenate([[ln], self.L[2:]])
-        env = self.env
-        merged = (L0 * env[0] + L1 * env[1]) / ln if np.isfinite(env[:2, 6]).all() else env[1]
-        self.env = np.vstack([merged, env[2:]])
-        self.conn_ok = np.delete(self.conn_ok, 1)
-        self.armed = np.delete(self.armed, 1)
-        self.breaking_load = np.delete(self.breaking_load, 1)
-        self.tensions = np.delete(self.tensions, 1)
 
     # ------------------------------------------------------------------ outputs
     @property

@@ -221,7 +221,7 @@ def _frame(yaw):
 
 def _triads(H):
     """(n, 3, 3) rows t, n, b in the paper frame (Eq 1, row 3 corrected)."""
-    ph, th = H[:, 6], H[:, 7]
+    ph, th = H[:, FK.H_PHI], H[:, FK.H_THETA]
     cp, sp, ct, st = np.cos(ph), np.sin(ph), np.cos(th), np.sin(th)
     z = np.zeros_like(ph)
     t = np.stack([ct * cp, ct * sp, -st], axis=1)
@@ -233,6 +233,20 @@ def _triads(H):
 def _angles(t):
     """phi, theta of unit tangents t (n, 3) in the paper frame (inverse of Eq 1 row 1)."""
     return np.arctan2(t[:, 1], t[:, 0]), -np.arcsin(np.clip(t[:, 2], -1.0, 1.0))
+
+
+def _parameter_vector(p):
+    """The kernels' parameter vector (fd_kernels.P_*): masses, weight in water, stiffnesses
+    and the drag factors of Eq 6."""
+    mr = p.mass + (p.added_mass if p.added_mass_full_acceleration else 0.0)
+    rho = p.water_density
+    P = np.empty(FK.NP)
+    P[FK.P_M], P[FK.P_MA], P[FK.P_MR], P[FK.P_W0] = p.mass, p.added_mass, mr, p.weight_in_water
+    P[FK.P_EA], P[FK.P_EI] = p.ea, p.ei
+    P[FK.P_KT] = 0.5 * rho * math.pi * p.diameter * p.drag_tangential  # Eq 6: R_t on pi*d
+    P[FK.P_KN] = 0.5 * rho * p.diameter * p.drag_normal
+    P[FK.P_KB] = 0.5 * rho * p.diameter * p.drag_binormal
+    return P
 
 
 class FdCable:
@@ -266,17 +280,10 @@ class FdCable:
                                      else _vec3(tangential_reference, "tangential_reference"))
         self.heading = float(heading)
         p = params
-        mr = p.mass + (p.added_mass if p.added_mass_full_acceleration else 0.0)
-        rho = p.water_density
-        self._P = np.array([
-            p.mass, p.added_mass, mr, p.weight_in_water, p.ea, p.ei,
-            0.5 * rho * math.pi * p.diameter * p.drag_tangential,  # Eq 6: R_t on pi*d
-            0.5 * rho * p.diameter * p.drag_normal,
-            0.5 * rho * p.diameter * p.drag_binormal,
-        ])
+        self._P = _parameter_vector(p)
         # Newton convergence scales: forces by the cable weight, velocities 1 m/s, rad, 1/m
-        f0 = max(p.weight_in_water * p.length, 1.0)
-        self._scale = np.array([f0, f0, f0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+        self._scale = np.ones(FK.NV)
+        self._scale[FK.H_FORCE] = max(p.weight_in_water * p.length, 1.0)
         self.time = 0.0
         self.steps = 0
         self.last_iterations = 0
@@ -315,12 +322,12 @@ class FdCable:
         t_p = self._to_paper(t_w)
         H = np.zeros((n, FK.NV))
         ph, th = _angles(t_p[None, :])
-        H[:, 6], H[:, 7] = ph[0], th[0]
+        H[:, FK.H_PHI], H[:, FK.H_THETA] = ph[0], th[0]
         s = np.arange(n) * self.ds
-        H[:, 0] = p.weight_in_water * s * 0.5
+        H[:, FK.H_T] = p.weight_in_water * s * 0.5
         vp = self._to_paper(self.top_velocity)
         tri = _triads(H)
-        H[:, 3:6] = tri @ vp
+        H[:, FK.H_VEL] = tri @ vp
         return H
 
     def _steady_state(self):
@@ -328,10 +335,11 @@ class FdCable:
         guess. Raises FdCableConvergenceError(step 0) if it fails."""
         H = self._guess_straight()
         n = self.n
-        A, D, C, r = (np.zeros((n, 10, 10)), np.zeros((n, 10, 10)), np.zeros((n, 10, 10)),
-                      np.zeros((n, 10)))
-        dummy3 = np.zeros((n, 10, 10))
-        dummy2 = np.zeros((max(n - 1, 1), 10))
+        nv = FK.NV
+        A, D, C, r = (np.zeros((n, nv, nv)), np.zeros((n, nv, nv)), np.zeros((n, nv, nv)),
+                      np.zeros((n, nv)))
+        dummy3 = np.zeros((n, nv, nv))
+        dummy2 = np.zeros((max(n - 1, 1), nv))
         vtop = self._to_paper(self.top_velocity)
         cur = self._cur_paper()
         res = math.inf
@@ -346,7 +354,7 @@ class FdCable:
             if not np.all(np.isfinite(dx)):
                 break
             # damping: at most 0.3 rad on any angle per iteration (far from the solution)
-            big = np.max(np.abs(dx[:, 6:8]))
+            big = np.max(np.abs(dx[:, FK.H_ANGLES]))
             lam = min(1.0, 0.3 / big) if big > 0 else 1.0
             H = H + lam * dx
             if lam == 1.0 and np.max(np.abs(dx) / self._scale) < self.params.newton_tol:
@@ -376,9 +384,9 @@ class FdCable:
         H0 = self.H
         Hg = self._extrapolate(H0, self._H_prev, self._dt_prev, dt)
         Ko, Cold = self._old_terms(H0)
-        n = self.n
-        A, D, C, r = (np.zeros((n, 10, 10)), np.zeros((n, 10, 10)), np.zeros((n, 10, 10)),
-                      np.zeros((n, 10)))
+        n, nv = self.n, FK.NV
+        A, D, C, r = (np.zeros((n, nv, nv)), np.zeros((n, nv, nv)), np.zeros((n, nv, nv)),
+                      np.zeros((n, nv)))
         FK.assemble(Hg, H0, Ko, Cold, self._P, self._cur_paper(),
                     self._to_paper(self.top_velocity), self.ds, dt, self.params.time_weight,
                     True, A, D, C, r)
@@ -402,9 +410,9 @@ class FdCable:
         p = self.params
         Ko, Cold = self._old_terms(H0)
         vtop, cur = self._to_paper(vtop_w), self._cur_paper()
-        n = self.n
-        A, D, C, r = (np.empty((n, 10, 10)), np.empty((n, 10, 10)), np.empty((n, 10, 10)),
-                      np.empty((n, 10)))
+        n, nv = self.n, FK.NV
+        A, D, C, r = (np.empty((n, nv, nv)), np.empty((n, nv, nv)), np.empty((n, nv, nv)),
+                      np.empty((n, nv)))
         res, corr = math.inf, math.inf
         for it in range(1, p.newton_max_iter + 1):
             res = FK.assemble(H, H0, Ko, Cold, self._P, cur, vtop, self.ds, dt, p.time_weight,
@@ -477,7 +485,7 @@ class FdCable:
         self.time += dt
         self.steps = step_no
         self.last_iterations = its
-        if np.max(np.abs(H[:, 7])) > p.rebase_angle:
+        if np.max(np.abs(H[:, FK.H_THETA])) > p.rebase_angle:
             self._rebase()
 
     def _rebase(self):
@@ -491,27 +499,27 @@ class FdCable:
         Rn = _frame(yaw)
         Hn = self._transform(self.H, self._R, Rn, None)
         if self._H_prev is not None:
-            self._H_prev = self._transform(self._H_prev, self._R, Rn, Hn[:, 6])
+            self._H_prev = self._transform(self._H_prev, self._R, Rn, Hn[:, FK.H_PHI])
         self._rates = self._transform_rates(Rn)
         self.H, self._R, self._yaw = Hn, Rn, yaw
 
     @staticmethod
     def _transform(H, Ro, Rn, phi_ref):
         tri_w = _triads(H) @ Ro.T  # rows t, n, b in world
-        F = (H[:, 0:3, None] * tri_w).sum(axis=1)
-        V = (H[:, 3:6, None] * tri_w).sum(axis=1)
-        Kv = H[:, 8, None] * tri_w[:, 1] + H[:, 9, None] * tri_w[:, 2]
+        F = (H[:, FK.H_FORCE, None] * tri_w).sum(axis=1)
+        V = (H[:, FK.H_VEL, None] * tri_w).sum(axis=1)
+        Kv = H[:, FK.H_ON, None] * tri_w[:, 1] + H[:, FK.H_OB, None] * tri_w[:, 2]
         t_new = tri_w[:, 0] @ Rn
         ph, th = _angles(t_new)
         ph = np.unwrap(ph) if phi_ref is None else phi_ref + (
             (ph - phi_ref + math.pi) % (2 * math.pi) - math.pi)
         out = H.copy()
-        out[:, 6], out[:, 7] = ph, th
+        out[:, FK.H_PHI], out[:, FK.H_THETA] = ph, th
         tri_n = _triads(out) @ Rn.T
-        out[:, 0:3] = np.einsum("nki,ni->nk", tri_n, F)
-        out[:, 3:6] = np.einsum("nki,ni->nk", tri_n, V)
-        out[:, 8] = np.einsum("ni,ni->n", tri_n[:, 1], Kv)
-        out[:, 9] = np.einsum("ni,ni->n", tri_n[:, 2], Kv)
+        out[:, FK.H_FORCE] = np.einsum("nki,ni->nk", tri_n, F)
+        out[:, FK.H_VEL] = np.einsum("nki,ni->nk", tri_n, V)
+        out[:, FK.H_ON] = np.einsum("ni,ni->n", tri_n[:, 1], Kv)
+        out[:, FK.H_OB] = np.einsum("ni,ni->n", tri_n[:, 2], Kv)
         return out
 
     def _transform_rates(self, Rn):
@@ -525,7 +533,7 @@ class FdCable:
         for j in range(self.n):
             M = np.stack([zp, tri_n[j, 1]], axis=1)
             sol, *_ = np.linalg.lstsq(M, w[j], rcond=None)
-            rates[j, 6], rates[j, 7] = sol
+            rates[j, FK.H_PHI], rates[j, FK.H_THETA] = sol
         return rates
 
     # ------------------------------------------------------------------ outputs (world)
@@ -535,7 +543,8 @@ class FdCable:
     def _omega_world(self):
         tri = self._tri_world()
         zp = self._R[:, 2]
-        return self._rates[:, 6, None] * zp[None, :] + self._rates[:, 7, None] * tri[:, 1]
+        return (self._rates[:, FK.H_PHI, None] * zp[None, :]
+                + self._rates[:, FK.H_THETA, None] * tri[:, 1])
 
     @property
     def n_nodes(self):
@@ -543,7 +552,8 @@ class FdCable:
 
     @property
     def state(self):
-        """H (n, 10) in the paper's order (index 0 = free end) and paper frame; a copy."""
+        """H (n, 10) in the paper's order (columns fd_kernels.H_*; index 0 = free end) and
+        paper frame; a copy."""
         return self.H.copy()
 
     @property
@@ -565,19 +575,19 @@ class FdCable:
     def velocities(self):
         """(N, 3) node velocities, m/s, world; index 0 = towing point."""
         tri = self._tri_world()
-        v = np.einsum("nk,nki->ni", self.H[:, 3:6], tri)
+        v = np.einsum("nk,nki->ni", self.H[:, FK.H_VEL], tri)
         return v[::-1].copy()
 
     @property
     def tensions(self):
         """(N,) effective tension T at the nodes, N (may dip below 0 at low tension: the model
         carries compression through EI); index 0 = towing point."""
-        return self.H[::-1, 0].copy()
+        return self.H[::-1, FK.H_T].copy()
 
     @property
     def shear_forces(self):
         """(N, 2) shear forces (S_n, S_b), N; index 0 = towing point."""
-        return self.H[::-1, 1:3].copy()
+        return self.H[::-1, FK.H_SN:FK.H_SB + 1].copy()
 
     @property
     def rotations(self):
@@ -602,7 +612,7 @@ class FdCable:
 
     @property
     def stretched_segment_lengths(self):
-        e = self.H[:, 0] / self.params.ea
+        e = self.H[:, FK.H_T] / self.params.ea
         return (self.ds * (1.0 + 0.5 * (e[1:] + e[:-1])))[::-1].copy()
 
     @property
@@ -625,4 +635,4 @@ class FdCable:
         Eq 2); the ship feels -F.
         """
         tri = self._tri_world()[-1]
-        return -(self.H[-1, 0:3] @ tri)
+        return -(self.H[-1, FK.H_FORCE] @ tri)

@@ -39,6 +39,12 @@ from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at
 from sim_math.linalg import lu_factor, lu_solve_columns
 
 NV = 10
+# columns of H, the unknowns of Eq 9 in the paper's order (the equation code below indexes them
+# by these numbers, as the paper's rows and columns); FdCable uses the names
+H_T, H_SN, H_SB, H_VT, H_VN, H_VB, H_PHI, H_THETA, H_ON, H_OB = range(NV)
+H_FORCE = slice(H_T, H_SB + 1)  # (T, Sn, Sb), N: the internal force in the local triad
+H_VEL = slice(H_VT, H_VB + 1)  # (vt, vn, vb), m/s: the velocity in the local triad
+H_ANGLES = slice(H_PHI, H_THETA + 1)  # (phi, theta), rad: the triad's angles (Eq 1)
 # parameter vector layout
 P_M, P_MA, P_MR, P_W0, P_EA, P_EI, P_KT, P_KN, P_KB = range(9)
 NP = 9
@@ -123,7 +129,7 @@ def node_terms(H, Hold, P, cur, use_k, L, g):
 def k_matrix(H, P, K):
     """K(H) (Eq 12, re-derived from Eq 2 and 4): coefficient of H_dot in row i."""
     m, ma, mr, EA = P[P_M], P[P_MA], P[P_MR], P[P_EA]
-    vt, vn, vb, ph, th = H[3], H[4], H[5], H[6], H[7]
+    vt, vn, vb, th = H[3], H[4], H[5], H[7]
     ct, st = math.cos(th), math.sin(th)
     e1 = 1.0 + H[0] / EA
     K[:, :] = 0.0
@@ -415,8 +421,9 @@ def node_positions(H, R, ea, ds, top, out):
     sx = sy = sz = 0.0
     dx1 = dy1 = dz1 = 0.0
     for k in range(n - 1, -1, -1):
-        e1 = 1.0 + H[k, 0] / ea
-        cp, sp, ct, st = math.cos(H[k, 6]), math.sin(H[k, 6]), math.cos(H[k, 7]), math.sin(H[k, 7])
+        e1 = 1.0 + H[k, H_T] / ea
+        ph, th = H[k, H_PHI], H[k, H_THETA]
+        cp, sp, ct, st = math.cos(ph), math.sin(ph), math.cos(th), math.sin(th)
         t0, t1, t2 = ct * cp, ct * sp, -st
         dx = e1 * (R[0, 0] * t0 + R[0, 1] * t1 + R[0, 2] * t2)
         dy = e1 * (R[1, 0] * t0 + R[1, 1] * t1 + R[1, 2] * t2)

@@ -69,7 +69,8 @@ FMA = {"contract"}
 # S: float64 (N + 1, S_COLS), the state: per element j (rows 0..N-1) centre X, axis E,
 # velocity V, angular velocity W (3 columns each from SX, SE, SV, SW) and length (SL); per
 # connection c (rows 0..N) breaking load (SB) and tension (ST). RopeChain's X, E, ... are
-# views into it. F: int64 (N + 1, 2): connection intact (column 0), parting armed (1).
+# views into it. F: int64 (N + 1, F_COLS): connection intact (column F_OK), parting armed
+# (F_ARMED).
 SX, SE, SV, SW, SL, SB, ST = 0, 3, 6, 9, 12, 13, 14
 # environment per element j (rows 0..N-1), sampled at the element centres by the caller
 # (RopeChain.set_environment): water current (3 columns from SCUR, added to the uniform
@@ -77,6 +78,8 @@ SX, SE, SV, SW, SL, SB, ST = 0, 3, 6, 9, 12, 13, 14
 # (SDEPTH, m, positive down; inf = no seabed)
 SCUR, SWIND, SDEPTH = 15, 18, 21
 S_COLS = 22
+F_OK, F_ARMED = 0, 1
+F_COLS = 2
 # io: float64 (IO_ROWS, 3), RopeChain._io; the attributes att_pos, att_vel etc. are views
 IO_POS, IO_VEL, IO_FORCE, IO_IMPULSE, IO_MEAN = 0, 2, 4, 6, 8  # rows (end a, end b):
 # attachment position and velocity, force on the attachment, impulse over the call,
@@ -91,7 +94,7 @@ P_THETA, P_VMAX, P_WMAX = (16, 0), (16, 1), (16, 2)
 P_PMAX = (17, 0)
 IO_ATT = 17  # columns 1, 2: attachment a, b on (1.0) or not (0.0)
 IO_INFO = 18  # columns 0, 1: divergence (sub-step, element); column 2: events recorded
-IO_NEV = (18, 2)
+IO_NEV = (IO_INFO, 2)
 IO_DIAG = 19  # a parting refused as a blow-up (PART_MIN_ELASTIC): (connection or -1, T, EA strain)
 # seabed contact (MoorDyn's model): stiffness kbot (Pa/m) and damping cbot (Pa s/m) per
 # unit contact area (diameter x length), Coulomb friction coefficients along and across the
@@ -643,7 +646,7 @@ def _attachment_point(io, end, t):
 def _drum_sliding(S, Vp, Pn, Vn, payout_a, t):
     """Winch at end a (drum connection c = 0): rope slides through the drum at the pay-out
     rate, and the drum end of element 0 extends (retracts) along it during the call;
-    chain._winch then grows (shrinks) the element by that length, so the drum connection
+    winch.Winch.wind then grows (shrinks) the element by that length, so the drum connection
     never sees the flow of rope. Returns g (the next point's velocity relative to the
     attachment without the sliding, J nu) and the next point moved on by the sliding."""
     e0 = S[0, SE]
@@ -918,7 +921,7 @@ def _elastic_tension(kc, Pp, Pn, n):
 def _part(best_c, best_T, t, N, S, F, io):
     """The rope parts at the most overloaded connection only; the others that carry the
     same overload survived it (they are disarmed until they unload)."""
-    F[best_c, 0] = 0
+    F[best_c, F_OK] = 0
     ne = int(io[IO_NEV])
     if ne < N_EVENTS_MAX:
         io[IO_EVENTS + ne, 0] = t
@@ -927,7 +930,7 @@ def _part(best_c, best_T, t, N, S, F, io):
     io[IO_NEV] = ne + 1
     for c in range(N + 1):
         if S[c, ST] > S[c, SB]:
-            F[c, 1] = 0
+            F[c, F_ARMED] = 0
 
 
 # ------------------------------------------------------------------ block tri-diagonal solve
@@ -1204,8 +1207,8 @@ def _save_call_state(S, F, io, bk, misc, bF, N):
             bk[j, 3, a] = S[j, SW + a]
     for c in range(N + 1):
         misc[c, 1] = S[c, ST]
-        misc[c, 2] = F[c, 0]
-        misc[c, 3] = F[c, 1]
+        misc[c, 2] = F[c, F_OK]
+        misc[c, 3] = F[c, F_ARMED]
     for s in range(2):
         for a in range(3):
             bF[s, a] = io[IO_FORCE + s, a]
@@ -1223,8 +1226,8 @@ def _restore_call_state(S, F, io, bk, misc, bF, N, b_nev):
             S[j, SW + a] = bk[j, 3, a]
     for c in range(N + 1):
         S[c, ST] = misc[c, 1]
-        F[c, 0] = np.int64(misc[c, 2])
-        F[c, 1] = np.int64(misc[c, 3])
+        F[c, F_OK] = np.int64(misc[c, 2])
+        F[c, F_ARMED] = np.int64(misc[c, 3])
     for s in range(2):
         for a in range(3):
             io[IO_FORCE + s, a] = bF[s, a]
@@ -1393,7 +1396,7 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                 hp = c > 0
                 hn = c < N
                 S[c, ST] = 0.0
-                if not (F[c, 0] != 0 and (hp or att_a) and (hn or att_b)):
+                if not (F[c, F_OK] != 0 and (hp or att_a) and (hn or att_b)):
                     if full and hp and hn:  # parted: no coupling block
                         _clear_block(Ao, i)
                 else:
@@ -1424,13 +1427,13 @@ def run_substeps(S, F, io, ws, h, n_sub, payout_a, dt):
                         F0, F1, F2, T, axd = _tension_only_spring_damper(kc, cc[c, 1], ctr, Pp,
                                                                          Pn, Vp, Vn, n)
                         if T > S[c, SB]:  # parting candidate: the most overloaded one parts
-                            if F[c, 1] != 0 and T / S[c, SB] > best_ratio:
+                            if F[c, F_ARMED] != 0 and T / S[c, SB] > best_ratio:
                                 best_ratio = T / S[c, SB]
                                 best_c = c
                                 best_T = T
                                 best_el = _elastic_tension(kc, Pp, Pn, n)
                         else:
-                            F[c, 1] = 1  # re-armed once unloaded
+                            F[c, F_ARMED] = 1  # re-armed once unloaded
                         S[c, ST] = T
                         if not hn:  # F acts on the next point, -F on the prev point
                             _set_vec3(io, IO_FORCE + 1, F0, F1, F2)

@@ -209,17 +209,17 @@ def _evaluate(S, F, io, consts, t, payout_a, full, P, A, b, B):
     att = io[K.IO_ATT, 1] != 0.0, io[K.IO_ATT, 2] != 0.0
     for c in range(N + 1):
         S[c, K.ST] = 0.0
-        if not (F[c, 0] and (c > 0 or att[0]) and (c < N or att[1])):
+        if not (F[c, K.F_OK] and (c > 0 or att[0]) and (c < N or att[1])):
             continue
         Pp, Vp, si, Pn, Vn, sk, g = connection_points(c, X, E, V, W, L, io, t, payout_a)
         Fc, n, cx_eff = connection_force(c, Pp, Vp, Pn, Vn, E, consts)
         T = float(np.linalg.norm(Fc))
         if T > S[c, K.SB]:
-            if F[c, 1] and T / S[c, K.SB] > best_ratio:
+            if F[c, K.F_ARMED] and T / S[c, K.SB] > best_ratio:
                 best_ratio = T / S[c, K.SB]
                 best = (c, T, consts[c][0] * ((Pp - Pn) @ n))
         else:
-            F[c, 1] = 1
+            F[c, K.F_ARMED] = 1
         S[c, K.ST] = T
         if c == N:
             io[K.IO_FORCE + 1] = Fc
@@ -328,12 +328,12 @@ def run_substeps(S, F, io, h, n_sub, payout_a, dt):
                 io[K.IO_DIAG] = c, T, el
                 bad = max(0, min(c, N - 1))
                 break
-            F[c, 0] = 0  # parts; the others above their breaking load are disarmed
+            F[c, K.F_OK] = 0  # parts; the others above their breaking load are disarmed
             ne = int(io[K.IO_NEV])
             if ne < K.N_EVENTS_MAX:
                 io[K.IO_EVENTS + ne] = t, c, T
             io[K.IO_NEV] = ne + 1
-            F[S[:, K.ST] > S[:, K.SB], 1] = 0
+            F[S[:, K.ST] > S[:, K.SB], K.F_ARMED] = 0
         w8 = 0.5 * h if step in (0, n_sub) else h
         io[K.IO_IMPULSE:K.IO_IMPULSE + 2] += w8 * io[K.IO_FORCE:K.IO_FORCE + 2]
         if not full and bad < 0:

@@ -30,6 +30,7 @@ from visualization_msgs.msg import MarkerArray
 from rope_model.models import ModelFailure, make_model, rope_file_model
 from sea_environment.environment import Environment
 from rope_model.state_cdr import rope_state_cdr
+from rope_model.winch import Winch
 from sim_contract import topics as T
 from sim_plumbing import cdr
 from sim_math.rotations import matrix_from_quaternion
@@ -131,7 +132,7 @@ class RopeNode(SteppedNode):
     def on_live_parameters(self, changes) -> None:
         self.marker_every = max(1, round(1e9 / self.period_ns / changes["marker_rate"]))
 
-    WINCH_MODES = ("speed", "hold", "constant_tension")  # WinchCommand.SPEED, HOLD, CONSTANT_TENSION
+    WINCH_MODES = Winch.MODES  # indexed by WinchCommand.SPEED, HOLD, CONSTANT_TENSION
 
     @staticmethod
     def _winch_tensions(msg) -> dict:
