@@ -17,10 +17,12 @@ from typing import Callable, List
 import pytest
 from scenario_runner.conductor import DOMAIN_CHECK_WAIT_VARIABLE  # noqa: F401  (tests import it from here)
 from scenario_runner.run_nodes import executable_path  # noqa: F401  (tests import it from here)
+from sim_plumbing.dds_profile import use_discovery_profile
 
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.pop("ROS_STATIC_PEERS", None)
 os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; the range above replaces it
+use_discovery_profile()  # as the runner and nodes: the test's observers discover as fast as they do
 
 
 

@@ -31,6 +31,7 @@ from sim_contract import topics as T
 from scenario_format.particulars import breaking_loads, particulars, scenario_path
 from scenario_format.scenario import load_scenario
 from sim_math.rotations import yaw_from_quaternion
+from sim_plumbing import ros_common as rc
 
 ANCHOR = {"let_go": 1, "heave_up": 2}
 
@@ -218,7 +219,7 @@ def main(argv=None) -> int:
         if not math.isfinite(v) or not 0 < v <= 90:
             p.error(f"--{name.replace('_', '-')}: expected a number in (0, 90], got {v!r}")
     ropes, breaking = _rope_setup(args.vessel.strip("/"), args.scenario)
-    rclpy.init(args=argv)
+    rc.init_rclpy(argv)
     node = ConsoleNode(args.vessel.strip("/"), ropes)
     executor = rclpy.executors.SingleThreadedExecutor()
     executor.add_node(node)

@@ -28,6 +28,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 
 from recording.mcap_io import (Channel, McapFile, McapReadError, locate_recording, message_class,
                                      ros_decode_errors)
+from sim_plumbing.dds_profile import use_discovery_profile
 
 CLOCK_TOPIC = "/clock"
 EXIT_OK, EXIT_DAMAGED, EXIT_NOTHING = 0, 1, 2
@@ -260,6 +261,7 @@ def play(args, argv: List[str], mf: McapFile, selected: Dict[str, Channel]) -> N
     import rclpy.executors
     from rclpy.signals import SignalHandlerOptions
     # Ctrl-C / SIGTERM stop the playing loop as KeyboardInterrupt (then a clean shutdown)
+    use_discovery_profile()
     rclpy.init(args=["replay"] + argv, signal_handler_options=SignalHandlerOptions.NO)
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     from rclpy.node import Node

@@ -273,7 +273,12 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 0
     # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
     # shut the context down under the running loop (an RCLError traceback, or exit 3).
-    rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    rc.exit_process(run_and_report(plan, args))
+
+
+def run_and_report(plan: RunPlan, args) -> int:
+    """The run of a checked plan (rclpy initialised), its summary printed; the exit status."""
     try:
         recorder = McapRecorder(plan.output, run_nodes.contract_topics(plan.sc),
                                 fed_topics=run_nodes.fed_topics(plan.sc, plan.external),

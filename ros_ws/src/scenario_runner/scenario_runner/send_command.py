@@ -75,7 +75,7 @@ def main(argv=None) -> int:
         if not math.isfinite(value):
             sys.stderr.write(f"send_command: {name} {value!r}: expected a finite number\n")
             return 2
-    rclpy.init(args=argv)
+    rc.init_rclpy(argv)
     node = Node("send_command")
     try:
         topic = f"/{args.vessel.strip('/')}/command"

@@ -27,7 +27,6 @@ import os
 
 import numpy as np
 from numba import njit
-from scipy.interpolate import RegularGridInterpolator
 
 _HEADER = ("ncols", "nrows", "xllcorner", "yllcorner", "cellsize")
 
@@ -39,6 +38,9 @@ class BathymetryError(ValueError):
 class DepthGrid:
     def __init__(self, x: np.ndarray, y: np.ndarray, depth_yx: np.ndarray, source: str = "<grid>"):
         self.x, self.y, self.values, self.source = x, y, depth_yx, source
+        # imported here: scipy.interpolate costs every node process 0.25 s at start-up, and only a
+        # run with a depth grid needs it
+        from scipy.interpolate import RegularGridInterpolator
         self._interp = RegularGridInterpolator((y, x), depth_yx, method="linear")
         self.bounds = (float(x[0]), float(x[-1]), float(y[0]), float(y[-1]))
 

@@ -16,6 +16,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from sim_contract import topics
+from sim_plumbing.dds_profile import use_discovery_profile
 
 WORLD_FRAME = "map"  # REP-105 world-fixed frame, ENU (REP-103), still-water surface at z = 0
 EVENTS_TOPIC = topics.EVENTS
@@ -247,6 +248,13 @@ def die_with_parent() -> None:
     threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
+def init_rclpy(args=None, **kwargs) -> None:
+    """rclpy.init with the simulator's discovery profile (dds_profile.use_discovery_profile)."""
+    import rclpy
+    use_discovery_profile()
+    rclpy.init(args=args, **kwargs)
+
+
 class ModelDiverged(RuntimeError):
     """The model's state went non-finite or blew up: numerics, not physics (named with the step).
     A node's main() (run_node) ends with exit 3 naming it."""
@@ -257,14 +265,15 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
     """main() of a simulator node: construct, spin until Ctrl-C / SIGTERM, clean up.
 
     Exit status: 0 stopped, 2 bad parameters or files (bad_input, message on stderr), 3 the
-    model failed (failures, e.g. a diverged rope, or a state gone non-finite; message on stderr)."""
+    model failed (failures, e.g. a diverged rope, or a state gone non-finite; message on stderr).
+    Once the node has spun, the process ends in here (os._exit): a node's main() is its process."""
     import sys
 
     import rclpy
     from rclpy.exceptions import ParameterException
 
     failures = (*failures, ModelDiverged) if isinstance(failures, tuple) else (failures, ModelDiverged)
-    rclpy.init(args=args)
+    init_rclpy(args)
     die_with_parent()
     try:
         node = make_node()
@@ -277,15 +286,26 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
         return 0
     executor = make_executor()
     executor.add_node(node)
+    status = 0
     try:
         spin_forever(executor, getattr(node, "poll", None), lambda text: sys.stderr.write(f"{program}: {text}\n"))
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
     except failures as exc:
         sys.stderr.write(f"{program}: {exc}\n")
-        return 3
+        status = 3
     finally:
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
-    return 0
+    exit_process(status)
+
+
+def exit_process(status: int) -> None:
+    """End the process now, its output flushed, once ROS is shut down and every file closed:
+    Python's own finalisation of the loaded numba/LLVM and DDS objects takes 0.3-0.4 s per
+    process here, and a run waits for each of its nodes."""
+    import sys
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
