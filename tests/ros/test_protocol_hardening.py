@@ -2,6 +2,7 @@
 stray, duplicate and untriggered messages, one run per domain), no orphans whatever kills the
 runner, SIGTERM like Ctrl-C, orders that cannot stall or grow a node."""
 import os
+import re
 import signal
 import subprocess
 import threading
@@ -162,6 +163,34 @@ def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_pat
     while _domain_nodes(ros_domain) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert _domain_nodes(ros_domain) == []  # the nodes died with their runner
+
+
+def test_a_second_run_given_the_same_output_leaves_the_first_recording_whole(tmp_path, ros_domain, run_in_process):
+    """Run A records to a.mcap; run B given the same --output (here: on the same domain, as two
+    ./run.sh in one clone) is refused before it touches the file, naming A's pid; A ends as it
+    would have alone, and its recording holds every step (read back)."""
+    from mcap.reader import make_reader
+    out = tmp_path / "a.mcap"
+    first = subprocess.Popen(runner(out, "--log-dir", str(tmp_path / "logs_a"), duration=30), stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_until_stepping(ros_domain, tmp_path / "logs_a")
+        second = run_in_process("run_scenario", SCENARIO, "--duration", "5", "--quiet", "--output", out,
+                                "--log-dir", tmp_path / "logs_b")
+        assert second.returncode == 2, second.stderr
+        assert f"{out} is being written by another run (pid {first.pid})" in second.stderr, second.stderr
+        stdout, stderr = first.communicate(timeout=240)
+    finally:
+        if first.poll() is None:
+            first.kill()
+    assert first.returncode == 0, stderr
+    said = int(re.search(r"recording: .*a\.mcap \((\d+) messages", stdout).group(1))
+    with open(out, "rb") as f:  # read by the mcap library, from its messages
+        clock = [m.log_time for _, ch, m in make_reader(f).iter_messages() if ch.topic == "/clock"]
+        f.seek(0)
+        assert sum(1 for _ in make_reader(f).iter_messages()) == said
+    assert len(clock) == 30 * 50 and clock == sorted(clock)  # 30 s at 50 Hz: every step of A
+    assert not (tmp_path / "logs_b").exists() and not (tmp_path / ".a.mcap.lock").exists()
 
 
 @pytest.mark.parametrize("victims", ["runner", "all"])

@@ -25,6 +25,7 @@
 """
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import re
@@ -129,6 +130,51 @@ def bag_metadata(file_name: str, topics: List[dict], start_ns: Optional[int], en
 RESERVE_BYTES = 64 * 1024  # kept free beside a recording: room to end it readably on a full disk
 
 
+class RecordingInUse(OSError):
+    """Another process (a run still going) has claimed this recording's path."""
+
+
+class OutputClaim:
+    """A recording's path claimed by this process for as long as it writes it: an exclusive lock
+    on `.<name>.lock` beside it (holding the pid), taken before the recording is opened, so that a
+    second run given the same --output is refused before it truncates or removes the first run's
+    file. The kernel drops the lock with the process, however it ends (a stale lock file is taken
+    over)."""
+
+    def __init__(self, path: str):
+        folder = os.path.dirname(os.path.abspath(path))
+        os.makedirs(folder, exist_ok=True)
+        self.lock_path = os.path.join(folder, f".{os.path.basename(path)}.lock")
+        while True:
+            fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+                os.close(fd)
+                raise RecordingInUse(f"{os.path.abspath(path)} is being written by another run (pid {holder}); "
+                                     f"give this run another --output") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.lock_path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:  # not a lock file its last holder removed while we waited for it
+                break
+            os.close(fd)
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        self._fd = fd
+
+    def release(self) -> None:
+        if self._fd is not None:
+            try:
+                os.remove(self.lock_path)
+            except OSError:
+                pass
+            os.close(self._fd)
+            self._fd = None
+
+
 class RecordingFile:
     """The stream the mcap Writer writes to: unbuffered, so each write (the Writer hands over
     whole records) is on disk or has failed, and `good` is the offset after the last complete
@@ -137,10 +183,15 @@ class RecordingFile:
     complete record and closes the data section (DataEnd, a Footer without summary), which
     every MCAP reader takes: the run stops, the recording up to there stays usable."""
 
-    def __init__(self, path: str):
+    def __init__(self, path: str, claim: Optional[OutputClaim] = None):
         self.path = path
+        self.claim = claim or OutputClaim(path)  # RecordingInUse before anything of the path is touched
         self.reserve_path = os.path.join(os.path.dirname(os.path.abspath(path)), f".{os.path.basename(path)}.reserve")
-        self._f = open(path, "wb", buffering=0)
+        try:
+            self._f = open(path, "wb", buffering=0)
+        except OSError:
+            self.claim.release()
+            raise
         self.good = 0
         self.ended = False
         try:
@@ -149,6 +200,7 @@ class RecordingFile:
         except OSError:
             self._f.close()
             self._drop_reserve()
+            self.claim.release()
             raise
 
     def write(self, data) -> int:
@@ -186,10 +238,14 @@ class RecordingFile:
         self.write(tail.end() + MCAP0_MAGIC)
         self._f.close()
 
-    def close(self) -> None:
+    def close(self, discard: bool = False) -> None:
+        """Close; discard: remove the file too (still claimed, so that it is this run's file)."""
         if not self._f.closed:
             self._f.close()
         self._drop_reserve()
+        if discard:
+            os.remove(self.path)
+        self.claim.release()
 
 
 def readable_extent(path: str) -> str:
@@ -246,8 +302,9 @@ class McapRecorder(Node):
 
     def __init__(self, path: str, topics: List[Tuple[str, type, QoSProfile]], period_ns: Optional[int] = None,
                  fed_topics: Tuple[str, ...] = (), metadata: Optional[Dict[str, Dict[str, str]]] = None,
-                 by_stamp: Tuple[str, ...] = ()):
-        """fed_topics: not subscribed; recorded from record() calls of their owner in this
+                 by_stamp: Tuple[str, ...] = (), claim: Optional[OutputClaim] = None):
+        """claim: the path's OutputClaim, taken by the caller before anything started (else taken
+        here; RecordingInUse if another run holds it). fed_topics: not subscribed; recorded from record() calls of their owner in this
         process (the scenario runner's /clock and /sim/step, and /sim/step_done which it takes
         raw anyway) or from the nodes' feeds (add_pipe_feed, feed_in_process); a feed's message
         on any other topic is not recorded (that topic is subscribed). metadata: MCAP
@@ -258,7 +315,7 @@ class McapRecorder(Node):
         super().__init__("recorder")
         self.path = path
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        self._file = RecordingFile(path)
+        self._file = RecordingFile(path, claim)
         self.failure: Optional[OSError] = None  # the write that failed; the file was then ended readably
         # LZ4: a quarter of zstd's CPU per chunk here, and every MCAP reader supports it.
         self.writer = Writer(self._file, compression=CompressionType.LZ4)
@@ -422,9 +479,10 @@ class McapRecorder(Node):
             if tap is not None:
                 tap(data)
 
-    def close(self) -> None:
+    def close(self, discard: bool = False) -> None:
         """Write what is queued, the rosbag2 metadata and the summary. OSError if writing fails
-        (the file is then ended readably, as in flush)."""
+        (the file is then ended readably, as in flush). discard: then remove the file (a run
+        refused before its first step: start-up messages would pass for a recording)."""
         try:
             if not self.closed:  # else: closed already, or ended after a failed write
                 self._flush()
@@ -437,7 +495,7 @@ class McapRecorder(Node):
         finally:
             for pipe in self.pipes:
                 pipe.close()
-            self._file.close()
+            self._file.close(discard)
 
     def serialized_metadata(self) -> str:
         """rosbag2's BagMetadata YAML of what has been written so far."""

@@ -7,7 +7,8 @@ every node is started as its own process, the run is stepped in lockstep (or pac
 time), progress is shown, everything is shut down, and a summary is printed. With --external the
 runner drives nodes somebody else started (other PCs; --print-nodes gives their commands): it
 waits for them to announce themselves and records their outputs by subscription. Exit status:
-0 done, 2 invalid scenario, 3 a node died / stopped answering / failed, 4 the ROS domain is
+0 done, 2 invalid scenario or output (also: another run still writing the same --output, whose
+recording is left untouched), 3 a node died / stopped answering / failed, 4 the ROS domain is
 in use by another run (refused before step 0, no recording left), 130 Ctrl-C, 143 SIGTERM (both stop the
 nodes and finalise the recording).
 """
@@ -33,7 +34,7 @@ from scenario_runner import conductor as cd
 from scenario_runner import run_nodes
 from scenario_runner.node_processes import LAYOUTS
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
-from recording.recorder import McapRecorder, readable_extent
+from recording.recorder import McapRecorder, OutputClaim, RecordingInUse, readable_extent
 from scenario_format.particulars import recording_metadata, scenario_path
 from scenario_format.scenario import Scenario, ScenarioError, load_scenario
 from sim_contract import topics as T
@@ -271,19 +272,28 @@ def main(argv: Optional[List[str]] = None) -> int:
     if args.print_nodes:
         print("\n".join(node_commands(plan, args.run_id or "")))
         return 0
+    try:  # the output is this run's before anything starts: a run still writing it is not touched
+        claim = OutputClaim(plan.output) if plan.record else None
+    except RecordingInUse as exc:
+        sys.stderr.write(f"run_scenario: refused to start: {exc}\n")
+        return 2
+    except OSError as exc:
+        sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
+        return 2
     # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
     # shut the context down under the running loop (an RCLError traceback, or exit 3).
     rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    rc.exit_process(run_and_report(plan, args))
+    rc.exit_process(run_and_report(plan, args, claim))
 
 
-def run_and_report(plan: RunPlan, args) -> int:
-    """The run of a checked plan (rclpy initialised), its summary printed; the exit status."""
+def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim]) -> int:
+    """The run of a checked plan (rclpy initialised, the output claimed), its summary printed;
+    the exit status."""
     try:
         recorder = McapRecorder(plan.output, run_nodes.contract_topics(plan.sc),
                                 fed_topics=run_nodes.fed_topics(plan.sc, plan.external),
                                 by_stamp=run_nodes.external_outputs(plan.sc, plan.external)[0],
-                                metadata=recording_metadata(plan.path, plan.sc)) if plan.record else None
+                                metadata=recording_metadata(plan.path, plan.sc), claim=claim) if plan.record else None
     except OSError as exc:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         rclpy.try_shutdown()
@@ -404,14 +414,13 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
             progress.close()
         if recorder:
             try:
-                recorder.close()  # finalised (summary, indexes) also after an error or Ctrl-C
+                recorder.close(discard=refused)  # finalised (summary, indexes) also after an error or Ctrl-C
             except OSError as exc:
                 sys.stderr.write(f"run_scenario: the recording {os.path.abspath(output)} could not be "
                                  f"finalised: {exc}; it ends readably where the write failed: "
                                  f"{readable_extent(output)}\n")
                 finalise_failed = True
             if refused:  # no step was run: a file of start-up messages would pass for a recording
-                os.remove(output)
                 sys.stderr.write(f"run_scenario: no recording written ({os.path.abspath(output)} removed)\n")
         mon.destroy_node()
         if live is not None:
