@@ -16,15 +16,17 @@ paced run, read by independent parsers and compared with the recording of the sa
   each reported once in the node's log and the run completes with every step recorded.
 """
 import math
+import os
+import signal
 import socket
 import subprocess
 import threading
+import time
 
-import numpy as np
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import executable_path, processes_of_domain
 from test_recording import decoded
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
@@ -216,3 +218,25 @@ def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
 def _ship_path(name):
     from ament_index_python.packages import get_package_share_directory
     return f"{get_package_share_directory('tug_dynamics')}/ships/{name}"
+
+
+def test_a_run_whose_instrument_dies_stops_naming_it(tmp_path, ros_domain):
+    """nmea_out is part of the run the user asked for: it ending mid-run (here killed) stops the
+    run with exit 3 naming it and its log, as a node's death does (it once went unnoticed: exit 0)."""
+    path, sc = _scenario(tmp_path, 9)  # port 9 (discard): the sentences go nowhere
+    run = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), str(path), "--output",
+                            str(tmp_path / "dies.mcap"), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    try:
+        deadline = time.monotonic() + 120
+        log = tmp_path / "dies_logs" / "bridge_nmea_out.log"
+        while time.monotonic() < deadline and "NMEA 0183 / AIS out" not in (log.read_text() if log.exists() else ""):
+            time.sleep(0.1)
+        [pid] = [p for p in processes_of_domain(ros_domain) if b"nmea_out" in open(f"/proc/{p}/cmdline", "rb").read()]
+        os.kill(pid, signal.SIGKILL)
+        stdout, stderr = run.communicate(timeout=60)
+    finally:
+        if run.poll() is None:
+            run.kill()
+    assert run.returncode == 3, stderr
+    assert "instrument /bridge/nmea_out died (exit code -9)" in stderr and str(log) in stderr, stderr

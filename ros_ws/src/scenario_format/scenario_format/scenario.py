@@ -35,6 +35,7 @@ starts; every error names the file, the key and what was expected.
 """
 from __future__ import annotations
 
+import datetime as _dt
 import math
 import os
 import re
@@ -436,7 +437,7 @@ def _check_references(path: str, sc: Scenario) -> None:
     _check_prescribed_starts(path, sc)
     driven = _check_autopilots(path, sc, vessels)
     if sc.nmea is not None:
-        _check_nmea(path, sc.nmea, vessels)
+        _check_nmea(path, sc.nmea, vessels, sc.duration)
     if sc.steps < 1:
         raise ScenarioError(f"{path}: key 'duration': {sc.duration} s is less than one step at "
                             f"{sc.exchange_rate:g} Hz (exchange_rate)")
@@ -521,7 +522,7 @@ def _check_autopilots(path: str, sc: Scenario, vessels: List[str]) -> Dict[str, 
     return driven
 
 
-def _check_nmea(path: str, nmea: "NmeaSpec", vessels: List[str]) -> None:
+def _check_nmea(path: str, nmea: "NmeaSpec", vessels: List[str], duration: float) -> None:
     for i, o in enumerate(nmea.outputs):
         if o.vessel not in vessels:
             raise ScenarioError(f"{path}: key 'nmea.outputs[{i}].vessel': '{o.vessel}' is not in 'vessels' "
@@ -536,10 +537,15 @@ def _check_nmea(path: str, nmea: "NmeaSpec", vessels: List[str]) -> None:
     if len(set(nmea.mmsi.values())) != len(nmea.mmsi):
         raise ScenarioError(f"{path}: key 'nmea.mmsi': two vessels with one MMSI")
     try:
-        parse_utc(nmea.utc_start)
+        start = parse_utc(nmea.utc_start)
     except ValueError as exc:
         raise ScenarioError(f"{path}: key 'nmea.utc_start': expected an ISO 8601 UTC time such as "
                             f"2026-06-01T08:00:00Z: {exc}") from None
+    try:  # every sentence's time, utc_start + t, must be a date
+        start + _dt.timedelta(seconds=duration)
+    except OverflowError:
+        raise ScenarioError(f"{path}: key 'nmea.utc_start': {nmea.utc_start!r} plus the run's {duration:g} s is "
+                            f"past the year 9999") from None
 
 
 def _check_events(path: str, sc: Scenario, vessels: List[str], driven: Dict[str, str]) -> None:

@@ -589,10 +589,11 @@ class _Session:
                     node.poll()
             if recorder:
                 recorder.flush()  # a node blocked on a full feed pipe must never stall the step
-            dead = procs.dead()
-            if dead:
-                raise RunError(f"node {dead} died (exit code {procs.procs[dead].returncode}) while {what}; "
-                               f"last lines of its log ({procs.logs[dead]}):\n{procs.tail(dead)}")
+            for group, kind in ((procs, "node"), (self.instruments, "instrument")):
+                dead = group.dead()
+                if dead:
+                    raise RunError(f"{kind} {dead} died (exit code {group.procs[dead].returncode}) while {what}; "
+                                   f"last lines of its log ({group.logs[dead]}):\n{group.tail(dead)}")
             if self.external and step > 0 and now > graph_check:
                 graph_check = now + GRAPH_CHECK_PERIOD
                 gone = self.gone_external()
