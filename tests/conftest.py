@@ -55,3 +55,17 @@ def pytest_sessionstart(session):
 @pytest.fixture(scope="session")
 def repo_root():
     return os.environ.get("TUGSIM_ROOT") or os.path.dirname(_TESTS)
+
+
+# Test files whose runs are shared through one cache per session (test_startup_loads._recorded):
+# one pytest-xdist worker takes them all, so each library run is made once.
+_SHARED_RUNS = {"test_scenarios.py", "test_startup_loads.py", "test_environment_runs.py"}
+
+
+def pytest_collection_modifyitems(config, items):
+    """With pytest-xdist (--dist loadgroup), a test file's tests go to one worker together (its
+    module fixtures, e.g. a recording several tests read, are made once) and so do the files
+    sharing runs; the files themselves spread over the workers."""
+    for item in items:
+        name = item.path.name
+        item.add_marker(pytest.mark.xdist_group("shared_runs" if name in _SHARED_RUNS else name))
