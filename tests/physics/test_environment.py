@@ -193,6 +193,17 @@ def test_scalar_depth_lookup_equals_scipys_interpolation(tmp_path):
     ([[1, 2, 3, 4], [1, 2, 3], [1, 2, 3, 4]], None, "line 8: 3 values, the header says ncols 4"),
     ([[1, 2, 3, 4]], None, "1 rows of depths, the header says nrows 3"),
     ([[1, 2, 3, 4]] * 3, ["ncols 4", "nrows 3", "xllcorner 0", "cellsize 5"], "header key 'yllcorner' is missing"),
+    # issue 30 item 6: a traceback (OverflowError, MemoryError), or accepted silently
+    ([[1, 2, 3, 4]] * 3, ["ncols inf", "nrows 3", "xllcorner 0", "yllcorner 0", "cellsize 5"],
+     "line 1: ncols inf is not a finite number"),
+    ([[1, 2, 3, 4]] * 3, ["ncols 1000000000000", "nrows 3", "xllcorner 0", "yllcorner 0", "cellsize 5"],
+     "line 6: 4 values, the header says ncols 1000000000000"),
+    ([[1, 2, 3, 4]] * 3, ["ncols 4", "nrows 3", "nrows 3", "xllcorner 0", "yllcorner 0", "cellsize 5"],
+     "line 3: header key 'nrows' given again (first on line 2)"),
+    ([[1, 2, 3, 4]] * 3, ["ncols 4", "nrows 3", "xllcorner 0", "yllcorner 0", "xllcenter 2.5", "cellsize 5"],
+     "the lower-left is given both as corner (xllcorner, yllcorner) and as centre (xllcenter)"),
+    ([[1, 2, 3, 4]] * 3, ["ncols 4", "nrows 3", "xllcorner 0", "yllcorner 0", "cellsize 5", "rotation 5"],
+     "line 6: unknown header key 'rotation'"),
 ])
 def test_bad_bathymetry_file_names_file_and_entry(tmp_path, rows, header, expect):
     path = _grid_file(tmp_path, rows, header)

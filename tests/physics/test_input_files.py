@@ -41,3 +41,24 @@ def test_file_errors_name_what_is_wrong(tmp_path):
     bad.write_bytes(b"a: \xff\n")
     with pytest.raises(YamlInputError, match="not UTF-8"):
         load_yaml(str(bad))
+
+
+def test_an_alias_bomb_is_refused_before_it_is_expanded(tmp_path):
+    """Nine levels of nine aliases (a 600-byte file standing for 9^9 values) are refused with a
+    short message: the scenario error once quoted the expanded value, 3.5 MB long."""
+    text = 'a: &a ["x","x","x","x","x","x","x","x","x"]\n' + "".join(
+        f"{c}: &{c} [*{p},*{p},*{p},*{p},*{p},*{p},*{p},*{p},*{p}]\n" for p, c in zip("abcdefgh", "bcdefghi"))
+    assert len(text) < 700
+    (tmp_path / "bomb.yaml").write_text(text)
+    for load in (lambda: loads_yaml(text), lambda: load_yaml(str(tmp_path / "bomb.yaml"))):
+        with pytest.raises(YamlInputError, match="aliases expand it to") as err:
+            load()
+        assert len(str(err.value)) < 200
+    assert loads_yaml("a: &x [1, 2]\nb: *x\n") == {"a": [1, 2], "b": [1, 2]}  # aliases as such are fine
+
+
+def test_nesting_deeper_than_the_reader_goes_is_an_input_error(tmp_path):
+    """3000 nested lists (a RecursionError traceback before) are an input error like any other."""
+    (tmp_path / "deep.yaml").write_text("description: " + "[" * 3000 + "]" * 3000 + "\n")
+    with pytest.raises(YamlInputError, match="nested deeper"):
+        load_yaml(str(tmp_path / "deep.yaml"))

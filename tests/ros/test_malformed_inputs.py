@@ -242,6 +242,11 @@ CASES = {
                                            "hull: barge}\nevents:\n")], {}, ["towline", "namespaces must differ"]),
     "duplicate_vessel_names": ([("  - name: barge", "  - name: tug")], {}, ["'vessels'", "duplicate"]),
     "scenario_name_is_a_path": ([("name: malformed_base", "name: ../../escape")], {}, ["'name'"]),
+    # --- issue 30 item 6: orders to a vessel on a prescribed motion were ignored without a word
+    "order_to_a_prescribed_motion_vessel": ([("initial: {x: -80.0, y: 5.0, heading_deg: 10.0, speed: 0.0}",
+                                              "initial: {x: -80.0, y: 5.0, heading_deg: 10.0}\n"
+                                              "    motion: {type: constant_speed, speed: 0.0}")], {},
+                                            ["events[1].vessel", "prescribed motion (constant_speed)"]),
     # --- issue 30 item 5: nmea_out died of it mid-run (OverflowError), the run ended 0
     "nmea_utc_start_runs_past_year_9999": ([("events:\n", "nmea: {outputs: [{vessel: tug}], utc_start: '9999-12-31T23:59:59.99Z'}\nevents:\n")],
                                            {}, ["nmea.utc_start", "year 9999"]),

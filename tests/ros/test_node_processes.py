@@ -75,3 +75,17 @@ def test_nan_command_is_rejected_and_logged(start_node, rclpy_context, ros_domai
     log = vessel.log()
     assert "command rejected" in log and "engine_order=nan" in log
     assert "command clamped" in log
+
+
+def test_an_order_to_a_vessel_on_a_prescribed_motion_is_refused_aloud(start_node, rclpy_context, ros_domain):
+    """The motion law moves the vessel whatever it is ordered: an order is refused, counted and
+    logged with the reason (it was ignored without a word), and the motion goes on."""
+    vessel = start_node("tug_dynamics", "vessel_node", *TUG, "-p", "motion:=constant_speed", "-p", "motion_speed:=1.0")
+    node, received = _status_listener(rclpy_context)
+    assert spin_until(node, lambda: len(received) > 0, 60), vessel.log()
+    assert _send(ros_domain, "--engine", "0.4").returncode == 0
+    assert spin_until(node, lambda: received[-1].commands_rejected == 1, 20), vessel.log()
+    assert received[-1].engine_order == 0.0
+    node.destroy_node()
+    vessel.stop()
+    assert "'tug' follows a prescribed motion: orders have no effect" in vessel.log()

@@ -310,6 +310,32 @@ def test_sigterm_ends_a_run_like_ctrl_c(tmp_path, ros_domain, layout):
     assert _domain_nodes(ros_domain) == []
 
 
+@pytest.mark.parametrize("moment", ["output claimed", "recording opened"])
+def test_a_signal_while_starting_leaves_nothing_behind(tmp_path, ros_domain, moment):
+    """Ctrl-C or SIGTERM during the start (before the run loop takes the signals over): no
+    traceback, exit 130, and no half-written recording or reserve file left (a 400-byte
+    unreadable .mcap and its .reserve were left)."""
+    out = tmp_path / "early.mcap"
+    watched = tmp_path / (".early.mcap.lock" if moment == "output claimed" else "early.mcap")
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        proc = subprocess.Popen(runner(out, "--log-dir", str(tmp_path / "logs")), stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 60
+        while not watched.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.002)
+        proc.send_signal(signum)
+        _, stderr = proc.communicate(timeout=60)
+        assert proc.returncode in (130, 128 + signum), stderr  # 128 + n: it was already stepping
+        assert "Traceback" not in stderr and "interrupted" in stderr, stderr
+        assert not (tmp_path / ".early.mcap.reserve").exists() and not (tmp_path / ".early.mcap.lock").exists()
+        if out.exists():  # the run had begun: its recording is finalised, not half-written
+            from mcap.reader import make_reader
+            with open(out, "rb") as f:
+                make_reader(f).get_summary()
+            out.unlink()
+    assert _domain_nodes(ros_domain) == []
+
+
 def _lockstep_vessel(start_node, run_id="run-x"):
     return start_node("tug_dynamics", "vessel_node", "--ros-args", "-r", "__ns:=/tug", "-p",
                       "ship_file:=harbour_tug.yaml", "-p", "lockstep:=true", "-p", f"run_id:={run_id}")

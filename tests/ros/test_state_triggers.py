@@ -21,10 +21,12 @@ def _run(name, out, duration):
     from domain_coordinator import domain_id
     with domain_id() as did:
         env = dict(os.environ, ROS_DOMAIN_ID=str(did), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-        res = subprocess.run([executable_path("scenario_runner", "run_scenario"), f"{name}.yaml", "--output",
+        res = subprocess.run([executable_path("scenario_runner", "run_scenario"),
+                              name if name.endswith(".yaml") else f"{name}.yaml", "--output",
                               str(out), "--duration", str(duration), "--quiet"], env=env, capture_output=True,
                              text=True, timeout=200)
     assert res.returncode == 0, res.stdout + res.stderr
+    _run.stdout = res.stdout
     return out
 
 
@@ -65,6 +67,13 @@ def test_zigzag_reverses_the_helm_at_the_step_the_heading_crosses(tmp_path):
         assert steer[j] == pytest.approx(side * -math.radians(10.0))
         k0, side, reversals = k, -side, reversals + 1
     assert reversals >= 4 and abs(t[1] - t[0] - dt) < 1e-9
+    # the summary names exactly the triggered events that had not fired by the end (issue 30)
+    from scenario_format.particulars import scenario_path
+    from scenario_format.scenario import load_scenario
+    triggered = [i for i, e in enumerate(load_scenario(scenario_path("trial_tug_zigzag_10_10")).events) if e.when]
+    late = [f"events[{i}] (when tug heading changed" for i in triggered[reversals:]]
+    assert all(text in _run.stdout for text in late) and ("never triggered" in _run.stdout) == bool(late), _run.stdout
+    assert not any(f"events[{i}] (when" in _run.stdout for i in triggered[:reversals]), _run.stdout
     out = subprocess.run([executable_path("recording", "analyze"), str(rec), "-o", str(tmp_path / "an"),
                           "--no-figures"], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
@@ -90,3 +99,18 @@ def test_crash_stop_stops_the_engine_when_headway_is_lost(tmp_path):
     stop = json.loads((tmp_path / "an" / "summary.json").read_text())["vessels"]["tug"]["stopping"]
     # headway lost between the last step with u >= 0 and the first with u < 0
     assert t[first_astern - 1] - 10.0 <= stop["time_to_stop"] <= t[first_astern] - 10.0
+
+
+def test_a_trigger_that_never_held_is_named_in_the_summary(tmp_path):
+    """A `when:` whose condition never holds before the end leaves its order ungiven: the summary
+    says so, naming the event (it was not mentioned)."""
+    import yaml
+    from scenario_format.particulars import scenario_path
+    sc = yaml.safe_load(open(scenario_path("trial_tug_crash_stop")))
+    sc["events"] = [{"time": 0.5, "vessel": "tug", "engine_order": 0.5},
+                    {"when": {"vessel": "tug", "speed_above": 30.0}, "vessel": "tug", "engine_order": 0.0}]
+    path = tmp_path / "never.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    _run(str(path), tmp_path / "never.mcap", 2.0)
+    assert "never triggered (their condition did not hold before the end): events[1] (when tug speed above 30 m/s)" \
+        in _run.stdout, _run.stdout

@@ -556,6 +556,10 @@ def _check_events(path: str, sc: Scenario, vessels: List[str], driven: Dict[str,
         if ev.vessel in driven:
             raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is steered by autopilot "
                                 f"'{driven[ev.vessel]}'; give its orders as the autopilot's params")
+        prescribed = next((v for v in sc.vessels if v.name == ev.vessel and v.motion is not None), None)
+        if prescribed is not None:
+            raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' follows a prescribed motion "
+                                f"({prescribed.motion.type}): orders would have no effect")
         if ev.rope is not None:
             if ev.rope not in ropes:
                 raise ScenarioError(f"{path}: key 'events[{i}].rope': '{ev.rope}' is not in 'ropes' ({ropes})")

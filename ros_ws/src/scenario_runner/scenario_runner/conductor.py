@@ -93,6 +93,7 @@ class RunStats:
     node_refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # node -> messages it refused
     rescued: int = 0  # StepDones the executor held back, taken directly (ros_common.take_missed)
     external: List[str] = dataclasses.field(default_factory=list)  # nodes of the run started by somebody else
+    never_fired: List[str] = dataclasses.field(default_factory=list)  # state-triggered events whose `when` never held
 
 
 class Conductor(Node):
@@ -622,6 +623,9 @@ class _Session:
     def close(self) -> None:
         """Protocol counts into the stats, then stop the nodes and the executor."""
         self.stats.refused = dict(self.conductor.refused)
+        events = self.sc.events
+        self.stats.never_fired = [f"events[{i}] (when {events[i].when.describe()})" for i in self.conductor.triggered
+                                  if i not in self.conductor.fired]
         self.stats.node_refused = dict(self.conductor.node_refused)
         self.stats.rescued = self.conductor.rescued
         self.procs.stop()

@@ -130,6 +130,8 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
         lines.append("  refused protocol messages (logged, not used): " + ", ".join(
             [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +
             [f"{node}: {n}" for node, n in sorted(stats.node_refused.items()) if n]))
+    if stats.never_fired:
+        lines.append(f"  never triggered (their condition did not hold before the end): {', '.join(stats.never_fired)}")
     if sc.mode == "realtime":
         lines.append(f"  realtime: {stats.overruns} overrun step(s); lateness p99 "
                      f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
@@ -281,9 +283,23 @@ def main(argv: Optional[List[str]] = None) -> int:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         return 2
     # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
-    # shut the context down under the running loop (an RCLError traceback, or exit 3).
-    rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    rc.exit_process(run_and_report(plan, args, claim))
+    # shut the context down under the running loop (an RCLError traceback, or exit 3). Until the
+    # run loop takes them over, either is a KeyboardInterrupt: the start is abandoned, nothing kept.
+    signal.signal(signal.SIGTERM, _terminate_as_interrupt)
+    try:
+        rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+        status = run_and_report(plan, args, claim)
+    except KeyboardInterrupt:
+        sys.stderr.write("run_scenario: interrupted while starting; nothing was run, no recording written\n")
+        if claim:
+            claim.release()
+        rclpy.try_shutdown()
+        status = 130
+    rc.exit_process(status)
+
+
+def _terminate_as_interrupt(signum, frame):
+    raise KeyboardInterrupt(signum)
 
 
 def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim]) -> int:
@@ -298,19 +314,25 @@ def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim]) -> int:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         rclpy.try_shutdown()
         return 2
-    mon = Monitor(plan.sc, recorder)
-    live = None
-    if args.live:
-        try:
-            live = start_live_view(plan.sc, args, recorder)
-        except Exception as exc:  # noqa: BLE001 - e.g. the port is taken: said before anything starts
-            sys.stderr.write(f"run_scenario: --live: cannot start the live view on {args.live_host}:"
-                             f"{args.live_port}: {exc}\n")
-            if recorder:
-                recorder.close()
-            mon.destroy_node()
-            rclpy.try_shutdown()
-            return 2
+    try:
+        mon = Monitor(plan.sc, recorder)
+        live = None
+        if args.live:
+            try:
+                live = start_live_view(plan.sc, args, recorder)
+            except Exception as exc:  # noqa: BLE001 - e.g. the port is taken: said before anything starts
+                sys.stderr.write(f"run_scenario: --live: cannot start the live view on {args.live_host}:"
+                                 f"{args.live_port}: {exc}\n")
+                if recorder:
+                    recorder.close(discard=True)  # start-up messages only: not a recording
+                mon.destroy_node()
+                rclpy.try_shutdown()
+                return 2
+    except KeyboardInterrupt:
+        if recorder:
+            recorder.close(discard=True)
+        raise
+    if live is not None:
         print(f"live view: ws://{args.live_host}:{live.port} (Foxglove / Lichtblick: open connection, "
               f"Foxglove WebSocket)", flush=True)
     stats, exit_code = execute(plan, args, recorder, mon, live)

@@ -28,7 +28,6 @@ import os
 import numpy as np
 from numba import njit
 
-_HEADER = ("ncols", "nrows", "xllcorner", "yllcorner", "cellsize")
 
 
 class BathymetryError(ValueError):
@@ -51,41 +50,17 @@ class DepthGrid:
         with open(path) as f:
             lines = [(i + 1, ln.split("#")[0].split()) for i, ln in enumerate(f)]
         lines = [(n, parts) for n, parts in lines if parts]
-        head = {}
-        body_start = 0
-        for k, (n, parts) in enumerate(lines):
-            key = parts[0].lower()
-            if key[0].isdigit() or key[0] in "+-.":
-                body_start = k
-                break
-            if len(parts) != 2:
-                raise BathymetryError(f"{path}: line {n}: expected '<key> <value>', got {' '.join(parts)!r}")
-            try:
-                head[key] = float(parts[1])
-            except ValueError:
-                raise BathymetryError(f"{path}: line {n}: {parts[0]} {parts[1]!r} is not a number") from None
-        else:
-            raise BathymetryError(f"{path}: no depth values after the header")
-        centre = "xllcenter" in head or "yllcenter" in head
-        need = ("ncols", "nrows", "xllcenter" if centre else "xllcorner", "yllcenter" if centre else "yllcorner",
-                "cellsize")
-        for key in need:
-            if key not in head:
-                raise BathymetryError(f"{path}: header key '{key}' is missing (ESRI ASCII grid: {', '.join(need)})")
+        head, rows = _read_header(path, lines)
+        centre = "xllcenter" in head
         ncols, nrows, cs = head["ncols"], head["nrows"], head["cellsize"]
-        if ncols != int(ncols) or nrows != int(nrows) or ncols < 2 or nrows < 2:
-            raise BathymetryError(f"{path}: ncols {ncols:g} and nrows {nrows:g} must be whole numbers >= 2")
-        if not (math.isfinite(cs) and cs > 0.0):
-            raise BathymetryError(f"{path}: cellsize {cs!r} must be a finite number > 0")
-        ncols, nrows = int(ncols), int(nrows)
         nodata = head.get("nodata_value")
-        rows = lines[body_start:]
         if len(rows) != nrows:
             raise BathymetryError(f"{path}: {len(rows)} rows of depths, the header says nrows {nrows}")
-        grid = np.empty((nrows, ncols))
-        for r, (n, parts) in enumerate(rows):
+        for n, parts in rows:  # before any allocation: the grid is no larger than the file
             if len(parts) != ncols:
                 raise BathymetryError(f"{path}: line {n}: {len(parts)} values, the header says ncols {ncols}")
+        grid = np.empty((nrows, ncols))
+        for r, (n, parts) in enumerate(rows):
             for c, text in enumerate(parts):
                 try:
                     v = float(text)
@@ -114,6 +89,53 @@ class DepthGrid:
         xs = np.clip(np.asarray(x, float), xmin, xmax)
         ys = np.clip(np.asarray(y, float), ymin, ymax)
         return self._interp(np.stack([ys, xs], axis=-1))
+
+
+_HEADER_KEYS = ("ncols", "nrows", "xllcorner", "yllcorner", "xllcenter", "yllcenter", "cellsize", "nodata_value")
+
+
+def _read_header(path: str, lines):
+    """The ESRI ASCII grid header (key -> number; ncols, nrows as int) and the lines after it.
+    Each key once, known, finite; the lower-left given either as corner or as centre for both
+    axes; ncols, nrows whole numbers >= 2, cellsize > 0."""
+    head, where = {}, {}
+    for k, (n, parts) in enumerate(lines):
+        key = parts[0].lower()
+        if key[0].isdigit() or key[0] in "+-.":
+            break
+        if len(parts) != 2:
+            raise BathymetryError(f"{path}: line {n}: expected '<key> <value>', got {' '.join(parts)!r}")
+        if key not in _HEADER_KEYS:
+            raise BathymetryError(f"{path}: line {n}: unknown header key {parts[0]!r} (ESRI ASCII grid: "
+                                  f"{', '.join(_HEADER_KEYS)})")
+        if key in head:
+            raise BathymetryError(f"{path}: line {n}: header key '{key}' given again (first on line {where[key]})")
+        try:
+            head[key] = float(parts[1])
+        except ValueError:
+            raise BathymetryError(f"{path}: line {n}: {parts[0]} {parts[1]!r} is not a number") from None
+        if not math.isfinite(head[key]):
+            raise BathymetryError(f"{path}: line {n}: {parts[0]} {parts[1]} is not a finite number")
+        where[key] = n
+    else:
+        raise BathymetryError(f"{path}: no depth values after the header")
+    corner = [k for k in ("xllcorner", "yllcorner") if k in head]
+    centre = [k for k in ("xllcenter", "yllcenter") if k in head]
+    if corner and centre:
+        raise BathymetryError(f"{path}: the lower-left is given both as corner ({', '.join(corner)}) and as "
+                              f"centre ({', '.join(centre)}): give xllcorner and yllcorner, or xllcenter and yllcenter")
+    need = ("ncols", "nrows", "xllcenter" if centre else "xllcorner", "yllcenter" if centre else "yllcorner",
+            "cellsize")
+    for key in need:
+        if key not in head:
+            raise BathymetryError(f"{path}: header key '{key}' is missing (ESRI ASCII grid: {', '.join(need)})")
+    ncols, nrows = head["ncols"], head["nrows"]
+    if ncols != int(ncols) or nrows != int(nrows) or ncols < 2 or nrows < 2:
+        raise BathymetryError(f"{path}: ncols {ncols:g} and nrows {nrows:g} must be whole numbers >= 2")
+    if head["cellsize"] <= 0.0:
+        raise BathymetryError(f"{path}: cellsize {head['cellsize']!r} must be a finite number > 0")
+    head["ncols"], head["nrows"] = int(ncols), int(nrows)
+    return head, lines[k:]
 
 
 @njit(cache=True)

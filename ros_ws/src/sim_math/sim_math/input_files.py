@@ -56,6 +56,30 @@ class UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
+    def compose_document(self):
+        """The document's node graph, refused when its aliases expand it beyond MAX_EXPANDED_NODES
+        (a few hundred bytes of nested aliases stand for gigabytes: every reader, and every
+        error message quoting the value, would expand them)."""
+        node = super().compose_document()
+        sizes = {}
+
+        def expanded(n) -> int:
+            if id(n) not in sizes:
+                sizes[id(n)] = 1  # a node reached again through itself counts once
+                if isinstance(n, yaml.SequenceNode):
+                    sizes[id(n)] = 1 + sum(expanded(c) for c in n.value)
+                elif isinstance(n, yaml.MappingNode):
+                    sizes[id(n)] = 1 + sum(expanded(k) + expanded(v) for k, v in n.value)
+            return sizes[id(n)]
+
+        if node is not None and expanded(node) > MAX_EXPANDED_NODES:
+            raise yaml.composer.ComposerError(None, None, f"its aliases expand it to {expanded(node):,} values "
+                                              f"(at most {MAX_EXPANDED_NODES:,}): an alias bomb?", node.start_mark)
+        return node
+
+
+MAX_EXPANDED_NODES = 1_000_000  # values of a document with its aliases expanded (the library's largest: ~2,000)
+
 UniqueKeyLoader.add_implicit_resolver(  # YAML 1.2 floats: 1e9, 4.4e8 (YAML 1.1 wants 4.4e+8)
     "tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
     list("-+0123456789"))
@@ -84,12 +108,15 @@ def _input_error(exc: yaml.YAMLError) -> YamlInputError:
 
 def load_yaml(path: str) -> Any:
     """The parsed document of a YAML file; YamlInputError (no path in the message) if it cannot
-    be read, is not UTF-8, is not valid YAML or repeats a key."""
+    be read, is not UTF-8, is not valid YAML, repeats a key, nests deeper than the reader goes
+    or expands its aliases beyond MAX_EXPANDED_NODES."""
     try:
         with open(path, "r", encoding="utf-8") as fh:
             return yaml.load(fh, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         raise _input_error(exc) from None
+    except RecursionError:
+        raise _too_deep() from None
     except UnicodeDecodeError as exc:
         raise YamlInputError(f"not UTF-8 text: {exc}") from None
     except OSError as exc:
@@ -102,6 +129,12 @@ def loads_yaml(text: str) -> Any:
         return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         raise _input_error(exc) from None
+    except RecursionError:
+        raise _too_deep() from None
+
+
+def _too_deep() -> YamlInputError:
+    return YamlInputError("not readable: lists or mappings nested deeper than the reader goes (hundreds of levels)")
 
 
 def first_non_finite(data: Any, path: str = "") -> str | None:

@@ -159,6 +159,11 @@ class VesselNode(SteppedNode):
 
     # -- inputs --------------------------------------------------------------------------
     def accept_input(self, spec: StepInput, msg) -> bool:
+        if spec.msg_type in (VesselCommand, ThrusterCommand) and isinstance(self.model, PrescribedMotion):
+            # refused aloud: an order the motion law would silently override
+            self._reject_command(CommandRejected(f"'{self.vessel_name}' follows a prescribed motion: orders "
+                                                 "have no effect"))
+            return False
         if spec.msg_type is VesselCommand:
             try:
                 check_command(Command(msg.engine_order, msg.steering_angle, msg.anchor))
