@@ -263,6 +263,7 @@ def play(args, argv: List[str], mf: McapFile, selected: Dict[str, Channel]) -> N
     # Ctrl-C / SIGTERM stop the playing loop as KeyboardInterrupt (then a clean shutdown)
     use_discovery_profile()
     rclpy.init(args=["replay"] + argv, signal_handler_options=SignalHandlerOptions.NO)
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # also when started with SIGINT ignored
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     from rclpy.node import Node
     node = Node("mcap_replay")

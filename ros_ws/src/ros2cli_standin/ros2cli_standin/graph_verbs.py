@@ -762,6 +762,9 @@ def main(argv: List[str]) -> int:
         pass
     args = build_parser().parse_args(argv)
     cli = None
+    # Ctrl-C as KeyboardInterrupt even when started with SIGINT ignored (a parent that ignores it,
+    # e.g. a pytest-xdist worker, passes that on through exec), as ros2cli's rclpy handlers do
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         cli = CliNode(args.spin_time)

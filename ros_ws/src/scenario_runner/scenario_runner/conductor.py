@@ -369,7 +369,10 @@ class StopSignals:
         import threading
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
-                self._old[sig] = signal.signal(sig, self._note)
+                old = self._old[sig] = signal.signal(sig, self._note)
+                earlier = getattr(old, "__self__", None)
+                if isinstance(earlier, StopSignals) and earlier.signum is not None and self.signum is None:
+                    self.signum = earlier.signum  # noted by the StopSignals before this one (the runner's start)
         return self
 
     def _note(self, signum, frame) -> None:

@@ -282,29 +282,37 @@ def main(argv: Optional[List[str]] = None) -> int:
     except OSError as exc:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         return 2
-    # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals): rclpy's handlers would
-    # shut the context down under the running loop (an RCLError traceback, or exit 3). Until the
-    # run loop takes them over, either is a KeyboardInterrupt: the start is abandoned, nothing kept.
-    signal.signal(signal.SIGTERM, _terminate_as_interrupt)
-    try:
-        rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-        status = run_and_report(plan, args, claim)
-    except KeyboardInterrupt:
-        sys.stderr.write("run_scenario: interrupted while starting; nothing was run, no recording written\n")
-        if claim:
-            claim.release()
-        rclpy.try_shutdown()
-        status = 130
-    rc.exit_process(status)
+    # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals: noted, acted on at the
+    # next check; rclpy's handlers would shut the context down under the running loop, an RCLError
+    # traceback or exit 3). A signal while starting abandons the start and keeps nothing; the run
+    # loop's StopSignals takes over a signal noted just before it.
+    starting = cd.StopSignals().__enter__()
+    rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    rc.exit_process(run_and_report(plan, args, claim, starting))
 
 
-def _terminate_as_interrupt(signum, frame):
-    raise KeyboardInterrupt(signum)
+def _abandoned(starting: cd.StopSignals, recorder: Optional[McapRecorder], claim: Optional[OutputClaim],
+               nodes=()) -> Optional[int]:
+    """If a signal came while starting: everything made so far undone (the recording discarded:
+    start-up messages only), said on stderr; the exit status 128 + signal. Else None."""
+    if starting.signum is None:
+        return None
+    if recorder:
+        recorder.close(discard=True)
+    elif claim:
+        claim.release()
+    for node in nodes:
+        if node is not None:
+            node.destroy_node()
+    rclpy.try_shutdown()
+    sys.stderr.write(f"run_scenario: interrupted by {signal.Signals(starting.signum).name} while starting; "
+                     "nothing was run, no recording written\n")
+    return 128 + int(starting.signum)
 
 
-def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim]) -> int:
-    """The run of a checked plan (rclpy initialised, the output claimed), its summary printed;
-    the exit status."""
+def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim], starting: cd.StopSignals) -> int:
+    """The run of a checked plan (rclpy initialised, the output claimed, signals noted by
+    `starting`), its summary printed; the exit status."""
     try:
         recorder = McapRecorder(plan.output, run_nodes.contract_topics(plan.sc),
                                 fed_topics=run_nodes.fed_topics(plan.sc, plan.external),
@@ -314,24 +322,22 @@ def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim]) -> int:
         sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
         rclpy.try_shutdown()
         return 2
-    try:
-        mon = Monitor(plan.sc, recorder)
-        live = None
-        if args.live:
-            try:
-                live = start_live_view(plan.sc, args, recorder)
-            except Exception as exc:  # noqa: BLE001 - e.g. the port is taken: said before anything starts
-                sys.stderr.write(f"run_scenario: --live: cannot start the live view on {args.live_host}:"
-                                 f"{args.live_port}: {exc}\n")
-                if recorder:
-                    recorder.close(discard=True)  # start-up messages only: not a recording
-                mon.destroy_node()
-                rclpy.try_shutdown()
-                return 2
-    except KeyboardInterrupt:
-        if recorder:
-            recorder.close(discard=True)
-        raise
+    mon = Monitor(plan.sc, recorder)
+    live = None
+    if args.live and starting.signum is None:
+        try:
+            live = start_live_view(plan.sc, args, recorder)
+        except Exception as exc:  # noqa: BLE001 - e.g. the port is taken: said before anything starts
+            sys.stderr.write(f"run_scenario: --live: cannot start the live view on {args.live_host}:"
+                             f"{args.live_port}: {exc}\n")
+            if recorder:
+                recorder.close(discard=True)  # start-up messages only: not a recording
+            mon.destroy_node()
+            rclpy.try_shutdown()
+            return 2
+    abandoned = _abandoned(starting, recorder, claim, (mon, live))
+    if abandoned is not None:
+        return abandoned
     if live is not None:
         print(f"live view: ws://{args.live_host}:{live.port} (Foxglove / Lichtblick: open connection, "
               f"Foxglove WebSocket)", flush=True)
