@@ -57,15 +57,18 @@ def repo_root():
     return os.environ.get("TUGSIM_ROOT") or os.path.dirname(_TESTS)
 
 
-# Test files whose runs are shared through one cache per session (test_startup_loads._recorded):
-# one pytest-xdist worker takes them all, so each library run is made once.
-_SHARED_RUNS = {"test_scenarios.py", "test_startup_loads.py", "test_environment_runs.py"}
+# Test files without module fixtures whose tests spread over the workers one by one (their library
+# runs are shared across workers through a file-locked cache: test_startup_loads._recorded).
+_SPREAD = {"test_scenarios.py", "test_startup_loads.py", "test_environment_runs.py"}
 
 
 def pytest_collection_modifyitems(config, items):
     """With pytest-xdist (--dist loadgroup), a test file's tests go to one worker together (its
-    module fixtures, e.g. a recording several tests read, are made once) and so do the files
-    sharing runs; the files themselves spread over the workers."""
+    module fixtures, e.g. a recording several tests read, are made once), except the files of
+    long library runs, whose tests spread one by one; the files themselves spread over the workers."""
     for item in items:
-        name = item.path.name
-        item.add_marker(pytest.mark.xdist_group("shared_runs" if name in _SHARED_RUNS else name))
+        if item.path.name not in _SPREAD:
+            item.add_marker(pytest.mark.xdist_group(item.path.name))
+    # the long runs first, the quick physics last: the workers end together instead of one of them
+    # finishing a long library run alone (a stable sort: each file keeps its order)
+    items.sort(key=lambda item: 0 if item.path.name in _SPREAD else 1 if _ROS_TESTS in str(item.path) else 2)

@@ -75,18 +75,33 @@ def _run(path, out, duration=None):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-_RECORDED = {}   # (scenario, duration) -> recording: each run once per test session
 WHOLE_RUN = ("default_demo", "tow_snatch_load",  # run whole for their own tests anyway
              "env_beam_wind_tow", "env_tidal_stream_tow", "env_slack_towline_seabed")
 
 
+def _shared_runs_dir(tmp_path):
+    """A folder every test of this session sees, whichever pytest-xdist worker runs it: the
+    session's base temp folder (with workers, the folder above each worker's own)."""
+    base = tmp_path.parent.parent if os.environ.get("PYTEST_XDIST_WORKER") else tmp_path.parent
+    folder = base / "shared_runs"
+    folder.mkdir(exist_ok=True)
+    return folder
+
+
 def _recorded(path, tmp_path, duration=None):
-    key = (path, duration)
-    if key not in _RECORDED:
-        out = tmp_path / "run.mcap"
-        _run(path, out, duration)
-        _RECORDED[key] = out
-    return _RECORDED[key]
+    """The recording of a library scenario's run (whole, or its first `duration` s), made once per
+    test session: a test on another worker needing the same run waits for it (file lock) and
+    reads the same recording."""
+    import fcntl
+    folder = _shared_runs_dir(tmp_path)
+    stem = f"{os.path.basename(path)[:-5]}_{'whole' if duration is None else f'{duration:g}s'}"
+    out, done = folder / f"{stem}.mcap", folder / f"{stem}.done"
+    with open(folder / f"{stem}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, also if the run fails
+        if not done.exists():
+            _run(path, out, duration)
+            done.touch()
+    return out
 
 
 def _stamp(msg):

@@ -274,19 +274,18 @@ def main(argv: Optional[List[str]] = None) -> int:
     if args.print_nodes:
         print("\n".join(node_commands(plan, args.run_id or "")))
         return 0
-    try:  # the output is this run's before anything starts: a run still writing it is not touched
-        claim = OutputClaim(plan.output) if plan.record else None
-    except RecordingInUse as exc:
-        sys.stderr.write(f"run_scenario: refused to start: {exc}\n")
-        return 2
-    except OSError as exc:
-        sys.stderr.write(f"run_scenario: cannot write the recording {plan.output}: {exc}\n")
-        return 2
     # The runner handles SIGINT and SIGTERM itself (conductor.StopSignals: noted, acted on at the
     # next check; rclpy's handlers would shut the context down under the running loop, an RCLError
     # traceback or exit 3). A signal while starting abandons the start and keeps nothing; the run
     # loop's StopSignals takes over a signal noted just before it.
     starting = cd.StopSignals().__enter__()
+    try:  # the output is this run's before anything starts: a run still writing it is not touched
+        claim = OutputClaim(plan.output) if plan.record else None
+    except OSError as exc:
+        starting.__exit__()
+        why = "refused to start" if isinstance(exc, RecordingInUse) else f"cannot write the recording {plan.output}"
+        sys.stderr.write(f"run_scenario: {why}: {exc}\n")
+        return 2
     rc.init_rclpy(argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     rc.exit_process(run_and_report(plan, args, claim, starting))
 
