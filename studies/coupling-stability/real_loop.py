@@ -110,12 +110,10 @@ def advance_vessel(body: Body, h, force_fn, omega_j):
     return work
 
 
-def run(scheme, rate, duration, case="bollard", n_elements=30, log_every=None, length=40.0, stretch=0.0,
-        smooth=False, ship="asd_tug.yaml", attachment="winch_aft"):
-    """smooth: drive each rope end along a continuous path (no jump at the step's start): from
-    where the last step left it, x~, at v_k + (x_k - x~) / h, reaching x_k + h v_k; as now
-    (False): set_end(x_k, v_k), a jump of ~h^2 a / 2 onto the end connection every step."""
-    h = 1.0 / rate
+def _set_up(case, n_elements, length, stretch, ship, attachment):
+    """The bodies (bollard: the tug at full ahead and a fixed point; else two free ASD tugs,
+    engines stopped) and the rope laid straight between them and settled, its ends on the
+    attachments; (params, a, b, rope, ends with a vessel)."""
     params = dataclasses.replace(load_rope_params(ROPES + "steel_wire_40mm.yaml"), length=length)
     tug = load_ship(SHIPS + ship, name="tug")
     if case == "bollard":
@@ -133,15 +131,24 @@ def run(scheme, rate, duration, case="bollard", n_elements=30, log_every=None, l
     rope = RopeChain.straight(params, pa, pb, n_elements=n_elements, end_a="pinned",
                               end_b="pinned" if b.vessel is not None else "fixed")
     ends = [e for e, body in (("a", a), ("b", b)) if body.vessel is not None]
-    settle_t = rope.settle(va, vb)                        # the rope node's equilibrium:=true
+    rope.settle(va, vb)                                  # the rope node's equilibrium:=true
     for e, body in (("a", a), ("b", b)):
         if body.vessel is not None:
             rope.set_end_kinematics(e, *body.kin())
+    return params, a, b, rope, ends
+
+
+def run(scheme, rate, duration, case="bollard", n_elements=30, log_every=None, length=40.0, stretch=0.0,
+        smooth=False, ship="asd_tug.yaml", attachment="winch_aft"):
+    """smooth: drive each rope end along a continuous path (no jump at the step's start): from
+    where the last step left it, x~, at v_k + (x_k - x~) / h, reaching x_k + h v_k; as now
+    (False): set_end(x_k, v_k), a jump of ~h^2 a / 2 onto the end connection every step."""
+    h = 1.0 / rate
+    params, a, b, rope, ends = _set_up(case, n_elements, length, stretch, ship, attachment)
     # step-0 output: the rope's force at the layout (not averaged)
     # (the Jacobian's reference is the step-0 attachment state itself)
     out = {e: dict(F=rope.end_force(e), J=rope_jacobian(rope, e)[:2], xhat=(a if e == "a" else b).kin()[0],
                    vhat=(a if e == "a" else b).kin()[1], Fpred=rope.end_force(e)) for e in ends}
-    kin_prev = {e: (a if e == "a" else b).kin() for e in ends}
     omega_j = math.sqrt(params.ea / length / 3.0e5)      # generous: sub-steps for the lightest tug
     t_hist, ten, energy, xs = [], [], [], []
     steps = int(round(duration * rate))
