@@ -8,6 +8,7 @@ to a log file that is printed when the test fails, and they are killed at teardo
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -85,14 +86,53 @@ def kill_processes_of_domain(domain: int) -> List[int]:
     return pids
 
 
+@contextlib.contextmanager
+def reserved_domain():
+    """A ROS_DOMAIN_ID reserved with domain_coordinator and exported to the processes this one
+    starts, until the block ends; then whatever still runs in it is killed and the variable is
+    put back. Put back without fail: another worker reserves the domain next, and its clean-up
+    kills every process started with it (a process of this worker's later tests included)."""
+    from domain_coordinator import domain_id
+    old = os.environ.get("ROS_DOMAIN_ID")
+    try:
+        with domain_id() as did:
+            os.environ["ROS_DOMAIN_ID"] = str(did)
+            try:
+                yield did
+            finally:
+                kill_processes_of_domain(did)
+                # what the killed processes left in /dev/shm (sim_plumbing.shm_hygiene says why)
+                from sim_plumbing.shm_hygiene import remove_dead_fastdds_files
+                remove_dead_fastdds_files()
+    finally:
+        if old is None:
+            os.environ.pop("ROS_DOMAIN_ID", None)
+        else:
+            os.environ["ROS_DOMAIN_ID"] = old
+
+
+_DOMAIN_AT_START = os.environ.get("ROS_DOMAIN_ID")
+
+
+@pytest.fixture(autouse=True)
+def _domain_put_back():
+    """A test (or module fixture) that leaves ROS_DOMAIN_ID changed fails, and the variable is
+    put back: a leaked domain gets this worker's later processes killed by another worker."""
+    yield
+    now = os.environ.get("ROS_DOMAIN_ID")
+    if now != _DOMAIN_AT_START:
+        if _DOMAIN_AT_START is None:
+            os.environ.pop("ROS_DOMAIN_ID", None)
+        else:
+            os.environ["ROS_DOMAIN_ID"] = _DOMAIN_AT_START
+        pytest.fail(f"ROS_DOMAIN_ID left at {now} (was {_DOMAIN_AT_START}): use reserved_domain()")
+
+
 @pytest.fixture
 def ros_domain():
     """A reserved ROS_DOMAIN_ID, exported for this test's node processes; whatever still runs
     in it when the test ends is killed before the domain is released."""
-    from domain_coordinator import domain_id
-    old = os.environ.get("ROS_DOMAIN_ID")
-    with domain_id() as did:
-        os.environ["ROS_DOMAIN_ID"] = str(did)
+    with reserved_domain() as did:
         # the domain is this test's alone: the runner's 3 s look for another run on it (about a
         # sixth of the suite's time) shortened; the tests of that check use full_domain_check
         os.environ[DOMAIN_CHECK_WAIT_VARIABLE] = "0.2"
@@ -100,14 +140,6 @@ def ros_domain():
             yield did
         finally:
             os.environ.pop(DOMAIN_CHECK_WAIT_VARIABLE, None)
-            kill_processes_of_domain(did)
-            # what the killed processes left in /dev/shm (sim_plumbing.shm_hygiene says why)
-            from sim_plumbing.shm_hygiene import remove_dead_fastdds_files
-            remove_dead_fastdds_files()
-    if old is None:
-        os.environ.pop("ROS_DOMAIN_ID", None)
-    else:
-        os.environ["ROS_DOMAIN_ID"] = old
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import executable_path
+from conftest import executable_path, reserved_domain
 from test_recording import decoded as _decoded
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
@@ -45,12 +45,9 @@ def _physics(msgs):
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    import os
-    from domain_coordinator import domain_id
     base = tmp_path_factory.mktemp("assist")
     out = {}
-    with domain_id() as did:
-        os.environ["ROS_DOMAIN_ID"] = str(did)
+    with reserved_domain():
         for name, extra in (("first", ()), ("one_process", ("--layout", "one_process"))):
             _run(base / f"{name}.mcap", *extra)
             out[name] = _decoded(base / f"{name}.mcap", [f"/{v}/{t}" for v in ("ship", "bow_tug", "stern_tug")

@@ -9,7 +9,7 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
-from conftest import executable_path
+from conftest import executable_path, reserved_domain
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
 
@@ -59,11 +59,9 @@ def physics(path):
 
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory):
-    from domain_coordinator import domain_id
     base = tmp_path_factory.mktemp("rec")
     paths = {}
-    with domain_id() as did:
-        os.environ["ROS_DOMAIN_ID"] = str(did)
+    with reserved_domain():
         for name, extra in (("first", ()), ("second", ()), ("one_process", ("--layout", "one_process"))):
             paths[name] = base / f"{name}.mcap"
             run(paths[name], *extra)
