@@ -385,7 +385,8 @@ def render_topics() -> str:
     sections = [("Global", "", TOPICS.GLOBAL_TOPICS),
                 ("Per vessel", "/<vessel>/", TOPICS.VESSEL_TOPICS),
                 ("Per vessel with azimuth thrusters", "/<vessel>/", TOPICS.THRUSTER_TOPICS),
-                ("Per rope", "/<rope>/", TOPICS.ROPE_TOPICS + (TOPICS.END_WRENCH, TOPICS.WINCH_TOPIC)),
+                ("Per rope", "/<rope>/", TOPICS.ROPE_TOPICS + (TOPICS.END_WRENCH, TOPICS.END_COUPLING,
+                                                                  TOPICS.WINCH_TOPIC)),
                 ("Per hull contact", "/<contact>/", TOPICS.CONTACT_TOPICS)]
     for title, prefix, table in sections:
         lines += [f"## {title}" + (f" ({_code(prefix)})" if prefix else ""), "",

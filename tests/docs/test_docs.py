@@ -47,7 +47,7 @@ def test_topic_reference_covers_every_topic():
     gen = _gen_docs()
     page = _read(gen.TOPICS_PAGE)
     for topic in ("/clock", "/sim/step", "/tf_static", "/<vessel>/odom", "/<vessel>/thruster_command",
-                  "/<rope>/end_<a|b>/wrench", "/<rope>/winch", "/<contact>/state"):
+                  "/<rope>/end_<a|b>/wrench", "/<rope>/end_<a|b>/coupling", "/<rope>/winch", "/<contact>/state"):
         assert f"| `{topic}` |" in page, topic
 
 

@@ -16,6 +16,7 @@ from sim_math.rotations import yaw_pitch_quaternions
 
 from rope_model import fd_kernels as FK
 from rope_model.chain import RopeChain, RopeDivergedError
+from rope_model.end_coupling import EndCoupling, end_couplings
 from rope_model.fd_cable import FdCable, FdCableConvergenceError, load_cable_params
 from rope_model.params import load_rope_params
 from rope_model.schema import RopeParamsError, read_yaml_mapping
@@ -83,6 +84,22 @@ class ChainAdapter:
 
     def set_end(self, label: str, position, velocity) -> None:
         self.rope.set_end_kinematics(label, position, velocity)
+
+    def drive_end(self, label: str, position, velocity, h: float):
+        """Drive a pinned end over the coming step of length h so that it reaches where the
+        vessel's attachment will be (position + h velocity) without a jump: from where the last
+        step left it, x~, at v + (position - x~) / h. Re-pinning it at `position` every step
+        instead jerks the end connection by about a h^2 / 2 (261 kN at 10 Hz on 40 m of wire,
+        studies/coupling-stability 4.4). Returns (x~, the drive velocity)."""
+        start = self.rope.attachment_position(label)
+        drive = np.asarray(velocity, float) + (np.asarray(position, float) - start) / h
+        self.rope.set_end_kinematics(label, start, drive)
+        return start, drive
+
+    def couplings(self, drives: dict, h: float, averaged: bool) -> dict:
+        """{end: end_coupling.EndCoupling} of the pinned ends (drives: {end: (x~, drive velocity)}
+        of the step just taken, or their step-0 state; end_coupling.end_couplings)."""
+        return end_couplings(self.rope, drives, h, averaged)
 
     def element_centres(self) -> np.ndarray:
         """(N, 3) element centres (world, m): where to sample current, wind and depth."""
@@ -155,6 +172,22 @@ class CableAdapter:
     def set_end(self, label: str, position, velocity) -> None:
         if label == "a":
             self.cable.set_top_kinematics(position, velocity)
+
+    def drive_end(self, label: str, position, velocity, h: float):
+        """The cable's top end is set where the vessel's attachment is (its own scheme, Park &
+        Jung Eq 14); returns (position, velocity) as ChainAdapter.drive_end does."""
+        self.set_end(label, position, velocity)
+        return np.asarray(position, float), np.asarray(velocity, float)
+
+    def couplings(self, drives: dict, h: float, averaged: bool) -> dict:
+        """The top end's force, held over the step (K = C = 0: a towed cable of a few hundred kg
+        hardly couples back into its ship's motion; not linearised)."""
+        out = {}
+        for end, (x0, v) in drives.items():
+            x0, v = np.asarray(x0, float), np.asarray(v, float)
+            out[end] = EndCoupling(self.end_force(end, averaged), x0 + 0.5 * h * v if averaged else x0.copy(),
+                                   v.copy(), np.zeros((3, 3)), np.zeros((3, 3)))
+        return out
 
     def set_payout_rate(self, rate: float) -> None:
         raise ValueError("an fd_cable rope has no winch")

@@ -9,10 +9,11 @@ laid out between the ends' step-0 positions (straight, slack or wound on end a's
 with equilibrium:=true, settled to static equilibrium for those positions and the ends' step-0
 velocities before step 0 (RopeChain.settle; nothing of it is published).
 
-Publishes ``state`` (tug_msgs/RopeState), ``end_a/wrench`` and ``end_b/wrench``
-(geometry_msgs/WrenchStamped for ends pinned to a vessel: the force the rope exerts on the
-attachment, in frame "<vessel>/<attachment>", i.e. acting at the attachment point with the
-vessel's body axes) and ``markers`` (visualization_msgs/MarkerArray, a line strip coloured
+Publishes ``state`` (tug_msgs/RopeState), for each end pinned to a vessel ``end_<a|b>/coupling``
+(tug_msgs/RopeEndCoupling: the force the vessel takes over the coming step, with its stiffness and
+damping, world axes; rope_model.end_coupling) and ``end_<a|b>/wrench`` (geometry_msgs/WrenchStamped:
+the mean force over the last step in frame "<vessel>/<attachment>", i.e. acting at the attachment
+point with the vessel's body axes; for RViz, instruments and analysis) and ``markers`` (visualization_msgs/MarkerArray, a line strip coloured
 by tension). Subscribes ``winch`` (tug_msgs/WinchCommand) for a rope wound on a winch.
 """
 from __future__ import annotations
@@ -24,7 +25,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 from geometry_msgs.msg import WrenchStamped
-from tug_msgs.msg import AttachmentArray, RopeState, ScenarioEvent, WinchCommand
+from tug_msgs.msg import AttachmentArray, RopeEndCoupling, RopeState, ScenarioEvent, WinchCommand
 from visualization_msgs.msg import MarkerArray
 
 from rope_model.models import ModelFailure, make_model, rope_file_model
@@ -106,11 +107,17 @@ class RopeNode(SteppedNode):
         self.marker_pub = self.create_fed_publisher(MarkerArray, T.MARKERS, rc.LATCHED_STATE_QOS)
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self.wrench_outputs: Dict[str, tuple] = {}  # end label -> (publisher, encoder)
+        self.coupling_outputs: Dict[str, tuple] = {}
         for end in self.ends:
             if end.mode == "pinned":
                 self.wrench_outputs[end.label] = (
                     self.create_fed_publisher(WrenchStamped, f"end_{end.label}/wrench", rc.LATCHED_STATE_QOS),
                     cdr.WrenchStampedEncoder(end.frame))
+                self.coupling_outputs[end.label] = (
+                    self.create_fed_publisher(RopeEndCoupling, f"end_{end.label}/coupling", rc.LATCHED_STATE_QOS),
+                    cdr.RopeEndCouplingEncoder(rc.WORLD_FRAME, end.vessel, end.attachment))
+        self._drives: Dict[str, tuple] = {}     # pinned end -> (start, velocity) of the rope's last step
+        self._couplings: Dict[str, object] = {}  # pinned end -> end_coupling.EndCoupling to publish
         self.vessel_topics = {}
         for end in self.ends:
             if end.mode == "pinned":
@@ -228,6 +235,8 @@ class RopeNode(SteppedNode):
         for end in self.ends:
             if end.mode == "pinned":
                 self.rope.set_end(end.label, end.position, end.velocity)
+                self._drives[end.label] = (np.array(end.position, float), np.array(end.velocity, float))
+        self._couplings = self.rope.couplings(self._drives, self.dt, averaged=False)
         self.ready_to_step = True
         self.publish_outputs()
         out = self.rope.outputs()
@@ -245,8 +254,8 @@ class RopeNode(SteppedNode):
             if msg is not None:
                 self._take_attachments(msg)
         for end in self.ends:
-            if end.mode == "pinned":
-                self.rope.set_end(end.label, end.position, end.velocity)
+            if end.mode == "pinned":   # continuously: from where the last step left it to the vessel's path
+                self._drives[end.label] = self.rope.drive_end(end.label, end.position, end.velocity, self.dt)
         order = inputs.get(T.WINCH)
         if order is not None:
             # clamped to the winch's limits like any order; the notes say how
@@ -272,6 +281,7 @@ class RopeNode(SteppedNode):
             raise ModelDiverged(detail) from exc
         for detail, tension in self.rope.new_events():
             self.emit_event("rope_parted", detail, tension)
+        self._couplings = self.rope.couplings(self._drives, self.dt, averaged=True)
 
     def publish_outputs(self) -> None:
         if self.rope is None:
@@ -300,6 +310,10 @@ class RopeNode(SteppedNode):
             f_body = rot.T @ forces[end.label]
             publisher, encoder = self.wrench_outputs[end.label]
             publisher.publish(encoder.encode(stamp_ns, f_body.tolist()), stamp_ns)
+            c = self._couplings[end.label]
+            publisher, encoder = self.coupling_outputs[end.label]
+            publisher.publish(encoder.encode(stamp_ns, self.step_index, c.force, c.reference_position,
+                                             c.reference_velocity, c.stiffness, c.damping), stamp_ns)
 
         if self.step_index % self.marker_every == 0:
             self.marker_pub.publish(self._markers(line, out["tensions"], stamp_ns), stamp_ns)

@@ -326,6 +326,13 @@ class Scenario(_Strict):
     origin: GeoOrigin = GeoOrigin()
     nmea: Optional[NmeaSpec] = None
     _path: str = PrivateAttr("")   # the file it was read from (load_scenario), for relative paths
+    _warnings: List[str] = PrivateAttr(default_factory=list)   # what the run should say before it starts
+
+    @property
+    def warnings(self) -> List[str]:
+        """Things the checks let through but a user should hear before the run (e.g. an exchange
+        rate close to what a rope's stiffness allows)."""
+        return list(self._warnings)
 
     @model_validator(mode="before")
     @classmethod
@@ -616,14 +623,15 @@ def _check_files(path: str, sc: Scenario) -> None:
     from rope_model.models import MODELS, load_params as load_rope_params
     from tug_dynamics.ship_file import load_ship
     points: Dict[str, Dict[str, Any]] = {}
+    models: Dict[str, Any] = {}
     for i, v in enumerate(sc.vessels):
         key = f"vessels[{i}].ship_file"
         ship = resolve("tug_dynamics", "ships", v.ship_file, path)
         if not os.path.isfile(ship):
             raise ScenarioError(f"{path}: key '{key}': ship file '{v.ship_file}' not found (looked for {ship})")
         try:
-            points[v.name] = {k: [float(c) for c in p] for k, p in
-                              load_ship(ship, name=v.name, overrides=v.ship_overrides).attachments.items()}
+            models[v.name] = load_ship(ship, name=v.name, overrides=v.ship_overrides)
+            points[v.name] = {k: [float(c) for c in p] for k, p in models[v.name].attachments.items()}
         except Exception as exc:  # noqa: BLE001 - whatever stops the vessel node stops the run here
             what = "ship file (with ship_overrides)" if v.ship_overrides else "ship file"
             raise ScenarioError(f"{path}: key '{key}': {what} '{v.ship_file}' is not usable:\n"
@@ -674,6 +682,8 @@ def _check_files(path: str, sc: Scenario) -> None:
             if pa is not None and pb is not None and math.dist(pa, pb) < 1e-6:
                 raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
                                     "a straight rope needs two distinct end points")
+        if model != "fd_cable":
+            _check_exchange_rate(path, sc, i, r, params, models)
     for i, c in enumerate(sc.contacts):
         _check_contact(path, sc, i, c)
     depth = sc.environment.depth
@@ -687,6 +697,44 @@ def _check_files(path: str, sc: Scenario) -> None:
         if installed_executable(a.package, a.executable) is None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
+
+
+def _check_exchange_rate(path: str, sc: Scenario, i: int, r: "RopeSpec", params, models: Dict[str, Any]) -> None:
+    """The exchange period h against the stiffest vessel-rope mode, omega^2 = (EA / L) (lambda_a +
+    lambda_b), lambda the largest horizontal mobility of each end's attachment (0: fixed, or a
+    prescribed motion): refused above omega h = REFUSE_OMEGA_H, a warning above WARN_OMEGA_H
+    (rope_model.end_coupling, where the bound comes from)."""
+    from rope_model.end_coupling import REFUSE_OMEGA_H, WARN_OMEGA_H, exchange_omega
+    mobility, masses = [], []
+    for end in ("a", "b"):
+        spec = getattr(r, f"end_{end}")
+        if spec == "free":
+            return                                  # no spring between two ends to resolve
+        lam = 0.0
+        if "/" in spec:
+            vessel, point = spec.split("/")
+            v = next(v for v in sc.vessels if v.name == vessel)
+            if v.motion is None:
+                lam = models[vessel].point_mobility(models[vessel].attachments[point])
+            masses.append(f"{spec} (effective mass {1.0 / lam:,.0f} kg)" if lam > 0 else f"{spec} (prescribed)")
+        else:
+            masses.append("a fixed point")
+        mobility.append(lam)
+    length = float(r.deployed_length or params.length)
+    omega = exchange_omega(params.ea, length, *mobility)
+    h = 1.0 / float(sc.exchange_rate)
+    if omega * h <= WARN_OMEGA_H:
+        return
+    what = (f"rope '{r.name}' ({r.rope_file}: EA/L = {params.ea / length:.3g} N/m on {length:g} m between "
+            f"{masses[0]} and {masses[1]}) has its stiffest vessel-rope mode at omega = {omega:.3g} rad/s")
+    if omega * h > REFUSE_OMEGA_H:
+        raise ScenarioError(f"{path}: key 'exchange_rate': {sc.exchange_rate:g} Hz is too slow for {what}: the "
+                            f"exchange needs omega h <= {REFUSE_OMEGA_H:g}, i.e. exchange_rate >= "
+                            f"{math.ceil(omega / REFUSE_OMEGA_H * 10) / 10:g} Hz (omega h = {omega * h:.2f} now)")
+    sc._warnings.append(f"exchange_rate {sc.exchange_rate:g} Hz: {what}, omega h = {omega * h:.2f}: the rope's "
+                        f"tension and the recorded energy are off by about (omega h)^2 = {(omega * h) ** 2:.0%}; "
+                        f"{math.ceil(omega / WARN_OMEGA_H * 10) / 10:g} Hz or more keeps it under "
+                        f"{WARN_OMEGA_H ** 2:.0%}")
 
 
 def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:

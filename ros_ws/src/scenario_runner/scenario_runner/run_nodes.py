@@ -140,10 +140,10 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
                   "initial_x": float(v.initial.x), "initial_y": float(v.initial.y), "initial_yaw": heading_rad(v),
                   "initial_speed": float(v.initial.speed), "initial_engine_order": float(v.initial.engine_order),
                   "initial_steering_angle": math.radians(v.initial.steering_deg)}
-        wrenches = [T.end_wrench_topic(r.name, end) for r in sc.ropes for end in ("a", "b")
-                    if getattr(r, f"end_{end}").split("/")[0] == v.name]
-        if wrenches:
-            params["wrench_topics"] = wrenches
+        rope_ends = [T.end_coupling_topic(r.name, end) for r in sc.ropes for end in ("a", "b")
+                     if getattr(r, f"end_{end}").split("/")[0] == v.name]
+        if rope_ends:
+            params["rope_end_topics"] = rope_ends
         contacts = [T.contact_topic(c.name) for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
         if contacts:
             params["contact_topics"] = contacts
@@ -227,7 +227,8 @@ def contract_topics(sc: Scenario) -> List[tuple]:
             named += [(T.vessel_topic(v.name, t.name), t) for t in T.THRUSTER_TOPICS]
     for r in sc.ropes:
         named += [(T.rope_topic(r.name, t.name), t) for t in T.ROPE_TOPICS]
-        named += [(T.end_wrench_topic(r.name, e), T.END_WRENCH) for e in ("a", "b") if "/" in getattr(r, f"end_{e}")]
+        named += [(topic(r.name, e), t) for e in ("a", "b") if "/" in getattr(r, f"end_{e}")
+                  for topic, t in ((T.end_wrench_topic, T.END_WRENCH), (T.end_coupling_topic, T.END_COUPLING))]
         if r.layout == "winch":
             named.append((T.rope_topic(r.name, T.WINCH), T.WINCH_TOPIC))
     named += [(T.contact_topic(c.name), t) for c in sc.contacts for t in T.CONTACT_TOPICS]

@@ -120,8 +120,10 @@ VESSEL_NODE = ParamTable(
     P("initial_yaw", 0.0, "Initial heading, 0 = bow east, positive counter-clockwise (REP-103)",
       -2 * math.pi, 2 * math.pi, "rad"),
     P("initial_speed", 0.0, "Initial surge speed", -30.0, 40.0, "m/s"),
-    P("wrench_topics", [""], "geometry_msgs/WrenchStamped topics of external forces (rope ends) acting on this "
-                             "vessel"),
+    P("wrench_topics", [""], "geometry_msgs/WrenchStamped topics of external forces acting on this vessel, each "
+                             "held constant over a step"),
+    P("rope_end_topics", [""], "tug_msgs/RopeEndCoupling topics of the rope ends pinned to this vessel (rope "
+                               "nodes' end_<a|b>/coupling)"),
     P("contact_topics", [""], "tug_msgs/HullContact topics (hull_contact nodes) this vessel takes part in, as "
                               "fender or hull"),
     P("initial_engine_order", 0.0, "Engine order held from the start, engine already at that rpm (0: the model's "

@@ -55,6 +55,9 @@ ROPE_TOPICS: Tuple[Topic, ...] = (
 )
 END_WRENCH = Topic("end_<a|b>/wrench", "geometry_msgs/msg/WrenchStamped", "latched_state",
                    "<vessel>/<attachment>", "every exchange step", note="an end on a vessel: the rope's force on it")
+END_COUPLING = Topic("end_<a|b>/coupling", "tug_msgs/msg/RopeEndCoupling", "latched_state", "map",
+                     "every exchange step",
+                     note="an end on a vessel: the force it takes, with its stiffness and damping (world)")
 WINCH_TOPIC = Topic(WINCH, "tug_msgs/msg/WinchCommand", "command", "-", "on demand", taken=True,
                     note="ropes with layout winch")
 CONTACT_TOPICS: Tuple[Topic, ...] = (
@@ -95,6 +98,13 @@ def end_wrench_topic(rope: str, end: str) -> str:
     if end not in ("a", "b"):
         raise ValueError(f"rope end '{end}': expected 'a' or 'b'")
     return f"/{rope}/end_{end}/wrench"
+
+
+def end_coupling_topic(rope: str, end: str) -> str:
+    """Rope end `end`'s force on its vessel with its linearisation: /<rope>/end_<end>/coupling."""
+    if end not in ("a", "b"):
+        raise ValueError(f"rope end '{end}': expected 'a' or 'b'")
+    return f"/{rope}/end_{end}/coupling"
 
 
 def contact_topic(contact: str) -> str:

@@ -236,6 +236,27 @@ class HullContactEncoder:
         return self.t.pack(stamp_parts(stamp_ns), (step,), (in_contact,), tuple(values), tuple(vectors))
 
 
+class RopeEndCouplingEncoder:
+    """tug_msgs/RopeEndCoupling of one rope end (names fixed)."""
+
+    _VALUES = struct.Struct("<27d")   # force, reference_position, reference_velocity, stiffness, damping
+
+    def __init__(self, frame_id: str, vessel: str, attachment: str):
+        t = self.t = Template()
+        _header_template(t, frame_id)
+        t.slot(_U64, 8)
+        t.string(vessel)
+        t.string(attachment)
+        t.slot(self._VALUES, 8)
+        t.seal()
+
+    def encode(self, stamp_ns: int, step: int, force, reference_position, reference_velocity, stiffness,
+               damping) -> bytes:
+        values = np.concatenate((force, reference_position, reference_velocity, np.ravel(stiffness),
+                                 np.ravel(damping))).tolist()
+        return self.t.pack(stamp_parts(stamp_ns), (step,), tuple(values))
+
+
 class ThrusterStatusEncoder:
     """tug_msgs/ThrusterStatus of a fixed list of thrusters: one float64 sequence per field, each
     as long as the names."""
@@ -670,6 +691,33 @@ def decode_hull_contact(data: bytes) -> HullContactIn:
     values = r.unpack(HullContactEncoder._VALUES, 8)
     v = r.unpack(HullContactEncoder._VECTORS, 8)
     return HullContactIn(stamp, step, *names, bool(in_contact), values, v[0:3], v[3:6], v[6:9], v[9:12])
+
+
+class RopeEndCouplingIn(NamedTuple):
+    """A tug_msgs/RopeEndCoupling as taken (vectors and row-major matrices as tuples)."""
+    stamp_ns: int
+    step: int
+    vessel: str
+    attachment: str
+    force: Tuple[float, float, float]
+    reference_position: Tuple[float, float, float]
+    reference_velocity: Tuple[float, float, float]
+    stiffness: Tuple[float, ...]
+    damping: Tuple[float, ...]
+
+    def is_finite(self) -> bool:
+        return all(math.isfinite(v) for v in self.force + self.reference_position + self.reference_velocity
+                   + self.stiffness + self.damping)
+
+
+def decode_rope_end_coupling(data: bytes) -> RopeEndCouplingIn:
+    r = CdrReader(data)
+    stamp = r.stamp_ns()
+    r.string()  # frame_id
+    step = r.unpack(_U64, 8)[0]
+    vessel, attachment = r.string(), r.string()
+    v = r.unpack(RopeEndCouplingEncoder._VALUES, 8)
+    return RopeEndCouplingIn(stamp, step, vessel, attachment, v[0:3], v[3:6], v[6:9], v[9:18], v[18:27])
 
 
 class OdometryIn(NamedTuple):

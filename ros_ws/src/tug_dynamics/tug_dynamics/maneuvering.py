@@ -44,9 +44,9 @@ from sea_environment.sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_F_
                                      N_SAMPLE, P_TIME, EnvironmentSampler, sample)
 from sim_math.integration import rk4_stage, rk4_update
 
-from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, AnchorState, Command, CommandRejected, ExternalWrench,
-                     StatusRecord, ThrusterOrder, ThrusterStatus, Vessel, VesselState, check_command,
-                     check_current)
+from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, CPL_C, CPL_K, CPL_ON, CPL_P, CPL_V, NCPL, AnchorState,
+                     Command, CommandRejected, ExternalWrench, StatusRecord, ThrusterOrder, ThrusterStatus, Vessel,
+                     VesselState, check_command, check_current, coupling_row)
 
 # ---- state vector layout -------------------------------------------------
 S_X, S_Y, S_PSI, S_U, S_V, S_R, S_PHI, S_P, S_N, S_DELTA = range(10)
@@ -380,6 +380,31 @@ def _wrench_in_body(force, point, moment, cpsi, spsi, cphi, sphi):
 
 
 @njit(cache=True, inline="always")
+def _coupled_force(force, cpl, point, x, y, u, v, r, p, cpsi, spsi, cphi, sphi):
+    """force + K (p_pt - p_ref) + C (v_pt - v_ref), world: an exchanged force followed along the
+    point's own motion inside the step (the other side's one-step lag removed, docs/step-protocol.md).
+    The point's world position and velocity from the stage state: R = Rz(psi) Rx(phi), body
+    angular velocity (p, 0, r)."""
+    rx, ry, rz = point[0], point[1], point[2]
+    a, b, c = rx, cphi * ry - sphi * rz, sphi * ry + cphi * rz
+    px = x + cpsi * a - spsi * b
+    py = y + spsi * a + cpsi * b
+    pz = c
+    b0, b1, b2 = u - r * ry, v + r * rx - p * rz, p * ry
+    h1, h2 = cphi * b1 - sphi * b2, sphi * b1 + cphi * b2
+    vx = cpsi * b0 - spsi * h1
+    vy = spsi * b0 + cpsi * h1
+    vz = h2
+    dp0, dp1, dp2 = px - cpl[CPL_P], py - cpl[CPL_P + 1], pz - cpl[CPL_P + 2]
+    dv0, dv1, dv2 = vx - cpl[CPL_V], vy - cpl[CPL_V + 1], vz - cpl[CPL_V + 2]
+    out = np.empty(3)
+    for i in range(3):
+        out[i] = (force[i] + cpl[CPL_K + 3 * i] * dp0 + cpl[CPL_K + 3 * i + 1] * dp1 + cpl[CPL_K + 3 * i + 2] * dp2
+                  + cpl[CPL_C + 3 * i] * dv0 + cpl[CPL_C + 3 * i + 1] * dv1 + cpl[CPL_C + 3 * i + 2] * dv2)
+    return out
+
+
+@njit(cache=True, inline="always")
 def _rigid_body_coriolis(hp, ur, vr, r):
     """Rigid-body and added-mass Coriolis terms about the reference point, moved to the right.
 
@@ -588,6 +613,14 @@ def _deriv(s, hp, props, ruds, rv, rf, minv, ctrl, wrench_force, wrench_point, w
 
 @njit(cache=True)
 def _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, out):
+    """_deriv_c with constant wrenches (no coupling rows; the form the tests and benchmarks call)."""
+    return _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+                    np.zeros((wrench_force.shape[0], NCPL)), out)
+
+
+@njit(cache=True)
+def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, wrench_cpl,
+             out):
     """Time derivative of the state vector s (S_* indices); writes diagnostics to out (O_*).
 
     X, Y, N, K sum the components in a fixed order (the order is part of the numbers)."""
@@ -664,8 +697,11 @@ def _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
 
     heel_external = 0.0
     for k in range(wrench_force.shape[0]):
-        Xw, Yw, Kw, Nw = _wrench_in_body(wrench_force[k], wrench_point[k], wrench_moment[k],
-                                         cpsi, spsi, cphi, sphi)
+        force = wrench_force[k]
+        if wrench_cpl[k, CPL_ON] > 0.0:
+            force = _coupled_force(force, wrench_cpl[k], wrench_point[k], s[S_X], s[S_Y], u, v, r, p,
+                                   cpsi, spsi, cphi, sphi)
+        Xw, Yw, Kw, Nw = _wrench_in_body(force, wrench_point[k], wrench_moment[k], cpsi, spsi, cphi, sphi)
         X += Xw
         Y += Yw
         K += Kw
@@ -702,37 +738,67 @@ def _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
 
 @njit(cache=True)
 def _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
-               out):
+               wrench_cpl, out):
     """RK4 over dt in equal sub-steps <= hmax; the towline angle ramps between sub-steps and the
-    azimuths of 360 deg thrusters are wrapped to (-pi, pi] after each."""
+    azimuths of 360 deg thrusters are wrapped to (-pi, pi] after each. Coupled wrench rows
+    (wrench_cpl) are evaluated at every stage. Returns the work done by each wrench's force on its
+    point over dt (J; RK4's weights on the stage powers)."""
     nsub = int(math.ceil(dt / hmax - 1e-9))
     if nsub < 1:
         nsub = 1
     h = dt / nsub
     stage = np.empty_like(s)
+    nw = wrench_force.shape[0]
+    work = np.zeros(nw)
     for _ in range(nsub):
-        k1 = _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
-                      out)
-        k2 = _deriv_t(rk4_stage(s, 0.5 * h, k1, stage), hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force,
-                      wrench_point, wrench_moment, out)
-        k3 = _deriv_t(rk4_stage(s, 0.5 * h, k2, stage), hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force,
-                      wrench_point, wrench_moment, out)
-        k4 = _deriv_t(rk4_stage(s, h, k3, stage), hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force,
-                      wrench_point, wrench_moment, out)
+        w1 = _wrench_power(s, wrench_force, wrench_point, wrench_cpl)
+        k1 = _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+                      wrench_cpl, out)
+        x2 = rk4_stage(s, 0.5 * h, k1, stage)
+        w2 = _wrench_power(x2, wrench_force, wrench_point, wrench_cpl)
+        k2 = _deriv_c(x2, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+                      wrench_cpl, out)
+        x3 = rk4_stage(s, 0.5 * h, k2, stage)
+        w3 = _wrench_power(x3, wrench_force, wrench_point, wrench_cpl)
+        k3 = _deriv_c(x3, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+                      wrench_cpl, out)
+        x4 = rk4_stage(s, h, k3, stage)
+        w4 = _wrench_power(x4, wrench_force, wrench_point, wrench_cpl)
+        k4 = _deriv_c(x4, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+                      wrench_cpl, out)
+        for i in range(nw):
+            work[i] += h * (w1[i] + 2.0 * w2[i] + 2.0 * w3[i] + w4[i]) / 6.0
         rk4_update(s, h, k1, k2, k3, k4)
         if hp[H_TOW_ON] > 0.0:
             ctrl[C_GAMMA] = _towline_angle_ramp(ctrl[C_GAMMA], hp[H_TOW_MAX], hp[H_TOW_RATE] * h)
         for k in range(thrs.shape[0]):
             if thrs[k, T_FULL] > 0.0:
                 s[S_THR0 + 2 * k + 1] = _wrap(s[S_THR0 + 2 * k + 1])
-    _deriv_t(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
+    _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment, wrench_cpl,
              out)   # diagnostics
-    return s
+    return work
+
+
+@njit(cache=True)
+def _wrench_power(s, wrench_force, wrench_point, wrench_cpl):
+    """Power (W) of each wrench's force on its point's world velocity at state s."""
+    u, v, r, p = s[S_U], s[S_V], s[S_R], s[S_P]
+    cpsi, spsi = math.cos(s[S_PSI]), math.sin(s[S_PSI])
+    cphi, sphi = math.cos(s[S_PHI]), math.sin(s[S_PHI])
+    out = np.zeros(wrench_force.shape[0])
+    for k in range(wrench_force.shape[0]):
+        point = wrench_point[k]
+        f = _coupled_force(wrench_force[k], wrench_cpl[k], point, s[S_X], s[S_Y], u, v, r, p, cpsi, spsi, cphi, sphi)
+        rx, ry, rz = point[0], point[1], point[2]
+        b0, b1, b2 = u - r * ry, v + r * rx - p * rz, p * ry
+        h1, h2 = cphi * b1 - sphi * b2, sphi * b1 + cphi * b2
+        out[k] = f[0] * (cpsi * b0 - spsi * h1) + f[1] * (spsi * b0 + cpsi * h1) + f[2] * h2
+    return out
 
 
 @njit(cache=True)
 def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point,
-                              wrench_moment, out, env):
+                              wrench_moment, wrench_cpl, out, env):
     """_integrate in the environment (env: a EnvironmentSampler's data) as sampled at the
     start state: its wind and the bottom's friction are the last two wrench rows (filled here);
     then the environment is sampled at the new state, its time advanced by dt, and its current and
@@ -746,12 +812,12 @@ def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, 
         wrench_point[k + 1, i] = 0.0
         wrench_moment[k, i] = 0.0
         wrench_moment[k + 1, i] = 0.0
-    _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
-               out)
+    work = _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point,
+                      wrench_moment, wrench_cpl, out)
     env[P_TIME] += dt
     sample(env, s[S_X], s[S_Y], s[S_PSI], s[S_U], s[S_V])
     _apply_environment(e, ctrl, hp)
-    return s
+    return work
 
 
 @njit(cache=True)
@@ -764,6 +830,18 @@ def _apply_environment(e, ctrl, hp):
         hp[H_C0 + int(hp[H_LIN + 1])] = hp[H_LIN + 5] * e[E_F_YR]
         hp[H_C0 + int(hp[H_LIN + 2])] = hp[H_LIN + 6] * e[E_F_NV]
         hp[H_C0 + int(hp[H_LIN + 3])] = hp[H_LIN + 7] * e[E_F_NR]
+
+
+def point_mobility_matrix(minv, point_body, roll: bool) -> float:
+    """vessel.Vessel.point_mobility for the (u, v, r, p) mass matrix inverse minv: a world force
+    (fx, fy) at body point r gives X = fx, Y = fy, N = rx fy - ry fx, K = -rz fy (roll only with
+    a roll degree of freedom); the point's horizontal acceleration is (u' - ry r',
+    v' + rx r' - rz p'), i.e. G M^-1 G^T with G the point's lever. Body axes: the eigenvalues do
+    not depend on the heading."""
+    rx, ry, rz = (float(c) for c in point_body)
+    g = np.array([[1.0, 0.0, -ry, 0.0], [0.0, 1.0, rx, -rz if roll else 0.0]])
+    mob = g @ np.asarray(minv, float) @ g.T
+    return float(np.linalg.eigvalsh(0.5 * (mob + mob.T))[-1])
 
 
 # AnchorState members bound once: an Enum class attribute costs ~0.1 us per lookup in step()
@@ -848,6 +926,7 @@ class ManeuveringVessel(Vessel):
         self._anchor_side = 0.0
         self._anchor_hold = 1.0   # share of the holding force the chain allows (set_depth)
         self._no_wrench = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
+        self.wrench_work = np.zeros(0)   # J, work done by each wrench of the last step on its point
         self._environment: Optional[EnvironmentSampler] = None   # attach_environment
         self.set_state(initial_state or VesselState.at_rest())
 
@@ -1096,34 +1175,53 @@ class ManeuveringVessel(Vessel):
         self.ctrl[C_ANC_F] = self._anchor_frac * self._anchor_hold
         self.ctrl[C_ANC_SIDE] = self._anchor_side
 
+    def point_mobility(self, point_body) -> float:
+        """Largest horizontal mobility (1/kg: acceleration per newton) of a body point: the
+        largest eigenvalue of G M^-1 G^T over the horizontal plane, G the point's lever on
+        (u, v, r, p), M the rigid-body + added mass matrix. The inverse of the smallest mass the
+        point feels; the exchange-rate bound and the sub-step of a coupled force use it."""
+        return point_mobility_matrix(self.minv, point_body, self.hp[H_ROLL] > 0.0)
+
     # ---- stepping --------------------------------------------------------------
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"{self.name}: dt={dt!r} must be positive and finite")
         env = self._environment
+        hmax = self.hmax
         if wrenches:
             k = len(wrenches)
             rows = k if env is None else k + 2      # + the environment's wind and bottom friction
             force = np.empty((rows, 3))
             point = np.empty((rows, 3))
             moment = np.empty((rows, 3))
+            cpl = np.zeros((rows, NCPL))
+            stiffest = 0.0
             for i, w in enumerate(wrenches):
                 force[i] = w.force_world
                 point[i] = w.point_body
                 moment[i] = w.moment_world
+                coupling_row(w, cpl[i])
+                if w.coupled:
+                    stiffest = max(stiffest, float(np.linalg.norm(np.asarray(w.stiffness, float), 2))
+                                   * self.point_mobility(w.point_body))
+            if stiffest > 0.0:   # the coupled spring is inside the explicit RK4 now: resolve it
+                hmax = min(hmax, 0.5 / math.sqrt(stiffest))
         else:
             force, point, moment = self._no_wrench if env is None else self._env_rows
+            cpl = np.zeros((force.shape[0], NCPL))
         if self.anchor_cfg is not None:
             if (env is not None and self._anchor_chain and self._anchor_state != _STOWED
                     and env.out[E_DEPTH] != self._anchor_depth):   # stowed, the chain's hold does not matter
                 self._set_anchor_hold(max(float(env.out[E_DEPTH]), 1e-3))
             self._update_anchor(dt)
         if env is None:
-            _integrate(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv, self.rf,
-                       self.minv, self.ctrl, force, point, moment, self.out)
+            work = _integrate(self.s, dt, hmax, self.hp, self.props, self.ruds, self.thrs, self.rv, self.rf,
+                              self.minv, self.ctrl, force, point, moment, cpl, self.out)
         else:
-            _integrate_in_environment(self.s, dt, self.hmax, self.hp, self.props, self.ruds, self.thrs, self.rv,
-                                      self.rf, self.minv, self.ctrl, force, point, moment, self.out, env.data)
+            work = _integrate_in_environment(self.s, dt, hmax, self.hp, self.props, self.ruds, self.thrs, self.rv,
+                                             self.rf, self.minv, self.ctrl, force, point, moment, cpl, self.out,
+                                             env.data)
+        self.wrench_work = work[:len(wrenches)]
         self.time += dt
         self._sync_state()
 

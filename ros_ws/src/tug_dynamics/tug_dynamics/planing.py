@@ -21,8 +21,8 @@ import numpy as np
 from sea_environment.sampler import E_CURRENT_X, E_CURRENT_Y, EnvironmentSampler
 from tug_dynamics import planing_core as pc
 from tug_dynamics import savitsky
-from tug_dynamics.vessel import (AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
-                                 check_command, check_current, rotation_body_to_world)
+from tug_dynamics.vessel import (CPL_ON, AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
+                                 check_command, check_current, coupling_row, rotation_body_to_world)
 
 KNOT = 1852.0 / 3600.0
 
@@ -162,7 +162,8 @@ class PlaningHull(Vessel):
         self._cmd = np.zeros(2)          # held engine order, bucket angle ordered
         self._command = Command()
         self._diag = np.zeros(pc.D_ND)
-        self._no_wrench = np.zeros((0, 9))
+        self._no_wrench = np.zeros((0, pc.NWRENCH))
+        self.wrench_work = np.zeros(0)   # J, work done by each wrench of the last step on its point
         self._current = np.zeros(3)
         self._environment: Optional[EnvironmentSampler] = None   # attach_environment
         self._x = np.zeros(12)
@@ -257,7 +258,7 @@ class PlaningHull(Vessel):
     def attach_environment(self, sampler: EnvironmentSampler) -> None:
         """From now on every step feels the sampler's environment (current, wind, the bottom;
         the depth has no other effect, see set_depth); sampled here on the present state."""
-        self._env_rows = np.empty((2, 9))
+        self._env_rows = np.zeros((2, pc.NWRENCH))
         self._environment = sampler
         self._sample_environment()
 
@@ -287,24 +288,58 @@ class PlaningHull(Vessel):
         env = self._environment
         if wrenches:
             # [F_world, r_body, M_world] per wrench (+ the environment's wind and bottom friction)
-            rows = np.empty((len(wrenches) + (0 if env is None else 2), 9))
+            rows = np.zeros((len(wrenches) + (0 if env is None else 2), pc.NWRENCH))
+            hmax = float(self.P[pc.P_MAXSUB])
             for i, ew in enumerate(wrenches):
                 rows[i, 0:3] = ew.force_world
                 rows[i, 3:6] = ew.point_body
                 rows[i, 6:9] = ew.moment_world
+                coupling_row(ew, rows[i, pc.W_CPL:])
+                if ew.coupled:   # the coupled spring is inside the explicit RK4 now: resolve it
+                    omega2 = float(np.linalg.norm(np.asarray(ew.stiffness, float), 2)) * self.point_mobility(ew.point_body)
+                    if omega2 > 0.0:
+                        hmax = min(hmax, 0.5 / math.sqrt(omega2))
+            start = self._points_world(x, rows[:len(wrenches)])
         else:
             rows = self._no_wrench if env is None else self._env_rows
+            hmax = float(self.P[pc.P_MAXSUB])
         if env is None:
-            pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt, self._diag)
+            pc.integrate(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt, self._diag, hmax)
         else:
             pc.integrate_in_environment(x, self._act, self._cmd, self.P, self.C, self.rtab, rows, self._current, dt,
-                                        self._diag, env.data)
+                                        self._diag, hmax, env.data)
+        if wrenches:   # the work of each wrench over the step: its force at both ends, trapezoidal
+            end = self._points_world(x, rows[:len(wrenches)])
+            self.wrench_work = np.array([0.5 * (f0 + f1) @ (p1 - p0) for (p0, f0), (p1, f1) in zip(start, end)])
         if not np.all(np.isfinite(x)):
             raise FloatingPointError(f"vessel {self.name!r}: state became non-finite")
         s.position[:] = x[0:3]
         s.rpy[:] = x[3:6]
         s.linear_velocity_body[:] = x[6:9]
         s.angular_velocity_body[:] = x[9:12]
+
+    def _points_world(self, x, rows):
+        """(world position, coupled force) of each wrench row's point at state x."""
+        c = pc.rotation_entries(x)
+        out = []
+        for row in rows:
+            full = pc._coupled_row(row, x, c) if row[pc.W_CPL + CPL_ON] > 0.0 else row
+            out.append((pc.point_world_motion(x, c, row[3:6])[0], np.array(full[0:3])))
+        return out
+
+    def point_mobility(self, point_body) -> float:
+        """vessel.Vessel.point_mobility: the horizontal block of G A^-1 G^T at the present state,
+        A the 6x6 rigid-body + added mass matrix of Eq 1 and G the point's lever (body axes)."""
+        x = self._x.copy()
+        s = self.state
+        x[0:3], x[3:6], x[6:9], x[9:12] = s.position, s.rpy, s.linear_velocity_body, s.angular_velocity_body
+        b, A = np.empty(6), np.empty((6, 6))
+        pc.forces(x, self.P, self.C, self.rtab, self._act[0], 0.0, self._no_wrench, self._current,
+                  np.zeros(pc.D_ND), b, A)
+        rx, ry, rz = (float(v) for v in point_body)
+        g = np.array([[1.0, 0.0, 0.0, 0.0, rz, -ry], [0.0, 1.0, 0.0, -rz, 0.0, rx]])   # a + alpha x r
+        mob = g @ np.linalg.solve(A, g.T)
+        return float(np.linalg.eigvalsh(0.5 * (mob + mob.T))[-1])
 
     def status(self) -> PlaningStatus:
         d = self._diag

@@ -27,6 +27,13 @@ from sim_math.integration import rk4_stage, rk4_update
 from sim_math.linalg import lu_factor, lu_solve
 from sim_math.rotations import matrix_entries_from_trig
 
+from .vessel import CPL_C, CPL_K, CPL_ON, CPL_P, CPL_V, NCPL
+
+# external wrench rows: [F_world (3), r_body (3), M_world (3)], then a coupled force's linearisation
+# (vessel.coupling_row) from W_CPL
+W_CPL = 9
+NWRENCH = W_CPL + NCPL
+
 # --- scalar parameter slots -------------------------------------------------------------
 (P_RHO, P_G, P_MASS, P_XG, P_YG, P_ZG, P_IXX, P_IYY, P_IZZ,
  P_LREF, P_BLIFT, P_D0, P_V0, P_NEXP, P_LIFT_FADE, P_UFIT,
@@ -221,6 +228,42 @@ def _wrench_in_body(wrench, R):
             rx * by - ry * bx + R02 * wrench[6] + R12 * wrench[7] + R22 * wrench[8])
 
 
+@njit(cache=True)
+def rotation_entries(x):
+    """R (body -> world) of state x as matrix_entries_from_trig's tuple."""
+    return matrix_entries_from_trig(math.cos(x[3]), math.sin(x[3]), math.cos(x[4]), math.sin(x[4]),
+                                    math.cos(x[5]), math.sin(x[5]))
+
+
+@njit(cache=True)
+def point_world_motion(x, R, r):
+    """World position and velocity of body point r at state x: X + R r, R (nu + omega x r)."""
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = R
+    rx, ry, rz = r[0], r[1], r[2]
+    u, v, w, p, q, rr = x[6], x[7], x[8], x[9], x[10], x[11]
+    bx, by, bz = u + q * rz - rr * ry, v + rr * rx - p * rz, w + p * ry - q * rx
+    pos = np.array([x[0] + R00 * rx + R01 * ry + R02 * rz, x[1] + R10 * rx + R11 * ry + R12 * rz,
+                    x[2] + R20 * rx + R21 * ry + R22 * rz])
+    vel = np.array([R00 * bx + R01 * by + R02 * bz, R10 * bx + R11 * by + R12 * bz, R20 * bx + R21 * by + R22 * bz])
+    return pos, vel
+
+
+@njit(cache=True)
+def _coupled_row(row, x, R):
+    """The wrench row with its force followed along the point's motion at state x:
+    F + K (p - p_ref) + C (v - v_ref) (vessel.ExternalWrench's coupling)."""
+    out = row.copy()
+    pos, vel = point_world_motion(x, R, row[3:6])
+    c = W_CPL
+    for i in range(3):
+        f = row[i]
+        for j in range(3):
+            f += row[c + CPL_K + 3 * i + j] * (pos[j] - row[c + CPL_P + j])
+            f += row[c + CPL_C + 3 * i + j] * (vel[j] - row[c + CPL_V + j])
+        out[i] = f
+    return out
+
+
 # ---- rigid body, Eq 1 ------------------------------------------------------------------------
 
 @njit(cache=True, inline="always")
@@ -357,7 +400,10 @@ def forces(x, P, C, rtab, n_imp, delta_cmd, wrenches, current, diag, b, A):
     mn += Nj
 
     for k in range(wrenches.shape[0]):
-        Xw, Yw, Zw, Kw, Mw, Nw = _wrench_in_body(wrenches[k], R)
+        row = wrenches[k]
+        if row[W_CPL + CPL_ON] > 0.0:
+            row = _coupled_row(row, x, R)
+        Xw, Yw, Zw, Kw, Mw, Nw = _wrench_in_body(row, R)
         fx += Xw
         fy += Yw
         fz += Zw
@@ -420,12 +466,13 @@ def _approach(value, target, max_change):
 
 
 @njit(cache=True)
-def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag):
-    """Advance x (12) and actuators act = [impeller fraction, bucket angle] by dt (RK4).
+def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag, hmax):
+    """Advance x (12) and actuators act = [impeller fraction, bucket angle] by dt (RK4, sub-steps
+    <= hmax, at most P[P_MAXSUB]).
 
     cmd = [engine order, bucket angle ordered]; the impeller speed ramps linearly (paper 2.5)
     and the bucket moves at a limited rate; both are held within each RK4 substep."""
-    nsub = int(math.ceil(dt / P[P_MAXSUB] - 1e-9))
+    nsub = int(math.ceil(dt / min(hmax, P[P_MAXSUB]) - 1e-9))
     if nsub < 1:
         nsub = 1
     h = dt / nsub
@@ -448,20 +495,20 @@ def integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag):
 
 
 @njit(cache=True)
-def integrate_in_environment(x, act, cmd, P, C, rtab, wrenches, current, dt, diag, env):
+def integrate_in_environment(x, act, cmd, P, C, rtab, wrenches, current, dt, diag, hmax, env):
     """integrate in the environment (env: a EnvironmentSampler's data) as sampled at the
     start state: its wind and the bottom's friction are the last two wrench rows (filled here);
     then the environment is sampled at the new state, its time advanced by dt, and its current
     set for the next step (Savitsky's forces are deep-water ones: the depth changes nothing else)."""
     e = env[E0:E0 + N_SAMPLE]
     k = wrenches.shape[0] - 2
-    for i in range(9):
+    for i in range(wrenches.shape[1]):
         wrenches[k, i] = 0.0
         wrenches[k + 1, i] = 0.0
     wrenches[k, 0], wrenches[k, 1] = e[E_WIND_FX], e[E_WIND_FY]
     wrenches[k, 3], wrenches[k, 5] = e[E_WIND_X], e[E_WIND_Z]
     wrenches[k + 1, 0], wrenches[k + 1, 1] = e[E_GROUND_FX], e[E_GROUND_FY]
-    integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag)
+    integrate(x, act, cmd, P, C, rtab, wrenches, current, dt, diag, hmax)
     env[P_TIME] += dt
     sample(env, x[0], x[1], x[5], x[6], x[7])
     current[0], current[1], current[2] = e[E_CURRENT_X], e[E_CURRENT_Y], 0.0

@@ -22,7 +22,8 @@ from typing import List, Sequence
 
 import numpy as np
 
-from tug_dynamics.vessel import Command, ExternalWrench, StatusRecord, Vessel, VesselState, check_current
+from tug_dynamics.vessel import (Command, ExternalWrench, StatusRecord, Vessel, VesselState, check_current,
+                                 rotation_body_to_world)
 
 MOTION_KINDS = ("constant_speed", "sinusoidal_sway", "acceleration", "turn")
 
@@ -101,6 +102,7 @@ class PrescribedMotion(Vessel):
         self.windage = base.windage
         self.time = 0.0
         self._environment = None    # attach_environment
+        self.wrench_work = np.zeros(0)
         self.set_state(base.state)
 
     # ---- commands: validated and held by the base model; they do not move this vessel ----
@@ -146,12 +148,24 @@ class PrescribedMotion(Vessel):
 
     # ---- stepping ---------------------------------------------------------------------------
     def step(self, dt: float, wrenches: Sequence[ExternalWrench] = ()) -> None:
-        """Advance along the track; wrenches have no effect on a prescribed motion."""
+        """Advance along the track; wrenches have no effect on a prescribed motion (their work
+        on the moving points is booked: the track is an energy source or sink)."""
+        before = [self._point_world(w.point_body) for w in wrenches]
         self.time += dt
         self._apply()
+        self.wrench_work = np.array([float(np.asarray(w.force_world, float) @ (self._point_world(w.point_body) - p0))
+                                     for w, p0 in zip(wrenches, before)])
         if self._environment is not None:
             self._environment.time += dt
             self._sample_environment()
+
+    def _point_world(self, point_body) -> np.ndarray:
+        s = self.state
+        return s.position + rotation_body_to_world(s.rpy) @ np.asarray(point_body, float)
+
+    def point_mobility(self, point_body) -> float:
+        """A prescribed motion is not moved by forces: mobility 0."""
+        return 0.0
 
     def _apply(self) -> None:
         (x, y), (vx, vy), (ax, ay) = self.law.track(self.time)

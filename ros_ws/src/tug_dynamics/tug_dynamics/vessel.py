@@ -23,7 +23,7 @@ import dataclasses
 import enum
 import math
 from abc import ABC, abstractmethod
-from typing import Dict, List, Sequence, Tuple, Union
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -78,10 +78,41 @@ class ExternalWrench:
     force_world: (3,) N in the world frame (ENU).
     point_body: (3,) m, where it acts, in the body frame.
     moment_world: (3,) N m extra pure moment in the world frame (usually zero).
+
+    A coupled force (another node's spring, e.g. a rope end; docs/step-protocol.md) also gives
+    its linearisation, world axes: the model applies
+        force_world + stiffness (p - reference_position) + damping (v - reference_velocity)
+    at every stage of its integration, p and v the point's world position and velocity there.
+    Without it (stiffness None) the force is held constant over the step.
     """
     force_world: np.ndarray
     point_body: np.ndarray
     moment_world: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    stiffness: Optional[np.ndarray] = None            # (3, 3) dF/dx, N/m
+    damping: Optional[np.ndarray] = None              # (3, 3) dF/dv, N s/m
+    reference_position: Optional[np.ndarray] = None  # (3,) m, world, where force_world holds
+    reference_velocity: Optional[np.ndarray] = None   # (3,) m/s, world
+
+    @property
+    def coupled(self) -> bool:
+        return self.stiffness is not None
+
+
+# A coupled wrench as the kernels take it (one row per wrench): dF/dx (3x3 row-major), dF/dv
+# (3x3), the reference position and velocity (world), 1.0 = coupled (0: a constant force)
+CPL_K, CPL_C, CPL_P, CPL_V, CPL_ON = 0, 9, 18, 21, 24
+NCPL = 25
+
+
+def coupling_row(w: ExternalWrench, row: np.ndarray) -> None:
+    """Write w's linearisation into row (NCPL,); zeros for a constant force."""
+    row[:] = 0.0
+    if w.coupled:
+        row[CPL_K:CPL_K + 9] = np.asarray(w.stiffness, float).reshape(9)
+        row[CPL_C:CPL_C + 9] = np.asarray(w.damping, float).reshape(9)
+        row[CPL_P:CPL_P + 3] = w.reference_position
+        row[CPL_V:CPL_V + 3] = w.reference_velocity
+        row[CPL_ON] = 1.0
 
 
 @dataclasses.dataclass
@@ -242,6 +273,12 @@ class Vessel(ABC):
     @abstractmethod
     def status(self) -> StatusRecord:
         """Actuator and safety status (engine, steering, thrust, anchor, heel, girting...)."""
+
+    def point_mobility(self, point_body) -> float:
+        """Largest horizontal mobility (1/kg) of a body point: the inverse of the smallest
+        effective mass a horizontal force there meets (rigid body + added mass). A model that
+        cannot be moved by forces (a prescribed motion) returns 0."""
+        raise NotImplementedError(f"{type(self).__name__} does not state its point mobility")
 
     def attachment_kinematics(self, name: str) -> Tuple[np.ndarray, np.ndarray]:
         """World position (m) and world velocity (m/s) of a named attachment point."""

@@ -3,8 +3,10 @@
     ros2 run tug_dynamics vessel_node --ros-args -r __ns:=/tug -p ship_file:=harbour_tug.yaml
 
 Subscribes ``command`` (tug_msgs/VesselCommand), ``thruster_command`` (tug_msgs/ThrusterCommand:
-per-thruster orders, for ships with azimuth thrusters) and every topic named in ``wrench_topics``
-(geometry_msgs/WrenchStamped; frame_id "<vessel>/<attachment>" or "<vessel>/base_link").
+per-thruster orders, for ships with azimuth thrusters), every topic named in ``rope_end_topics``
+(tug_msgs/RopeEndCoupling: a rope end's force with its stiffness and damping, followed along the
+attachment's motion inside the step) and in ``wrench_topics`` (geometry_msgs/WrenchStamped, held
+over the step; frame_id "<vessel>/<attachment>" or "<vessel>/base_link").
 Publishes ``odom`` (nav_msgs/Odometry), ``attachments`` (tug_msgs/AttachmentArray) and
 ``status`` (tug_msgs/VesselStatus) once per exchange step, and ``thrusters``
 (tug_msgs/ThrusterStatus) with them on a ship with azimuth thrusters; the frames on ``/tf``
@@ -29,8 +31,8 @@ from geometry_msgs.msg import WrenchStamped
 from visualization_msgs.msg import MarkerArray
 from nav_msgs.msg import Odometry
 from tf2_msgs.msg import TFMessage
-from tug_msgs.msg import (AttachmentArray, HullContact, ScenarioEvent, ThrusterCommand, ThrusterStatus, VesselCommand,
-                           VesselStatus)
+from tug_msgs.msg import (AttachmentArray, HullContact, RopeEndCoupling, ScenarioEvent, ThrusterCommand, ThrusterStatus,
+                           VesselCommand, VesselStatus)
 
 from sim_plumbing import cdr
 from sim_math.rotations import quaternion_from_rpy
@@ -110,6 +112,7 @@ class VesselNode(SteppedNode):
         self.body_frame = f"{self.vessel_name}/base_link"
         self.wrench_topics = [t for t in self.get_parameter("wrench_topics").value if t]
         self.contact_topics = [t for t in self.get_parameter("contact_topics").value if t]
+        self.rope_end_topics = [t for t in self.get_parameter("rope_end_topics").value if t]
         # contact topic -> (force on this vessel, world; point, body) of the step being computed
         self._contacts = {t: (np.zeros(3), np.zeros(3)) for t in self.contact_topics}
 
@@ -134,6 +137,8 @@ class VesselNode(SteppedNode):
                             StepInput(T.THRUSTER_COMMAND, ThrusterCommand, kind="order",
                                       decode=cdr.decode_thruster_command)] +
                            [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics] +
+                           [StepInput(t, RopeEndCoupling, decode=cdr.decode_rope_end_coupling)
+                            for t in self.rope_end_topics] +
                            [StepInput(t, HullContact, decode=cdr.decode_hull_contact) for t in self.contact_topics])
         self.on_live_parameters({n: self.get_parameter(n).value for n in self.LIVE_PARAMETERS})
         # The first call of a numba kernel loads it from the cache (about 0.4 s): pay that
@@ -180,7 +185,29 @@ class VesselNode(SteppedNode):
             return True
         if spec.msg_type is HullContact:
             return self._contact_fault(spec.topic, msg) is None
+        if spec.msg_type is RopeEndCoupling:
+            return self._rope_end_fault(spec.topic, msg) is None
         return self._wrench_point(spec.topic, msg) is not None
+
+    def _rope_end_fault(self, topic: str, msg: cdr.RopeEndCouplingIn) -> Optional[str]:
+        """Why a RopeEndCoupling cannot act on this vessel (None: it can): not finite, another
+        vessel's, an attachment this ship does not have, or a stiffness that is not a spring's
+        (dF/dx must be symmetric with no positive eigenvalue: it may never push the vessel on)."""
+        why = None
+        if not msg.is_finite():
+            why = "non-finite value"
+        elif msg.vessel != self.vessel_name:
+            why = f"it is pinned to vessel '{msg.vessel}', not this vessel '{self.vessel_name}'"
+        elif msg.attachment not in self.model.attachments:
+            why = f"attachment '{msg.attachment}' is not one of {sorted(self.model.attachments)}"
+        else:
+            k = np.array(msg.stiffness).reshape(3, 3)
+            if np.abs(k - k.T).max() > 1e-6 * max(1.0, np.abs(k).max()) or np.linalg.eigvalsh(k)[-1] > 1e-9 * max(
+                    1.0, np.abs(k).max()):
+                why = "its stiffness is not a restoring spring's (symmetric, negative semi-definite)"
+        if why is not None:
+            self.complaints("rope end " + topic, f"rope end on {topic} rejected: {why}")
+        return why
 
     def _contact_fault(self, topic: str, msg: cdr.HullContactIn) -> Optional[str]:
         """Why a HullContact cannot act on this vessel (None: it can): not finite, or a contact
@@ -307,6 +334,18 @@ class VesselNode(SteppedNode):
             wrenches.append(ExternalWrench(force_world=rot @ np.array(msg.force), point_body=point,
                                            moment_world=rot @ np.array(msg.torque)))
             self._rope_forces[topic] = (point, msg.force)
+        for topic in self.rope_end_topics:
+            msg = inputs.get(topic)
+            if msg is None:
+                continue
+            point = np.asarray(self.model.attachments[msg.attachment], float)
+            force = np.array(msg.force)
+            wrenches.append(ExternalWrench(force_world=force, point_body=point,
+                                           stiffness=np.array(msg.stiffness).reshape(3, 3),
+                                           damping=np.array(msg.damping).reshape(3, 3),
+                                           reference_position=np.array(msg.reference_position),
+                                           reference_velocity=np.array(msg.reference_velocity)))
+            self._rope_forces[topic] = (point, rot.T @ force)
         for topic in self.contact_topics:
             msg = inputs.get(topic)
             if msg is None:
