@@ -284,6 +284,27 @@ def test_hull_contact_both_ways(names):
         got.fender_point_body == tuple(vectors)
 
 
+@pytest.mark.parametrize("vessel, attachment", [("tug", "winch_aft"), ("t", "b"), ("barge_long_name", "bow")])
+def test_rope_end_coupling_both_ways(vessel, attachment):
+    from tug_msgs.msg import RopeEndCoupling
+    rng = np.random.default_rng(len(vessel) + 7 * len(attachment))
+    v = rng.normal(size=27)
+    ref = RopeEndCoupling(step=7, vessel=vessel, attachment=attachment, stiffness=list(v[9:18]),
+                          damping=list(v[18:27]))
+    ref.header.frame_id = "map"
+    _stamp(ref.header)
+    ref.force.x, ref.force.y, ref.force.z = v[0:3]
+    ref.reference_position.x, ref.reference_position.y, ref.reference_position.z = v[3:6]
+    ref.reference_velocity.x, ref.reference_velocity.y, ref.reference_velocity.z = v[6:9]
+    data = cdr.RopeEndCouplingEncoder("map", vessel, attachment).encode(
+        STAMP_NS, 7, v[0:3], v[3:6], v[6:9], v[9:18].reshape(3, 3), v[18:27].reshape(3, 3))
+    assert deserialize_message(data, RopeEndCoupling) == ref
+    got = cdr.decode_rope_end_coupling(serialize_message(ref))
+    assert (got.stamp_ns, got.step, got.vessel, got.attachment) == (STAMP_NS, 7, vessel, attachment)
+    assert got.force + got.reference_position + got.reference_velocity + got.stiffness + got.damping == tuple(v)
+    assert got.is_finite()
+
+
 @pytest.mark.parametrize("frame, child", [("map", "tug/base_link"), ("", "b"), ("abcdefg", "x/y")])
 def test_decode_odometry(frame, child):
     rng = np.random.default_rng(len(frame) + 3 * len(child))

@@ -948,26 +948,23 @@ class RopeChain:
         return pe + self.elastic_energy()
 
     def elastic_energy(self):
+        """Elastic energy of the stretched connections, J: EA / l_rep |d|^2 / 2 each (Eq 14's spring,
+        l_rep the half lengths of the elements it joins); none in a compressed (slack) one."""
         p = self.params
         n = self.n_elements
-        fr, af = self.front_points(), self.aft_points()
-        e_tot = 0.0
-        for c in range(n + 1):
-            if not self.conn_ok[c]:
-                continue
-            hp, hn = c > 0, c < n
-            if (not hp and not self.att_on[0]) or (not hn and not self.att_on[1]):
-                continue
-            Pp = af[c - 1] if hp else self.att_pos[0]
-            Pn = fr[c] if hn else self.att_pos[1]
-            if hp and np.linalg.norm(Pn - self.X[c - 1]) <= 0.5 * self.L[c - 1]:
-                continue
-            if hn and np.linalg.norm(Pp - self.X[c]) <= 0.5 * self.L[c]:
-                continue
-            lrep = (0.5 * self.L[c - 1] if hp else 0.0) + (0.5 * self.L[c] if hn else 0.0)
-            d = Pp - Pn
-            e_tot += 0.5 * p.ea / lrep * float(d @ d)
-        return e_tot
+        L, X = self.L, self.X
+        Pp = np.vstack((self.att_pos[0:1], self.aft_points()))     # connection c: aft end of c - 1 ...
+        Pn = np.vstack((self.front_points(), self.att_pos[1:2]))   # ... to the front end of c
+        active = self.conn_ok.astype(bool).copy()
+        active[0] &= bool(self.att_on[0])
+        active[n] &= bool(self.att_on[1])
+        half = 0.5 * L
+        # tension only: a connection whose end lies inside the element it pulls on is slack
+        active[1:] &= np.linalg.norm(Pn[1:] - X, axis=1) > half
+        active[:n] &= np.linalg.norm(Pp[:n] - X, axis=1) > half
+        lrep = np.concatenate(([0.0], half)) + np.concatenate((half, [0.0]))
+        d2 = ((Pp - Pn) ** 2).sum(1)
+        return float((0.5 * p.ea / lrep[active] * d2[active]).sum())
 
     def total_energy(self):
         return self.kinetic_energy() + self.potential_energy()
