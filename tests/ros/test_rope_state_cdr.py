@@ -31,6 +31,7 @@ def _reference(d) -> RopeState:
     m.end_a_force.x, m.end_a_force.y, m.end_a_force.z = map(float, d["end_a_force"])
     m.end_b_force.x, m.end_b_force.y, m.end_b_force.z = map(float, d["end_b_force"])
     m.broken = d["broken"]
+    m.kinetic_energy, m.potential_energy = d["kinetic_energy"], d["potential_energy"]
     return m
 
 
@@ -44,7 +45,8 @@ def test_rope_state_bytes_decode_to_the_same_message(n, starts, broken, name, fr
              velocities=rng.normal(size=(n, 3)), angular_velocities=rng.normal(size=(n, 3)),
              lengths=rng.random(n), tensions=rng.random(n + 1) if n else np.zeros(0), piece_starts=starts,
              unstretched_length=100.0, stretched_length=100.37, mass=172.5,
-             end_a_force=rng.normal(size=3), end_b_force=rng.normal(size=3), broken=broken)
+             end_a_force=rng.normal(size=3), end_b_force=rng.normal(size=3), broken=broken,
+             kinetic_energy=float(rng.random()), potential_energy=float(rng.normal()))
     ref = _reference(d)
     got = deserialize_message(rope_state_cdr(**d), RopeState)
     assert got == ref

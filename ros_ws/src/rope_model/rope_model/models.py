@@ -6,6 +6,7 @@ world frame (ENU, m, m/s, N).
 """
 from __future__ import annotations
 
+import math
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -146,7 +147,8 @@ class ChainAdapter:
         return dict(positions=r.positions, quaternions=quats, velocities=r.velocities,
                     angular_velocities=r.angular_velocities, lengths=r.lengths, tensions=r.tensions,
                     piece_starts=[a for a, _ in r.pieces], unstretched_length=r.unstretched_length,
-                    mass=r.total_mass, line=r.joint_points(), broken=bool(r.events))
+                    mass=r.total_mass, line=r.joint_points(), broken=bool(r.events),
+                    kinetic_energy=r.kinetic_energy(), potential_energy=r.potential_energy())
 
 
 class CableAdapter:
@@ -243,7 +245,8 @@ class CableAdapter:
         return dict(positions=c.positions, quaternions=quats, velocities=c.velocities,
                     angular_velocities=c.angular_velocities, lengths=c.segment_lengths,
                     tensions=np.maximum(c.tensions, 0.0), piece_starts=[0], unstretched_length=c.unstretched_length,
-                    mass=c.total_mass, line=c.positions, broken=False)
+                    mass=c.total_mass, line=c.positions, broken=False,
+                    kinetic_energy=math.nan, potential_energy=math.nan)   # not computed for the cable
 
 
 def _on_seabed(node: int, z: float, depth: float) -> CableOnSeabedError:

@@ -299,7 +299,8 @@ class RopeNode(SteppedNode):
             angular_velocities=out["angular_velocities"], lengths=out["lengths"], tensions=out["tensions"],
             piece_starts=out["piece_starts"], unstretched_length=float(out["unstretched_length"]),
             stretched_length=float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum()),
-            mass=float(out["mass"]), end_a_force=forces["a"], end_b_force=forces["b"], broken=bool(out["broken"])),
+            mass=float(out["mass"]), end_a_force=forces["a"], end_b_force=forces["b"], broken=bool(out["broken"]),
+            kinetic_energy=out["kinetic_energy"], potential_energy=out["potential_energy"]),
             stamp_ns)
 
         for end in self.ends:

@@ -10,6 +10,7 @@ The CDR rules and the writer are those of sim_plumbing.cdr (the other per-step m
 """
 from __future__ import annotations
 
+import math
 import struct
 
 import numpy as np
@@ -20,7 +21,8 @@ from sim_plumbing.cdr import CdrWriter
 def rope_state_cdr(*, stamp_ns: int, frame_id: str, step: int, rope: str, model: str,
                    positions, quaternions, velocities, angular_velocities, lengths, tensions,
                    piece_starts, unstretched_length: float, stretched_length: float, mass: float,
-                   end_a_force, end_b_force, broken: bool) -> bytes:
+                   end_a_force, end_b_force, broken: bool, kinetic_energy: float = math.nan,
+                   potential_energy: float = math.nan) -> bytes:
     """The serialized tug_msgs/RopeState. positions, velocities, angular_velocities (N,3),
     quaternions (N,4) as (x, y, z, w); stamp in nanoseconds (>= 0)."""
     pos = np.asarray(positions, float).reshape(-1, 3)
@@ -48,4 +50,5 @@ def rope_state_cdr(*, stamp_ns: int, frame_id: str, step: int, rope: str, model:
     w.float64s(np.concatenate([np.asarray(end_a_force, float).ravel()[:3],
                                np.asarray(end_b_force, float).ravel()[:3]]))
     w.raw(b"\x01" if broken else b"\x00", 1)
+    w.float64s(np.array([kinetic_energy, potential_energy], float))
     return w.getvalue()

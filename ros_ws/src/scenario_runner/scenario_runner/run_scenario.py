@@ -372,6 +372,8 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
     except ScenarioError as exc:
         sys.stderr.write(f"run_scenario: invalid scenario:\n{exc}\n")
         return None, 2
+    for warning in sc.warnings:
+        sys.stderr.write(f"run_scenario: warning: {path}: {warning}\n")
     steps = sc.steps if args.duration is None else min(sc.steps, int(round(args.duration * sc.exchange_rate)))
     output = args.output or sc.recording.path or os.path.join("output", f"{sc.name}.mcap")
     stem = os.path.splitext(os.path.basename(output))[0] or sc.name
