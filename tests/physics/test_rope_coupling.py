@@ -236,3 +236,52 @@ def test_linear_exchange_bound():
     omega = math.sqrt(k / m)
     assert exchange_omega(k * 40.0, 40.0, 1.0 / m, 0.0) == pytest.approx(omega)
     assert WARN_OMEGA_H < REFUSE_OMEGA_H
+
+
+HARBOUR = os.path.join(SRC, "tug_dynamics", "ships", "harbour_tug.yaml")
+
+
+def test_a_coupled_spring_inside_a_long_step_moves_the_vessel_as_a_spring_updated_every_millisecond():
+    """dt = 1 s with the spring followed inside the step (sub-steps resolve it) against the same
+    spring applied as a fresh constant force every 1 ms: the positions agree within 0.5 % of the
+    1 m start, and the work booked by the coupled steps is the spring's potential energy given up."""
+    k = 2.0e5                                      # N/m, along x, rest at x = 0; the tug starts at x = 1 m
+    point = np.zeros(3)
+    stiffness = np.zeros((3, 3))
+    stiffness[0, 0] = -k
+    coupled, reference = load_ship(HARBOUR, name="a"), load_ship(HARBOUR, name="b")
+    for vessel in (coupled, reference):
+        vessel.set_state(VesselState.at_rest(1.0, 0.0, 0.0))
+    xs_c, xs_r, work = [], [], 0.0
+    for _ in range(20):
+        coupled.step(1.0, [ExternalWrench(np.zeros(3), point, stiffness=stiffness, damping=np.zeros((3, 3)),
+                                          reference_position=np.zeros(3), reference_velocity=np.zeros(3))])
+        work += float(coupled.wrench_work[0])
+        xs_c.append(coupled.state.position[0])
+        for _ in range(1000):                      # the reference: a fresh constant force every 1 ms
+            x = reference.state.position[0]
+            reference.step(1e-3, [ExternalWrench(np.array([-k * x, 0.0, 0.0]), point)])
+        xs_r.append(reference.state.position[0])
+    xs_c, xs_r = np.array(xs_c), np.array(xs_r)
+    assert np.abs(xs_c - xs_r).max() < 0.005 * 1.0
+    assert xs_c.min() < -0.2                                    # it swung through the anchor
+    potential_given_up = 0.5 * k * (1.0 ** 2 - xs_c[-1] ** 2)
+    assert work == pytest.approx(potential_given_up, rel=0.01)
+
+
+@pytest.mark.parametrize("ship, attachment", [(ASD, "winch_aft"), (ASD, "bow_staple"), (HARBOUR, "towing_hook")])
+def test_point_mobility_is_the_acceleration_a_force_gives_the_point(ship, attachment):
+    """From rest (no hull force yet), a 1 kN push along x and along y at the point for 1 ms: the
+    point's horizontal accelerations form the 2x2 mobility; its largest eigenvalue is
+    point_mobility (1 %)."""
+    probe = load_ship(ship, name="p")
+    point = probe.attachments[attachment]
+    columns = []
+    for direction in (np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])):
+        vessel = load_ship(ship, name="v")
+        vessel.step(1e-3, [ExternalWrench(1e3 * direction, point)])
+        _p, v = vessel.attachment_kinematics(attachment)
+        columns.append(v[:2] / 1e-3 / 1e3)
+    mobility = np.column_stack(columns)
+    largest = float(np.linalg.eigvalsh(0.5 * (mobility + mobility.T))[-1])
+    assert probe.point_mobility(point) == pytest.approx(largest, rel=0.01)

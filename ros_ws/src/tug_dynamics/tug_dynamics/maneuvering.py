@@ -380,28 +380,34 @@ def _wrench_in_body(force, point, moment, cpsi, spsi, cphi, sphi):
 
 
 @njit(cache=True, inline="always")
-def _coupled_force(force, cpl, point, x, y, u, v, r, p, cpsi, spsi, cphi, sphi):
-    """force + K (p_pt - p_ref) + C (v_pt - v_ref), world: an exchanged force followed along the
-    point's own motion inside the step (the other side's one-step lag removed, docs/step-protocol.md).
-    The point's world position and velocity from the stage state: R = Rz(psi) Rx(phi), body
-    angular velocity (p, 0, r)."""
+def _point_motion(point, x, y, u, v, r, p, cpsi, spsi, cphi, sphi):
+    """World position and velocity of a body point at the state (R = Rz(psi) Rx(phi), body angular
+    velocity (p, 0, r), the reference point at z = 0), as 6 floats."""
     rx, ry, rz = point[0], point[1], point[2]
     a, b, c = rx, cphi * ry - sphi * rz, sphi * ry + cphi * rz
-    px = x + cpsi * a - spsi * b
-    py = y + spsi * a + cpsi * b
-    pz = c
     b0, b1, b2 = u - r * ry, v + r * rx - p * rz, p * ry
     h1, h2 = cphi * b1 - sphi * b2, sphi * b1 + cphi * b2
-    vx = cpsi * b0 - spsi * h1
-    vy = spsi * b0 + cpsi * h1
-    vz = h2
+    return (x + cpsi * a - spsi * b, y + spsi * a + cpsi * b, c,
+            cpsi * b0 - spsi * h1, spsi * b0 + cpsi * h1, h2)
+
+
+@njit(cache=True, inline="always")
+def _coupled_force(force, cpl, point, x, y, u, v, r, p, cpsi, spsi, cphi, sphi):
+    """force + K (p_pt - p_ref) + C (v_pt - v_ref), world, as 3 floats (force itself for a row that
+    is not coupled): an exchanged force followed along the point's own motion inside the step (the
+    other side's one-step lag removed; docs/step-protocol.md)."""
+    if cpl[CPL_ON] <= 0.0:
+        return force[0], force[1], force[2]
+    px, py, pz, vx, vy, vz = _point_motion(point, x, y, u, v, r, p, cpsi, spsi, cphi, sphi)
     dp0, dp1, dp2 = px - cpl[CPL_P], py - cpl[CPL_P + 1], pz - cpl[CPL_P + 2]
     dv0, dv1, dv2 = vx - cpl[CPL_V], vy - cpl[CPL_V + 1], vz - cpl[CPL_V + 2]
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = (force[i] + cpl[CPL_K + 3 * i] * dp0 + cpl[CPL_K + 3 * i + 1] * dp1 + cpl[CPL_K + 3 * i + 2] * dp2
-                  + cpl[CPL_C + 3 * i] * dv0 + cpl[CPL_C + 3 * i + 1] * dv1 + cpl[CPL_C + 3 * i + 2] * dv2)
-    return out
+    k, c = CPL_K, CPL_C
+    return (force[0] + cpl[k] * dp0 + cpl[k + 1] * dp1 + cpl[k + 2] * dp2
+            + cpl[c] * dv0 + cpl[c + 1] * dv1 + cpl[c + 2] * dv2,
+            force[1] + cpl[k + 3] * dp0 + cpl[k + 4] * dp1 + cpl[k + 5] * dp2
+            + cpl[c + 3] * dv0 + cpl[c + 4] * dv1 + cpl[c + 5] * dv2,
+            force[2] + cpl[k + 6] * dp0 + cpl[k + 7] * dp1 + cpl[k + 8] * dp2
+            + cpl[c + 6] * dv0 + cpl[c + 7] * dv1 + cpl[c + 8] * dv2)
 
 
 @njit(cache=True, inline="always")
@@ -697,10 +703,8 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
 
     heel_external = 0.0
     for k in range(wrench_force.shape[0]):
-        force = wrench_force[k]
-        if wrench_cpl[k, CPL_ON] > 0.0:
-            force = _coupled_force(force, wrench_cpl[k], wrench_point[k], s[S_X], s[S_Y], u, v, r, p,
-                                   cpsi, spsi, cphi, sphi)
+        force = _coupled_force(wrench_force[k], wrench_cpl[k], wrench_point[k], s[S_X], s[S_Y], u, v, r, p,
+                               cpsi, spsi, cphi, sphi)
         Xw, Yw, Kw, Nw = _wrench_in_body(force, wrench_point[k], wrench_moment[k], cpsi, spsi, cphi, sphi)
         X += Xw
         Y += Yw
@@ -748,26 +752,23 @@ def _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_fo
         nsub = 1
     h = dt / nsub
     stage = np.empty_like(s)
-    nw = wrench_force.shape[0]
-    work = np.zeros(nw)
+    work = np.zeros(wrench_force.shape[0])
     for _ in range(nsub):
-        w1 = _wrench_power(s, wrench_force, wrench_point, wrench_cpl)
+        _add_wrench_work(s, wrench_force, wrench_point, wrench_cpl, work, h / 6.0)
         k1 = _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
                       wrench_cpl, out)
         x2 = rk4_stage(s, 0.5 * h, k1, stage)
-        w2 = _wrench_power(x2, wrench_force, wrench_point, wrench_cpl)
+        _add_wrench_work(x2, wrench_force, wrench_point, wrench_cpl, work, h / 3.0)
         k2 = _deriv_c(x2, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
                       wrench_cpl, out)
         x3 = rk4_stage(s, 0.5 * h, k2, stage)
-        w3 = _wrench_power(x3, wrench_force, wrench_point, wrench_cpl)
+        _add_wrench_work(x3, wrench_force, wrench_point, wrench_cpl, work, h / 3.0)
         k3 = _deriv_c(x3, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
                       wrench_cpl, out)
         x4 = rk4_stage(s, h, k3, stage)
-        w4 = _wrench_power(x4, wrench_force, wrench_point, wrench_cpl)
+        _add_wrench_work(x4, wrench_force, wrench_point, wrench_cpl, work, h / 6.0)
         k4 = _deriv_c(x4, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_point, wrench_moment,
                       wrench_cpl, out)
-        for i in range(nw):
-            work[i] += h * (w1[i] + 2.0 * w2[i] + 2.0 * w3[i] + w4[i]) / 6.0
         rk4_update(s, h, k1, k2, k3, k4)
         if hp[H_TOW_ON] > 0.0:
             ctrl[C_GAMMA] = _towline_angle_ramp(ctrl[C_GAMMA], hp[H_TOW_MAX], hp[H_TOW_RATE] * h)
@@ -780,20 +781,18 @@ def _integrate(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_fo
 
 
 @njit(cache=True)
-def _wrench_power(s, wrench_force, wrench_point, wrench_cpl):
-    """Power (W) of each wrench's force on its point's world velocity at state s."""
+def _add_wrench_work(s, wrench_force, wrench_point, wrench_cpl, work, weight):
+    """work += weight x the power (W) of each wrench's force on its point's world velocity at s:
+    RK4's weights on the stage powers give the work over a sub-step."""
     u, v, r, p = s[S_U], s[S_V], s[S_R], s[S_P]
     cpsi, spsi = math.cos(s[S_PSI]), math.sin(s[S_PSI])
     cphi, sphi = math.cos(s[S_PHI]), math.sin(s[S_PHI])
-    out = np.zeros(wrench_force.shape[0])
     for k in range(wrench_force.shape[0]):
         point = wrench_point[k]
-        f = _coupled_force(wrench_force[k], wrench_cpl[k], point, s[S_X], s[S_Y], u, v, r, p, cpsi, spsi, cphi, sphi)
-        rx, ry, rz = point[0], point[1], point[2]
-        b0, b1, b2 = u - r * ry, v + r * rx - p * rz, p * ry
-        h1, h2 = cphi * b1 - sphi * b2, sphi * b1 + cphi * b2
-        out[k] = f[0] * (cpsi * b0 - spsi * h1) + f[1] * (spsi * b0 + cpsi * h1) + f[2] * h2
-    return out
+        f0, f1, f2 = _coupled_force(wrench_force[k], wrench_cpl[k], point, s[S_X], s[S_Y], u, v, r, p,
+                                    cpsi, spsi, cphi, sphi)
+        _x, _y, _z, vx, vy, vz = _point_motion(point, s[S_X], s[S_Y], u, v, r, p, cpsi, spsi, cphi, sphi)
+        work[k] += weight * (f0 * vx + f1 * vy + f2 * vz)
 
 
 @njit(cache=True)
@@ -927,6 +926,7 @@ class ManeuveringVessel(Vessel):
         self._anchor_hold = 1.0   # share of the holding force the chain allows (set_depth)
         self._no_wrench = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
         self.wrench_work = np.zeros(0)   # J, work done by each wrench of the last step on its point
+        self._no_coupling = np.zeros((2, NCPL))   # the coupling rows of no wrench / the environment's two
         self._environment: Optional[EnvironmentSampler] = None   # attach_environment
         self.set_state(initial_state or VesselState.at_rest())
 
@@ -1175,6 +1175,14 @@ class ManeuveringVessel(Vessel):
         self.ctrl[C_ANC_F] = self._anchor_frac * self._anchor_hold
         self.ctrl[C_ANC_SIDE] = self._anchor_side
 
+    def _mobility_of(self, point_body) -> float:
+        """point_mobility, kept per point (the mass matrix does not change)."""
+        key = tuple(point_body)
+        cache = self.__dict__.setdefault("_mobility_cache", {})
+        if key not in cache:
+            cache[key] = self.point_mobility(point_body)
+        return cache[key]
+
     def point_mobility(self, point_body) -> float:
         """Largest horizontal mobility (1/kg: acceleration per newton) of a body point: the
         largest eigenvalue of G M^-1 G^T over the horizontal plane, G the point's lever on
@@ -1200,15 +1208,16 @@ class ManeuveringVessel(Vessel):
                 force[i] = w.force_world
                 point[i] = w.point_body
                 moment[i] = w.moment_world
-                coupling_row(w, cpl[i])
                 if w.coupled:
-                    stiffest = max(stiffest, float(np.linalg.norm(np.asarray(w.stiffness, float), 2))
-                                   * self.point_mobility(w.point_body))
+                    coupling_row(w, cpl[i])
+                    # |K| (Frobenius: >= its largest eigenvalue, cheap) x the point's mobility
+                    stiffest = max(stiffest, math.sqrt(float((cpl[i, CPL_K:CPL_K + 9] ** 2).sum()))
+                                   * self._mobility_of(point[i]))
             if stiffest > 0.0:   # the coupled spring is inside the explicit RK4 now: resolve it
                 hmax = min(hmax, 0.5 / math.sqrt(stiffest))
         else:
             force, point, moment = self._no_wrench if env is None else self._env_rows
-            cpl = np.zeros((force.shape[0], NCPL))
+            cpl = self._no_coupling[:force.shape[0]]
         if self.anchor_cfg is not None:
             if (env is not None and self._anchor_chain and self._anchor_state != _STOWED
                     and env.out[E_DEPTH] != self._anchor_depth):   # stowed, the chain's hold does not matter
