@@ -44,7 +44,8 @@ from sea_environment.sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_F_
                                      N_SAMPLE, P_TIME, EnvironmentSampler, sample)
 from sim_math.integration import rk4_stage, rk4_update
 
-from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, CPL_C, CPL_K, CPL_ON, CPL_P, CPL_V, NCPL, AnchorState,
+from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, CPL_C, CPL_K, CPL_ON, CPL_P, CPL_V, NCPL, SPRING_SUBSTEP,
+                     AnchorState,
                      Command, CommandRejected, ExternalWrench, StatusRecord, ThrusterOrder, ThrusterStatus, Vessel,
                      VesselState, check_command, check_current, coupling_row)
 
@@ -1214,7 +1215,7 @@ class ManeuveringVessel(Vessel):
                     stiffest = max(stiffest, math.sqrt(float((cpl[i, CPL_K:CPL_K + 9] ** 2).sum()))
                                    * self._mobility_of(point[i]))
             if stiffest > 0.0:   # the coupled spring is inside the explicit RK4 now: resolve it
-                hmax = min(hmax, 0.5 / math.sqrt(stiffest))
+                hmax = min(hmax, SPRING_SUBSTEP / math.sqrt(stiffest))
         else:
             force, point, moment = self._no_wrench if env is None else self._env_rows
             cpl = self._no_coupling[:force.shape[0]]

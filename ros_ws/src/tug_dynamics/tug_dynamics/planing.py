@@ -21,7 +21,7 @@ import numpy as np
 from sea_environment.sampler import E_CURRENT_X, E_CURRENT_Y, EnvironmentSampler
 from tug_dynamics import planing_core as pc
 from tug_dynamics import savitsky
-from tug_dynamics.vessel import (CPL_ON, AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
+from tug_dynamics.vessel import (CPL_ON, SPRING_SUBSTEP, AnchorState, Command, ExternalWrench, StatusRecord, Vessel, VesselState,
                                  check_command, check_current, coupling_row, rotation_body_to_world)
 
 KNOT = 1852.0 / 3600.0
@@ -298,7 +298,7 @@ class PlaningHull(Vessel):
                 if ew.coupled:   # the coupled spring is inside the explicit RK4 now: resolve it
                     omega2 = float(np.linalg.norm(np.asarray(ew.stiffness, float), 2)) * self.point_mobility(ew.point_body)
                     if omega2 > 0.0:
-                        hmax = min(hmax, 0.5 / math.sqrt(omega2))
+                        hmax = min(hmax, SPRING_SUBSTEP / math.sqrt(omega2))
             start = self._points_world(x, rows[:len(wrenches)])
         else:
             rows = self._no_wrench if env is None else self._env_rows

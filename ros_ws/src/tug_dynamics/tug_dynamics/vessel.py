@@ -102,6 +102,9 @@ class ExternalWrench:
 # (3x3), the reference position and velocity (world), 1.0 = coupled (0: a constant force)
 CPL_K, CPL_C, CPL_P, CPL_V, CPL_ON = 0, 9, 18, 21, 24
 NCPL = 25
+# A coupled spring is inside the model's explicit RK4: its sub-step h keeps omega h at most this
+# (omega^2 = |K| x the point's mobility); RK4's phase error per period is then below 1e-4
+SPRING_SUBSTEP = 0.25
 
 
 def coupling_row(w: ExternalWrench, row: np.ndarray) -> None:
