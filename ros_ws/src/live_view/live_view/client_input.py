@@ -192,19 +192,3 @@ def check(full_type: str, data: bytes, encoding: str, stamp_ns: int) -> Order:
     except (ValueError, TypeError, OverflowError, RecursionError, struct.error, KeyError, IndexError) as exc:
         # whatever a malformed message makes the decoding raise: refused with a status, not a traceback
         raise InputRefused(f"malformed: {type(exc).__name__}: {str(exc)[:200]}") from None
-
-
-class TokenBucket:
-    """At most `rate` messages a second on average, bursts up to `burst`."""
-
-    def __init__(self, rate: float, burst: float, now: float):
-        self.rate, self.burst = rate, burst
-        self.tokens, self.t = burst, now
-
-    def take(self, now: float) -> bool:
-        self.tokens = min(self.burst, self.tokens + (now - self.t) * self.rate)
-        self.t = now
-        if self.tokens >= 1.0:
-            self.tokens -= 1.0
-            return True
-        return False
