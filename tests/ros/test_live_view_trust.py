@@ -67,6 +67,10 @@ def test_own_pages_and_allowed_origins(policy):
     assert configured.origin_refusal("https://app.foxglove.dev.evil.example") is not None
     with pytest.raises(ValueError, match="not an origin"):
         parse_origins("app.foxglove.dev")
+    with pytest.raises(ValueError, match="not an origin"):
+        parse_origins("https://")
+    desktop = WebPolicy("127.0.0.1", [WS], parse_origins("file://"))  # a desktop app's pages
+    assert desktop.origin_refusal("file://") is None and desktop.origin_refusal("null") is not None
 
 
 @pytest.mark.parametrize("body", [

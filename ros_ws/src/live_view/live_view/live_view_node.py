@@ -178,7 +178,10 @@ class _Listener:
         self.node = node
 
     def on_client_advertise(self, client, channel) -> None:
-        self.node.client_advertise(client.id, channel)
+        try:
+            self.node.client_advertise(client.id, channel)
+        except Exception as exc:  # noqa: BLE001 - nothing may escape into foxglove-sdk's thread
+            self.node._refuse("error", f"client {client.id}: advertise: {type(exc).__name__}: {str(exc)[:200]}")
 
     def on_client_unadvertise(self, client, client_channel_id: int) -> None:
         self.node.client_channels.pop((client.id, client_channel_id), None)

@@ -77,7 +77,7 @@ class WebPolicy:
         self.ports = tuple(sorted({int(p) for p in ports if p}))
         self.allowed_origins = tuple(sorted({normalise_origin(o) for o in allowed_origins if o.strip()}))
         self.allowed_names = {split_host(o.partition("://")[2], 0)[0] for o in self.allowed_origins
-                              if "://" in o and split_host(o.partition("://")[2], 0)}
+                              if o.startswith(("http://", "https://")) and split_host(o.partition("://")[2], 0)}
 
     def host_refusal(self, host: Optional[str], served_port: int) -> Optional[str]:
         """None if a request to served_port with this Host header is for this server, else why not."""
@@ -127,17 +127,21 @@ class WebPolicy:
 
 
 def normalise_origin(origin: str) -> str:
-    """An origin as compared: lower case, without a trailing slash."""
-    return origin.strip().lower().rstrip("/")
+    """An origin as compared: lower case, without a trailing slash after a host."""
+    value = origin.strip().lower()
+    return value[:-1] if value.endswith("/") and not value.endswith("://") else value
 
 
 def parse_origins(text: str) -> Tuple[str, ...]:
-    """The origins of parameter allowed_origins (comma or space separated); ValueError for one
-    that is not scheme://host[:port]."""
+    """The origins of parameter allowed_origins (comma or space separated), compared exactly: a
+    web page's http(s)://host[:port], or what a desktop app's pages send (file://, an app's own
+    scheme://...: no web site can send those); ValueError for anything else."""
     out = []
     for item in text.replace(",", " ").split():
         scheme, sep, authority = normalise_origin(item).partition("://")
-        if not sep or scheme not in ("http", "https") or split_host(authority, 0) is None:
+        web = scheme in ("http", "https")
+        if not sep or not scheme.isascii() or not (scheme[:1].isalpha() and all(
+                c.isalnum() or c in "+-." for c in scheme)) or (web and split_host(authority, 0) is None):
             raise ValueError(f"allowed_origins: {item!r} is not an origin (scheme://host[:port], e.g. "
                              "https://app.foxglove.dev)")
         out.append(normalise_origin(item))
