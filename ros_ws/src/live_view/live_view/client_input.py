@@ -6,8 +6,13 @@ command) and the ropes' ``winch`` (tug_msgs/WinchCommand) topics take client mes
 (as Foxglove's publish panel sends for a ROS 2 server) or JSON (a mapping of exactly the
 message's order fields). A message is refused (InputRefused, with the reason) when it is too
 large, not the type, has a non-finite value or an unknown anchor order; out-of-range values are
-clamped (the notes say which). The accepted order is written anew (sim_plumbing.cdr), stamped
-with the simulation time the live view knows, so nothing but checked numbers leaves the server.
+clamped (the notes say which). JSON is scanned before it is parsed: nesting deeper than
+MAX_JSON_DEPTH or a number longer than MAX_NUMBER_CHARS is refused (a 2000-deep array would end
+the parser in RecursionError, a 400-digit integer float() in OverflowError); and check() turns
+whatever else a malformed message may raise into InputRefused, so no input ends in a traceback.
+The accepted order is written anew (sim_plumbing.cdr), stamped with the simulation time the live
+view gives (the run's own clock, see live_view_node), so nothing but checked numbers leaves the
+server.
 """
 from __future__ import annotations
 
@@ -19,6 +24,8 @@ from typing import Callable, Dict, List, NamedTuple, Tuple
 from sim_plumbing import cdr
 
 MAX_MESSAGE_BYTES = 4096
+MAX_JSON_DEPTH = 4  # an order is a flat object; its optional header nests {"stamp": {...}}
+MAX_NUMBER_CHARS = 40  # characters of one JSON number (a double needs at most 24)
 # Generic bounds (the vessel and rope nodes clamp again to the ship's and rope's own limits)
 ENGINE_LIMIT = 1.0
 STEERING_LIMIT = math.pi / 2  # rad
@@ -42,7 +49,10 @@ class Order(NamedTuple):
 def _finite(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputRefused(f"{name}={value!r} is not a number")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an integer beyond the doubles
+        raise InputRefused(f"{name}={str(value)[:40]}...: too large a number") from None
     if not math.isfinite(value):
         raise InputRefused(f"{name}={value!r} is not a finite number")
     return value
@@ -55,11 +65,46 @@ def _clamp(name: str, value: float, limit: float, notes: List[str]) -> float:
     return value
 
 
+def _json_shape(text: str) -> None:
+    """Refuse JSON nested deeper than MAX_JSON_DEPTH or with a number longer than
+    MAX_NUMBER_CHARS, before the parser sees it (one pass, strings skipped)."""
+    depth = run = 0
+    in_string = escaped = False
+    for c in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif c == "\\":
+                escaped = True
+            elif c == '"':
+                in_string = False
+            continue
+        if c in "0123456789+-.eE":
+            run += 1
+            if run > MAX_NUMBER_CHARS:
+                raise InputRefused(f"a number of more than {MAX_NUMBER_CHARS} characters")
+            continue
+        run = 0
+        if c == '"':
+            in_string = True
+        elif c in "[{":
+            depth += 1
+            if depth > MAX_JSON_DEPTH:
+                raise InputRefused(f"JSON nested more than {MAX_JSON_DEPTH} deep (an order is a flat object)")
+        elif c in "]}":
+            depth -= 1
+
+
 def _json_fields(data: bytes, fields: Tuple[str, ...]) -> Dict[str, object]:
     try:
-        obj = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise InputRefused(f"not JSON: {exc}") from None
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputRefused(f"not JSON (not UTF-8: {exc})") from None
+    _json_shape(text)
+    try:
+        obj = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise InputRefused(f"not JSON: {str(exc)[:200]}") from None
     if not isinstance(obj, dict):
         raise InputRefused(f"expected a JSON object with {', '.join(fields)}")
     unknown = sorted(set(obj) - set(fields) - {"header"})
@@ -140,20 +185,10 @@ def check(full_type: str, data: bytes, encoding: str, stamp_ns: int) -> Order:
         raise InputRefused(f"{len(data)} bytes: more than {MAX_MESSAGE_BYTES}")
     if encoding not in ENCODINGS:
         raise InputRefused(f"encoding {encoding!r}: expected one of {ENCODINGS}")
-    return CHECKS[full_type](bytes(data), encoding, stamp_ns)
-
-
-class TokenBucket:
-    """At most `rate` messages a second on average, bursts up to `burst`."""
-
-    def __init__(self, rate: float, burst: float, now: float):
-        self.rate, self.burst = rate, burst
-        self.tokens, self.t = burst, now
-
-    def take(self, now: float) -> bool:
-        self.tokens = min(self.burst, self.tokens + (now - self.t) * self.rate)
-        self.t = now
-        if self.tokens >= 1.0:
-            self.tokens -= 1.0
-            return True
-        return False
+    try:
+        return CHECKS[full_type](bytes(data), encoding, stamp_ns)
+    except InputRefused:
+        raise
+    except (ValueError, TypeError, OverflowError, RecursionError, struct.error, KeyError, IndexError) as exc:
+        # whatever a malformed message makes the decoding raise: refused with a status, not a traceback
+        raise InputRefused(f"malformed: {type(exc).__name__}: {str(exc)[:200]}") from None

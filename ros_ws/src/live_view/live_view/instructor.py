@@ -22,13 +22,18 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
   POST /api/publish?topic=/<vessel>/command | /<rope>/winch   JSON body as the WebSocket clients
                      send it ({"engine_order": .., "steering_angle": .., "anchor": ..},
                      {"payout_rate": ..}); handed to LiveViewNode.take_input(): client_input.py's
-                     checks, the per-client rate limit, refusals logged and counted, out-of-range
-                     values clamped. Answers 200 (accepted, with the clamp notes), 400 (refused),
-                     403 (not a command or winch topic), 413 (too large), 415 (not JSON), 429 (rate).
+                     checks, the rate limit shared by every HTTP client, refusals logged and
+                     counted, out-of-range values clamped. Answers 200 (accepted, with the clamp
+                     notes), 202 (forwarded: a stand-alone live view, which cannot vouch for the
+                     run's clock, published it; the vessel decides), 400 (refused: malformed,
+                     non-finite, unknown fields, too deep or too long a number), 403 (not a command
+                     or winch topic), 413 (too large), 415 (not JSON), 429 (rate).
 
-A browser page of another site cannot send orders: a POST must be application/json (a cross-site
-page would need a CORS preflight, which is not answered), and on a loopback address the Host
-header must name a loopback host (no DNS rebinding).
+A browser page of another site cannot send orders or read the state: every request's Host must be
+exactly this machine's (trust.WebPolicy: localhost, 127.0.0.1 or [::1] with the port; no DNS
+rebinding) and an Origin, if sent, this node's own pages' or one of ``allowed_origins`` (403,
+counted as "host" / "origin"); a POST must be application/json. More than ``max_clients``
+connections at once are answered 503 and counted.
 """
 from __future__ import annotations
 
@@ -37,12 +42,13 @@ import http.server
 import json
 import math
 import os
+import sys
 import threading
 import time
 import urllib.parse
 from typing import Deque, Dict, List, Optional, Tuple
 
-from live_view import client_input
+from live_view import client_input, trust
 from sim_contract import topics as T
 from sim_contract.geo import KNOT, compass_deg
 from scenario_format.particulars import breaking_loads_from
@@ -50,7 +56,6 @@ from sim_math.rotations import rpy_from_quaternion
 
 HISTORY_SECONDS = 180.0  # s of simulated time kept for the tension plot
 MAX_BODY = client_input.MAX_MESSAGE_BYTES
-LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]", "::1")
 ANCHOR_STATES = {0: "none", 1: "stowed", 2: "letting go", 3: "dredging", 4: "heaving up"}
 
 # The page's files: URL path -> file under the web root (nothing else is served from disk)
@@ -124,7 +129,7 @@ class InstructorStation:
         self.node = node
         self.log = node.get_logger()
         host = node.get_parameter("host").value
-        self.loopback = host in ("127.0.0.1", "localhost", "::1") or host.startswith("127.")
+        self.loopback = trust.is_loopback_bind(host)
         self.period = 1.0 / node.get_parameter("http_rate").value
         root = node.get_parameter("web_root").value
         if not root:
@@ -161,6 +166,8 @@ class InstructorStation:
             pass
         Handler.station = station
         self.httpd = _Server((host, node.get_parameter("http_port").value), Handler)
+        self.httpd.max_clients = node.get_parameter("max_clients").value
+        self.httpd.on_refused = node.refuse_connection
         self.port = self.httpd.server_address[1]
         self.url = f"http://{'localhost' if self.loopback else host}:{self.port}/"
         self._threads = [threading.Thread(target=self.httpd.serve_forever, kwargs={"poll_interval": 0.2},
@@ -350,17 +357,58 @@ class InstructorStation:
     # -- orders ----------------------------------------------------------------------------
     def publish(self, client: str, topic: str, body: bytes) -> Tuple[int, dict]:
         outcome, why, notes = self.node.take_input(client, topic, body, "json")
-        code = {"accepted": 200, "rate": 429, "topic": 403, "message": 400}[outcome]
-        return code, {"accepted": outcome == "accepted", "topic": topic, "reason": why, "clamped": list(notes)}
+        code = {"accepted": 200, "forwarded": 202, "rate": 429, "topic": 403, "message": 400}[outcome]
+        return code, {"accepted": outcome == "accepted", "forwarded": outcome == "forwarded", "outcome": outcome,
+                      "topic": topic, "reason": why, "clamped": list(notes)}
 
     def refuse(self, kind: str, text: str) -> None:
         self.node._refuse(kind, text)
 
 
 class _Server(http.server.ThreadingHTTPServer):
+    """At most max_clients connections at once (a keep-alive connection holds its thread): more are
+    answered 503 and counted (on_refused). An error in a handler is counted and logged in one
+    line (on_refused), not printed as a traceback."""
     daemon_threads = True
     allow_reuse_address = True
     request_queue_size = 32
+    max_clients = 32
+    on_refused = staticmethod(lambda kind, why: None)
+
+    def __init__(self, *args, **kwargs):
+        self._active = 0
+        self._active_lock = threading.Lock()
+        super().__init__(*args, **kwargs)
+
+    def process_request(self, request, client_address) -> None:
+        with self._active_lock:
+            full = self._active >= self.max_clients
+            if not full:
+                self._active += 1
+        if not full:
+            super().process_request(request, client_address)
+            return
+        why = f"more than {self.max_clients} connections at once (parameter max_clients)"
+        self.on_refused("connections", f"http {client_address[0]}: {why}")
+        body = f"refused: {why}\n".encode()
+        try:
+            request.settimeout(1.0)
+            request.sendall(b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; charset=utf-8\r\n"
+                            b"Connection: close\r\nContent-Length: " + str(len(body)).encode() + b"\r\n\r\n" + body)
+        except OSError:
+            pass
+        self.shutdown_request(request)
+
+    def process_request_thread(self, request, client_address) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            with self._active_lock:
+                self._active -= 1
+
+    def handle_error(self, request, client_address) -> None:
+        exc = sys.exc_info()[1]
+        self.on_refused("error", f"http {client_address[0]}: {type(exc).__name__}: {str(exc)[:200]}")
 
 
 class _Handler(http.server.BaseHTTPRequestHandler):
@@ -385,16 +433,25 @@ class _Handler(http.server.BaseHTTPRequestHandler):
     def _json(self, code: int, obj: dict) -> None:
         self._send(code, json.dumps(obj).encode())
 
-    def _host_ok(self) -> bool:
-        if not self.station.loopback:
-            return True
-        host = (self.headers.get("Host") or "").strip().lower()
-        name = host.rsplit(":", 1)[0] if not host.endswith("]") else host
-        return name in LOOPBACK_NAMES or name.startswith("127.")
+    def _refused_request(self) -> bool:
+        """Answer 403 (counted, logged) a request whose Host is not this machine or whose Origin is
+        a page of another site (trust.WebPolicy); True if it was."""
+        node = self.station.node
+        policy = node.web_policy
+        host, origin = self.headers.get_all("Host") or [], self.headers.get_all("Origin") or []
+        why = policy.host_refusal(", ".join(host) if host else None, self.station.port)
+        kind = "host"
+        if why is None:
+            kind, why = "origin", policy.origin_refusal(", ".join(origin) if origin else None)
+        if why is None:
+            return False
+        self.close_connection = True
+        node.refuse_connection(kind, f"http {self.client_address[0]}: {why}")
+        self._json(403, {"accepted": False, "reason": why})
+        return True
 
     def do_GET(self) -> None:
-        if not self._host_ok():
-            self._json(403, {"reason": "Host header is not this machine"})
+        if self._refused_request():
             return
         path = urllib.parse.urlsplit(self.path).path
         if path == "/api/state":
@@ -428,10 +485,7 @@ class _Handler(http.server.BaseHTTPRequestHandler):
             self.close_connection = True
             self._json(404, {"accepted": False, "reason": "not found"})
             return
-        if not self._host_ok():
-            self.close_connection = True
-            self.station.refuse("channel", f"{client}: Host header {self.headers.get('Host')!r} is not this machine")
-            self._json(403, {"accepted": False, "reason": "Host header is not this machine"})
+        if self._refused_request():
             return
         if n < 0 or n > MAX_BODY:
             self.close_connection = True

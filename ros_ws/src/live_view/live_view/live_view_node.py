@@ -23,8 +23,20 @@ make a keep-all writer wait).
 Client input: only the vessels' ``command`` and the ropes' ``winch`` topics take client
 messages (client_input.py: checked, clamped, written anew, stamped with the simulation time,
 published); anything else a client advertises or sends is refused, logged (at most once a
-second per kind) and counted, and so is input beyond ``input_rate`` messages a second per
-client. The counts are in ``refused`` and ``accepted`` and in the log on shutdown.
+second per kind) and counted, and so is input beyond ``input_rate`` orders a second per kind of
+client and kind of order, all connections and addresses together (trust.SharedLimits). The
+counts are in ``refused``, ``accepted`` and ``forwarded`` and in the log on shutdown.
+
+Who may connect (trust.py, front.py; docs/live-view.md has the threat model): the WebSocket
+server is reached through a front door that refuses a wrong Host (DNS rebinding) or Origin (a
+page of another site; ``allowed_origins`` adds some) and more than ``max_clients`` connections;
+foxglove-sdk's own server listens behind it on 127.0.0.1 with TLS, so a page cannot bypass it.
+
+The time orders are stamped with: in the runner's process the run's own clock, handed over by
+the runner (offer('/clock')); an order that passes the checks is "accepted". Stand-alone the
+node follows /clock, which anyone on the domain may publish: a message that jumps ahead is not
+followed (trust.ClockGuard, refused as "clock"), and since the node cannot tell whose clock it
+follows, an order that passes the checks is "forwarded" (published; the vessel decides).
 
 The node holds its servers in ``self.servers`` (each with a ``stop()``): the browser
 instructor station (instructor.py: a page with a 3D view, gauges, a tension plot and controls,
@@ -36,7 +48,9 @@ from __future__ import annotations
 
 import collections
 import os
+import ssl
 import struct
+import subprocess
 import sys
 import threading
 import time
@@ -46,7 +60,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from live_view import client_input, instructor
+from live_view import client_input, front, instructor, trust
 from sim_contract.node_params import LIVE_VIEW
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
@@ -164,7 +178,10 @@ class _Listener:
         self.node = node
 
     def on_client_advertise(self, client, channel) -> None:
-        self.node.client_advertise(client.id, channel)
+        try:
+            self.node.client_advertise(client.id, channel)
+        except Exception as exc:  # noqa: BLE001 - nothing may escape into foxglove-sdk's thread
+            self.node._refuse("error", f"client {client.id}: advertise: {type(exc).__name__}: {str(exc)[:200]}")
 
     def on_client_unadvertise(self, client, client_channel_id: int) -> None:
         self.node.client_channels.pop((client.id, client_channel_id), None)
@@ -279,11 +296,18 @@ class LiveViewNode(Node):
         self.sim_time_ns = 0
         self._round_time = 0  # the simulation time of the sender's last round
         self.refused: collections.Counter = collections.Counter()  # why -> client messages refused
-        self.accepted = 0
+        self.accepted = 0  # orders stamped with the run's own clock (in the runner's process)
+        self.forwarded = 0  # orders published with a clock the node cannot vouch for (stand-alone)
         self.clamped = 0
         self.client_channels: Dict[Tuple[int, int], Tuple[str, str, str]] = {}  # -> topic, type, encoding
         self._refused_channels: Dict[Tuple[int, int], str] = {}
-        self._buckets: Dict[int, client_input.TokenBucket] = {}
+        self.limits = trust.SharedLimits(lambda: self.get_parameter("input_rate").value)
+        # the run's own clock is the one handed over in this process (the runner's); one taken from
+        # the domain is guarded and never vouched for
+        self.own_clock = "/clock" in self.offered
+        self.clock_guard = trust.ClockGuard()
+        self.order_time_ns = 0  # the time orders are stamped with (the guarded clock stand-alone)
+        self.allowed_origins = trust.parse_origins(self.get_parameter("allowed_origins").value)
         self._input_pubs: Dict[str, object] = {}
         self.subscribed_once = False
         self.servers: List[object] = []
@@ -294,12 +318,40 @@ class LiveViewNode(Node):
         self.fg_context = foxglove.Context()
         for topic, full_type, latched in topics:
             self.add_topic(topic, full_type, latched)
+        host = self.get_parameter("host").value
+        # foxglove-sdk has no hook to check a connection's Origin / Host or count connections: its
+        # server listens on 127.0.0.1 behind front.CheckedFront, with TLS whose certificate only the
+        # front door trusts (a browser page that finds the port cannot connect). Without openssl
+        # there is no certificate: clients may then only watch (no client publishing), said here.
+        try:
+            cert, key = front.make_certificate()
+        except (OSError, subprocess.SubprocessError) as exc:
+            cert = key = None
+            self.get_logger().warning(f"no TLS certificate for the WebSocket server behind the front door ({exc}): "
+                                      "clients may watch but not publish (is openssl installed?)")
+        capabilities = [Capability.Time] + ([Capability.ClientPublish] if cert else [])
+        self.client_publish = cert is not None
         self.server = foxglove.start_server(
-            name="tugsim live view", host=self.get_parameter("host").value, port=self.get_parameter("port").value,
-            capabilities=[Capability.ClientPublish, Capability.Time], supported_encodings=list(client_input.ENCODINGS),
-            server_listener=_Listener(self), context=self.fg_context)
+            name="tugsim live view", host="127.0.0.1", port=0, capabilities=capabilities,
+            supported_encodings=list(client_input.ENCODINGS), server_listener=_Listener(self),
+            context=self.fg_context, tls_cert=cert, tls_key=key)
         self.add_server(self.server)
-        self.port = self.server.port
+        backend_ssl = None
+        if cert:
+            backend_ssl = ssl.create_default_context(cadata=cert.decode())
+            backend_ssl.check_hostname = False  # the one certificate trusted is this node's own
+        ws_port = self.get_parameter("port").value
+        http_port = self.get_parameter("http_port").value
+        self.web_policy = trust.WebPolicy(host, [ws_port, http_port], self.allowed_origins)
+        try:
+            self.front = front.CheckedFront(host, ws_port, self.server.port, backend_ssl,
+                                            self.get_parameter("max_clients").value, self.check_connection,
+                                            self.refuse_connection)
+        except OSError:
+            self.server.stop()
+            raise
+        self.add_server(self.front)
+        self.port = self.front.port
         self.sender = Sender(self.send, self.get_parameter("rate").value,
                              lambda exc: self.complaints("send", f"sending failed: {exc!r}", "warning"))
         if self.get_parameter("discover").value and not topics:
@@ -319,6 +371,8 @@ class LiveViewNode(Node):
             else:
                 self.add_server(self.station)
                 self.http_port = self.station.port
+        # the ports as bound (0: any free port): the Origins of this node's own pages
+        self.web_policy = trust.WebPolicy(host, [self.port, self.http_port or 0], self.allowed_origins)
 
     # -- servers ---------------------------------------------------------------------------
     def add_server(self, server) -> None:
@@ -334,9 +388,14 @@ class LiveViewNode(Node):
                 server.stop()
             except Exception as exc:  # noqa: BLE001 - stopping is best effort at shutdown
                 self.get_logger().warning(f"stopping {server!r}: {exc}")
-        if self.refused or self.accepted:
+        self.get_logger().info(f"WebSocket front door: {self.front.accepted} connections passed on, "
+                               f"{self.front.cpu:.2f} s CPU piping their bytes")
+        if self.refused or self.accepted or self.forwarded:
             self.get_logger().info(f"client input: {self.accepted} accepted ({self.clamped} clamped), refused: "
                                    f"{dict(self.refused) or 'none'}")
+        if self.forwarded:
+            self.get_logger().info(f"client input: {self.forwarded} forwarded (stamped with a /clock from the "
+                                   "domain, which this node cannot vouch is the run's)")
         super().destroy_node()
 
     # -- topics ----------------------------------------------------------------------------
@@ -373,16 +432,27 @@ class LiveViewNode(Node):
     def offer(self, topic: str, data: bytes) -> None:
         """A message of a served topic, handed over in this process."""
         if topic == "/clock":
-            self._on_clock(data)
+            self._on_clock(data, own=True)
             return
         slot = self.slots.get(topic)
         if slot is not None:
             slot.offer(data)
 
-    def _on_clock(self, data: bytes) -> None:
+    def _on_clock(self, data: bytes, own: bool = False) -> None:
+        """A /clock message: own (handed over in this process by the runner) or from the domain."""
         if len(data) >= 12:
             sec, nanosec = _STAMP.unpack_from(data, 4)
-            self.sim_time_ns = max(0, sec) * 1_000_000_000 + nanosec
+            t = max(0, sec) * 1_000_000_000 + min(nanosec, 999_999_999)
+            if own:
+                self.sim_time_ns = self.order_time_ns = t
+            elif not self.own_clock:
+                why = self.clock_guard.observe(t, time.monotonic())
+                if why is None:
+                    self.sim_time_ns = self.order_time_ns = t
+                else:
+                    self.refused["clock"] += 1
+                    self.complaints("clock", f"{why}; orders keep the stamp {self.order_time_ns * 1e-9:.3f} s",
+                                    "warning")
         slot = self.slots.get("/clock")
         if slot is not None:
             slot.offer(data)
@@ -408,7 +478,7 @@ class LiveViewNode(Node):
         self.server.broadcast_time(t)
         return advanced if t else fresh
 
-    # -- client input ----------------------------------------------------------------------
+    # -- client input ---------------------------------------------------------------------
     def _refuse(self, kind: str, text: str) -> None:
         self.refused[kind] += 1
         if self.complaints("client " + kind, f"client input refused: {text}", "warning"):
@@ -417,6 +487,19 @@ class LiveViewNode(Node):
                                            "live_view_refused")
             except Exception:  # noqa: BLE001 - telling the clients is a courtesy
                 pass
+
+    def check_connection(self, headers: Dict[str, str], port: int) -> Optional[Tuple[str, str]]:
+        """(kind, why) a connection to port with these request headers is refused, or None."""
+        why = self.web_policy.host_refusal(headers.get("host"), port)
+        if why is not None:
+            return "host", why
+        why = self.web_policy.origin_refusal(headers.get("origin"))
+        return ("origin", why) if why is not None else None
+
+    def refuse_connection(self, kind: str, why: str) -> None:
+        """A connection refused by a front door (WebSocket or HTTP): counted and logged."""
+        self.refused[kind] += 1
+        self.complaints("connection " + kind, f"connection refused: {why}", "warning")
 
     def client_advertise(self, client_id: int, channel) -> None:
         key = (client_id, channel.id)
@@ -439,59 +522,64 @@ class LiveViewNode(Node):
             return
         self.client_channels[key] = (channel.topic, slot.full_type, channel.encoding)
 
-    def _rate_ok(self, client_key, label: str) -> bool:
-        bucket = self._buckets.get(client_key)
-        now = time.monotonic()
-        if bucket is None:
-            if len(self._buckets) > 10_000:
-                self._buckets.clear()
-            rate = self.get_parameter("input_rate").value
-            bucket = self._buckets[client_key] = client_input.TokenBucket(rate, max(1.0, rate), now)
-        if not bucket.take(now):
-            self._refuse("rate", f"{label} sends more than {bucket.rate:g} messages/s")
-            return False
-        return True
+    def _rate_ok(self, client_kind: str, full_type: str, label: str) -> bool:
+        """One shared bucket per kind of client and kind of order (trust.SharedLimits)."""
+        order_kind = full_type.rsplit("/", 1)[-1]
+        if self.limits.take(client_kind, order_kind, time.monotonic()):
+            return True
+        self._refuse("rate", f"{label}: more than {self.get_parameter('input_rate').value:g} messages/s of "
+                             f"{order_kind} from the {client_kind} clients together")
+        return False
 
     def _check_and_publish(self, label: str, topic: str, full_type: str, encoding: str,
-                           data: bytes) -> Tuple[bool, str, Tuple[str, ...]]:
-        """client_input's checks, then publish the order written anew: (accepted, why not, clamp notes)."""
+                           data: bytes) -> Tuple[str, str, Tuple[str, ...]]:
+        """client_input's checks, then publish the order written anew: (outcome, why not, clamp
+        notes); outcome 'accepted' (stamped with the run's own clock), 'forwarded' (stamped with
+        the guarded /clock of the domain) or 'message' (refused)."""
         try:
-            order = client_input.check(full_type, data, encoding, self.sim_time_ns)
+            order = client_input.check(full_type, data, encoding, self.order_time_ns)
         except client_input.InputRefused as exc:
             self._refuse("message", f"{topic} from {label}: {exc}")
-            return False, str(exc), ()
+            return "message", str(exc), ()
         if order.notes:
             self.clamped += 1
             self.complaints("client clamped", f"{topic} from {label}: {'; '.join(order.notes)}", "warning")
-        self.accepted += 1
         self._input_pubs[topic].publish(order.data)
-        return True, "", order.notes
+        if self.own_clock:
+            self.accepted += 1
+            return "accepted", "", order.notes
+        self.forwarded += 1
+        return "forwarded", ("published, stamped with the /clock of the domain, which this live view cannot vouch "
+                             "is the run's: the vessel decides"), order.notes
 
     def client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
-        if not self._rate_ok(client_id, f"client {client_id}"):
-            return
-        target = self.client_channels.get((client_id, channel_id))
-        if target is None:
-            why = self._refused_channels.get((client_id, channel_id), f"channel {channel_id} was never advertised")
-            self._refuse("channel", f"message on a refused channel ({why})")
-            return
-        topic, full_type, encoding = target
-        self._check_and_publish(f"client {client_id}", topic, full_type, encoding, data)
+        try:
+            target = self.client_channels.get((client_id, channel_id))
+            if target is None:
+                why = self._refused_channels.get((client_id, channel_id), f"channel {channel_id} was never advertised")
+                self._refuse("channel", f"message on a refused channel ({why})")
+                return
+            topic, full_type, encoding = target
+            if not self._rate_ok("websocket", full_type, f"client {client_id}"):
+                return
+            self._check_and_publish(f"client {client_id}", topic, full_type, encoding, data)
+        except Exception as exc:  # noqa: BLE001 - called by foxglove-sdk: nothing may escape into its thread
+            self._refuse("error", f"client {client_id}: {type(exc).__name__}: {str(exc)[:200]}")
 
-    def take_input(self, client: str, topic: str, data: bytes, encoding: str = "json") -> Tuple[str, str, Tuple[str, ...]]:
+    def take_input(self, client: str, topic: str, data: bytes, encoding: str = "json",
+                   client_kind: str = "http") -> Tuple[str, str, Tuple[str, ...]]:
         """An order from another front end (the instructor station: client 'http <address>'), with the
-        WebSocket clients' checks, rate limit and counts: (outcome, why, clamp notes), outcome one of
-        'accepted', 'rate', 'topic', 'message'."""
-        if not self._rate_ok(client, client):
-            return "rate", f"more than {self.get_parameter('input_rate').value:g} messages/s", ()
+        WebSocket clients' checks and counts, and its own kind's rate limit: (outcome, why, clamp
+        notes), outcome one of 'accepted', 'forwarded', 'rate', 'topic', 'message'."""
         slot = self.slots.get(topic)
         if slot is None or slot.full_type not in client_input.CHECKS or topic not in self._input_pubs:
             why = (f"{client} may publish only on the vessel command and rope winch topics "
                    f"({', '.join(sorted(self._input_pubs)) or 'none here'}), not '{topic[:200]}'")
             self._refuse("channel", why)
             return "topic", why, ()
-        ok, why, notes = self._check_and_publish(client, topic, slot.full_type, encoding, data)
-        return ("accepted" if ok else "message"), why, notes
+        if not self._rate_ok(client_kind, slot.full_type, client):
+            return "rate", f"more than {self.get_parameter('input_rate').value:g} messages/s", ()
+        return self._check_and_publish(client, topic, slot.full_type, encoding, data)
 
     def input_topics(self) -> List[str]:
         """The topics clients may publish on (vessel commands, rope winches)."""

@@ -25,15 +25,16 @@ class Probe:
         self.times: List[int] = []
         self.status: List[dict] = []
 
-    async def connect(self, timeout: float = 10.0) -> None:
-        """Connect, retrying until the server listens (up to timeout s)."""
+    async def connect(self, timeout: float = 10.0, origin: Optional[str] = None) -> None:
+        """Connect, retrying until the server listens (up to timeout s); origin: the Origin header a
+        browser page would send (none: a program's connection)."""
         import websockets
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
         while True:
             try:
                 self.ws = await websockets.connect(self.url, subprotocols=[SUBPROTOCOL], max_size=None,
-                                                   open_timeout=timeout)
+                                                   open_timeout=timeout, origin=origin)
                 return
             except OSError:
                 if loop.time() > deadline:

@@ -392,8 +392,10 @@ async function sendRaw(topic, body) {
   a.status = r.status;
   app.answers.push(a);
   const el = $('answer');
-  el.className = a.accepted ? (a.clamped && a.clamped.length ? 'warn' : 'muted') : 'bad';
-  el.textContent = a.accepted ? `${topic}: sent${a.clamped && a.clamped.length ? ` (${a.clamped.join('; ')})` : ''}`
+  // forwarded (202): published by a stand-alone live view, which cannot vouch for the run's clock
+  const sent = a.accepted || a.forwarded;
+  el.className = sent ? (a.clamped && a.clamped.length ? 'warn' : 'muted') : 'bad';
+  el.textContent = sent ? `${topic}: ${a.accepted ? 'sent' : 'forwarded'}${a.clamped && a.clamped.length ? ` (${a.clamped.join('; ')})` : ''}`
     : `${topic}: refused (${a.status}): ${a.reason}`;
   return a;
 }

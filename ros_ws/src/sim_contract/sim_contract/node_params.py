@@ -225,9 +225,14 @@ LIVE_VIEW = ParamTable(
     P("host", "127.0.0.1", "Address the WebSocket server listens on"),
     P("port", 8765, "WebSocket port (0: any free port)", 0, 65535),
     P("rate", 20.0, "Rate at which new messages go to the clients", 0.5, 200.0, "Hz"),
-    P("input_rate", 20.0, "Client messages accepted per second and client (more are refused and counted; "
-                          "a change applies to the clients that connect after it)",
-      0.1, 1000.0, "1/s", live=True),
+    P("input_rate", 20.0, "Client orders accepted per second for each kind of client (WebSocket, instructor "
+                          "station) and kind of order (vessel command, winch), all connections and addresses "
+                          "together; more are refused and counted", 0.1, 1000.0, "1/s", live=True),
+    P("max_clients", 32, "Connections at once to the WebSocket server, and to the instructor station (more are "
+                         "refused with 503 and counted)", 1, 1000),
+    P("allowed_origins", "", "Web pages of other origins allowed to use the WebSocket server and the instructor "
+                             "station besides this machine's own (http://localhost, 127.0.0.1 or [::1] with the "
+                             "served port), exact, comma-separated, e.g. https://app.foxglove.dev"),
     P("discover", True, "true: serve every topic on the ROS graph of a known type (looked up every 2 s); "
                         "a live view given its topics (run_scenario --live) serves those"),
     P("http_port", 8080, "Port of the browser instructor station (0: any free port, -1: none)", -1, 65535),
