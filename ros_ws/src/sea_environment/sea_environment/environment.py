@@ -75,10 +75,12 @@ class DepthGridSpec(_Strict):
 
 
 class WavesSpec(_Strict):
+    """One linear sea for every body (waves.py): a regular wave or a JONSWAP / Pierson-Moskowitz
+    spectrum, long- or short-crested, from a seed; hs 0 is a calm sea."""
     hs: float = Field(ge=0.0, le=20.0)              # m, significant wave height 4 sqrt(m0); regular: height H
     tp: float = Field(ge=1.0, le=30.0)              # s, spectral peak period; regular: the period
     from_deg: float = Field(ge=-360.0, le=360.0)     # compass, where the waves come from (like the wind)
-    spectrum: Literal["jonswap", "pierson_moskowitz", "regular"] = "jonswap"
+    spectrum: Literal["jonswap", "pierson_moskowitz", "regular"] = "jonswap"   # DNV-RP-C205 3.5.5; PM is gamma 1
     gamma: Optional[float] = Field(None, ge=1.0, le=10.0)   # JONSWAP peak enhancement; null: 3.3
     spreading_s: Optional[float] = Field(None, gt=0.0, le=100.0)  # cos-2s exponent; null: long-crested
     components: int = Field(150, ge=10, le=2000)    # irregular seas: one per frequency bin
