@@ -330,4 +330,8 @@ def test_scenario_waves_reach_the_nodes_environment(tmp_path):
     assert calm.environment.is_uniform
     env0, _ = Environment.from_parameter(environment_parameter(calm, path))
     assert env0.waves is None and env0.wave_elevation(5.0, 1.0, 2.0) == 0.0
+    calm_kin = env0.wave_kinematics(2.0, [5.0, 6.0], [1.0, 1.0], [-1.0, -2.0])
+    assert calm_kin.velocity.shape == (2, 3) and not np.any(calm_kin.velocity) and not np.any(calm_kin.pressure)
+    kin = env.wave_kinematics(3.0, [5.0], [1.0], [-1.0])
+    assert np.array_equal(kin.velocity, env.waves.kinematics(5.0, 1.0, -1.0, 3.0).velocity)
     assert Environment.from_parameter("{}")[0].waves is None

@@ -41,7 +41,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from typing_extensions import Annotated
 
 from .bathymetry import DepthGrid
-from .waves import G, WaveField, wavenumber
+from .waves import G, WaveField, WaveKinematics, wavenumber
 from .wind import KNOT, GustRecord
 
 # pydantic's names of Union members in an error's location (list[...], constrained-float, ...Spec)
@@ -357,3 +357,10 @@ class Environment:
         if self.waves is None:
             return 0.0 if np.ndim(x) == 0 else np.zeros(np.size(x))
         return self.waves.elevation(x, y, t)
+
+    def wave_kinematics(self, t: float, x, y, z):
+        """waves.WaveKinematics at points (x, y, z) (1-D); all zero on a calm sea."""
+        if self.waves is None:
+            m = np.size(np.broadcast_arrays(x, y, z)[0])
+            return WaveKinematics(np.zeros(m), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m))
+        return self.waves.kinematics(x, y, z, t)
