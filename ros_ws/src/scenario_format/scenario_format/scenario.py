@@ -8,7 +8,8 @@ starts; every error names the file, the key and what was expected.
     environment: {current: [0.0, 0.0], water_density: 1025.0, gravity: 9.80665}
     # or with wind, a current field and depth (sea_environment/environment.py has the format):
     # environment: {wind: {speed_kn: 25, from_deg: 270}, depth: 14.0,
-    #               current: {speed_kn: 1.5, towards_deg: 90, tidal_period_s: 44712}}
+    #               current: {speed_kn: 1.5, towards_deg: 90, tidal_period_s: 44712},
+    #               waves: {hs: 2.0, tp: 8.0, from_deg: 200, spreading_s: 10, seed: 3}}
     vessels:
       - name: tug              # ROS namespace
         ship_file: harbour_tug.yaml
@@ -90,7 +91,8 @@ class Environment(EnvironmentSpec):
     @property
     def is_uniform(self) -> bool:
         """Only a uniform current: the nodes' current_east / current_north carry it all."""
-        return self.wind is None and self.depth is None and isinstance(self.current, list)
+        return (self.wind is None and self.depth is None and isinstance(self.current, list)
+                and (self.waves is None or self.waves.hs == 0.0))   # hs 0: a calm sea, as without waves
 
 
 def _number(value, key: str) -> float:

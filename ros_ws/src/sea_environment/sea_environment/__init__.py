@@ -1,1 +1,1 @@
-"""ROS-free environment models (wind; depth and currents to follow)."""
+"""ROS-free environment models: wind, current, depth and waves."""

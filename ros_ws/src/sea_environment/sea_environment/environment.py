@@ -13,9 +13,18 @@ Scenario form (knots and compass degrees true at this edge, SI inside)::
                 phase_deg: 0.0}
       depth: 15.0                          # uniform, m; or a bathymetry grid:
       depth: {grid: harbour.asc}           # ESRI ASCII grid (bathymetry.py), path relative to the scenario
+      waves: {hs: 3.0, tp: 9.0, from_deg: 0.0,   # significant height m, peak period s, coming FROM (deg true)
+              spectrum: jonswap,           # jonswap | pierson_moskowitz | regular (hs: height H, tp: period)
+              gamma: 3.3,                  # JONSWAP peak enhancement (default 3.3; jonswap only)
+              spreading_s: null,           # null: long-crested; s: cos-2s short-crested spreading
+              components: 150, seed: 1,    # the sea's components and their random draws
+              ramp_time: 30.0}             # s of half-cosine start-up (default 3 Tp)
 
 Without ``wind`` the air is still; without ``depth`` the water is deep (no shallow-water effects,
-no seabed). The current field is the analytic one above: a steady or tidally reversing stream
+no seabed); without ``waves`` (or with hs 0) the sea is calm and no wave field exists. The waves
+(waves.py) are one linear sea every body samples at its own place and time; their dispersion
+uses the uniform depth, or a grid's mean wet depth (one sea over the scene: no refraction or
+shoaling over the grid). The current field is the analytic one above: a steady or tidally reversing stream
 with a linear cross-stream shear (a channel's edge or a river bend's outer side: the speed grows
 towards one bank). Everything is validated here (pydantic, strict): a bad value fails before any
 node starts, naming the key.
@@ -24,14 +33,15 @@ from __future__ import annotations
 
 import math
 import re
-from typing import List, Optional, Union
+from typing import List, Literal, Optional, Union
 
 import numpy as np
 from numba import njit
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from typing_extensions import Annotated
 
 from .bathymetry import DepthGrid
+from .waves import G, WaveField, WaveKinematics, wavenumber
 from .wind import KNOT, GustRecord
 
 # pydantic's names of Union members in an error's location (list[...], constrained-float, ...Spec)
@@ -64,6 +74,33 @@ class DepthGridSpec(_Strict):
     grid: str = Field(min_length=1)                 # ESRI ASCII grid file (bathymetry.py)
 
 
+class WavesSpec(_Strict):
+    """One linear sea for every body (waves.py): a regular wave or a JONSWAP / Pierson-Moskowitz
+    spectrum, long- or short-crested, from a seed; hs 0 is a calm sea."""
+    hs: float = Field(ge=0.0, le=20.0)              # m, significant wave height 4 sqrt(m0); regular: height H
+    tp: float = Field(ge=1.0, le=30.0)              # s, spectral peak period; regular: the period
+    from_deg: float = Field(ge=-360.0, le=360.0)     # compass, where the waves come from (like the wind)
+    spectrum: Literal["jonswap", "pierson_moskowitz", "regular"] = "jonswap"   # DNV-RP-C205 3.5.5; PM is gamma 1
+    gamma: Optional[float] = Field(None, ge=1.0, le=10.0)   # JONSWAP peak enhancement; null: 3.3
+    spreading_s: Optional[float] = Field(None, gt=0.0, le=100.0)  # cos-2s exponent; null: long-crested
+    components: int = Field(150, ge=10, le=2000)    # irregular seas: one per frequency bin
+    seed: int = Field(0, ge=0)                      # random frequencies, directions and phases
+    ramp_time: Optional[float] = Field(None, ge=0.0, le=3600.0)  # s, half-cosine start-up; null: 3 tp
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.gamma is not None and self.spectrum != "jonswap":
+            raise ValueError(f"gamma is only for spectrum jonswap (pierson_moskowitz is gamma 1), got spectrum "
+                             f"{self.spectrum!r}")
+        if self.spreading_s is not None and self.spectrum == "regular":
+            raise ValueError("spreading_s is only for an irregular sea (a regular wave is long-crested)")
+        return self
+
+
+# Miche (1944): a wave breaks beyond H / L = 0.142 tanh(k h) (1/7 in deep water)
+BREAKING_STEEPNESS = 1.0 / 7.0
+
+
 Uniform2 = Annotated[List[Annotated[float, Field(ge=-MAX_CURRENT, le=MAX_CURRENT)]],
                      Field(min_length=2, max_length=2)]
 
@@ -72,6 +109,25 @@ class EnvironmentSpec(_Strict):
     current: Union[Uniform2, CurrentFieldSpec] = [0.0, 0.0]
     wind: Optional[WindSpec] = None
     depth: Optional[Union[Annotated[float, Field(gt=0.0, le=12000.0)], DepthGridSpec]] = None
+    waves: Optional[WavesSpec] = None
+
+    @field_validator("waves")
+    @classmethod
+    def _not_breaking(cls, waves, info):
+        """Hs over the peak wavelength (at the uniform depth; deep water for a grid, whose depths
+        are read later) within Miche's limit."""
+        if waves is None or waves.hs == 0.0:
+            return waves
+        depth = info.data.get("depth")
+        h = float(depth) if isinstance(depth, (int, float)) else math.inf
+        k = float(wavenumber(2.0 * math.pi / waves.tp, h))
+        limit = BREAKING_STEEPNESS * (math.tanh(k * h) if math.isfinite(h) else 1.0)
+        steep = waves.hs * k / (2.0 * math.pi)
+        if steep > limit:
+            where = f"depth {h:g} m" if math.isfinite(h) else "deep water"
+            raise ValueError(f"hs {waves.hs:g} m over the peak wavelength {2.0 * math.pi / k:.1f} m (tp {waves.tp:g} s, "
+                             f"{where}) is {steep:.3f}, above the breaking limit {limit:.3f} (Miche: 1/7 tanh(k h))")
+        return waves
 
 
 def _towards(deg: float) -> np.ndarray:
@@ -206,24 +262,50 @@ class DepthField:
     def is_deep(self) -> bool:
         return self.grid is None and math.isinf(self.uniform)
 
+    @property
+    def representative(self) -> float:
+        """One depth for the waves' dispersion: the uniform depth, a grid's mean wet depth, inf."""
+        if self.grid is not None:
+            wet = self.grid.values[self.grid.values > 0.0]
+            return float(wet.mean()) if wet.size else math.inf
+        return self.uniform
+
     def at(self, x, y):
         if self.grid is not None:
             return self.grid.depth_at(x, y)
         return self.uniform if np.ndim(x) == 0 else np.full(np.size(x), self.uniform)
 
 
-class Environment:
-    """Wind, current and depth of a run (an EnvironmentSpec made into fields)."""
+def wave_field(spec: WavesSpec, depth: float = math.inf, g: float = G) -> Optional[WaveField]:
+    """The sea of a WavesSpec (None for hs 0: calm); the compass "from" becomes the ENU math
+    angle the waves travel towards, here and nowhere else."""
+    if spec.hs == 0.0:
+        return None
+    towards = -_towards(spec.from_deg)
+    psi = math.atan2(towards[1], towards[0])
+    ramp = 3.0 * spec.tp if spec.ramp_time is None else spec.ramp_time
+    if spec.spectrum == "regular":
+        return WaveField.regular(spec.hs, spec.tp, psi, depth, ramp, g)
+    gamma = (3.3 if spec.gamma is None else spec.gamma) if spec.spectrum == "jonswap" else 1.0
+    return WaveField.irregular(spec.hs, spec.tp, psi, gamma, spec.spreading_s, spec.components, spec.seed,
+                               depth, ramp, g)
 
-    def __init__(self, spec: Optional[EnvironmentSpec] = None, base_dir: str = "."):
+
+class Environment:
+    """Wind, current, depth and waves of a run (an EnvironmentSpec made into fields)."""
+
+    def __init__(self, spec: Optional[EnvironmentSpec] = None, base_dir: str = ".", gravity: float = G):
         spec = spec if spec is not None else EnvironmentSpec()
         self.spec = spec
         self.wind = WindField(spec.wind) if spec.wind is not None else None
         self.current = CurrentField(spec.current)
         self.depth = DepthField(spec.depth, base_dir)
+        # one sea for every node: the same spec and seed give the same components everywhere
+        self.waves = wave_field(spec.waves, self.depth.representative, gravity) if spec.waves is not None else None
 
     @staticmethod
-    def from_mapping(data: Optional[dict], source: str = "environment", base_dir: str = ".") -> "Environment":
+    def from_mapping(data: Optional[dict], source: str = "environment", base_dir: str = ".",
+                     gravity: float = G) -> "Environment":
         """From a plain mapping (a scenario's ``environment`` without water_density / gravity);
         a bad entry raises ValueError naming `source` and the key."""
         from pydantic import ValidationError
@@ -235,7 +317,7 @@ class Environment:
                 key = ".".join(str(p) for p in err["loc"] if not _UNION_BRANCH.search(str(p)))
                 lines.append(f"{source}: key '{key}': {err['msg']} (got {err.get('input')!r})")
             raise ValueError("\n".join(lines)) from None
-        return Environment(spec, base_dir)
+        return Environment(spec, base_dir, gravity)
 
     @staticmethod
     def from_parameter(text: str, source: str = "parameter environment"):
@@ -252,10 +334,12 @@ class Environment:
             raise ValueError(f"{source}: expected a YAML mapping, got {text!r}")
         data = dict(data)
         rho = data.pop("water_density", 1025.0)
-        data.pop("gravity", None)
+        g = data.pop("gravity", G)
         if isinstance(rho, bool) or not isinstance(rho, (int, float)) or not 900.0 < rho < 1100.0:
             raise ValueError(f"{source}: key 'water_density': expected a number in (900, 1100), got {rho!r}")
-        return Environment.from_mapping(data, source), float(rho)
+        if isinstance(g, bool) or not isinstance(g, (int, float)) or not 9.0 < g < 10.5:
+            raise ValueError(f"{source}: key 'gravity': expected a number in (9, 10.5), got {g!r}")
+        return Environment.from_mapping(data, source, gravity=float(g)), float(rho)
 
     def wind_velocity(self, t: float, z=10.0):
         if self.wind is None:
@@ -267,3 +351,16 @@ class Environment:
 
     def depth_at(self, x, y):
         return self.depth.at(x, y)
+
+    def wave_elevation(self, t: float, x, y):
+        """eta (m) at (x, y); 0 on a calm sea."""
+        if self.waves is None:
+            return 0.0 if np.ndim(x) == 0 else np.zeros(np.size(x))
+        return self.waves.elevation(x, y, t)
+
+    def wave_kinematics(self, t: float, x, y, z):
+        """waves.WaveKinematics at points (x, y, z) (1-D); all zero on a calm sea."""
+        if self.waves is None:
+            m = np.size(np.broadcast_arrays(x, y, z)[0])
+            return WaveKinematics(np.zeros(m), np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m))
+        return self.waves.kinematics(x, y, z, t)
