@@ -335,3 +335,12 @@ def test_scenario_waves_reach_the_nodes_environment(tmp_path):
     kin = env.wave_kinematics(3.0, [5.0], [1.0], [-1.0])
     assert np.array_equal(kin.velocity, env.waves.kinematics(5.0, 1.0, -1.0, 3.0).velocity)
     assert Environment.from_parameter("{}")[0].waves is None
+
+
+def test_a_sea_the_bodies_do_not_feel_yet_is_said_before_the_run(tmp_path):
+    """Until the vessel and rope models take the wave field (issue 31), a scenario with waves
+    says so: the run would otherwise look like a run in waves."""
+    from scenario_format.scenario import load_scenario
+    assert any("do not feel it yet" in w for w in load_scenario(_scenario(tmp_path, GOOD), check_files=False).warnings)
+    calm = load_scenario(_scenario(tmp_path, {**GOOD, "hs": 0.0}), check_files=False)
+    assert calm.warnings == []
