@@ -710,6 +710,52 @@ def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
         raise ScenarioError(f"{path}: key 'contacts[{i}]': the fender point of {c.fender} starts inside the hull "
                             f"of '{c.hull}' ({start.penetration - c.radius:.2f} m in, near {where}): move the "
                             "vessels apart")
+    _check_contact_exchange(path, sc, i, c, contact.mobility)
+
+
+def _round_in(value: float, up: bool) -> float:
+    """value to 3 significant digits, rounded towards the allowed side (a limit quoted in a
+    message must itself pass)."""
+    if not (math.isfinite(value) and value > 0.0):
+        return value
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return (math.ceil if up else math.floor)(value / scale) * scale
+
+
+def _check_contact_exchange(path: str, sc: Scenario, i: int, c: ContactSpec, mobility: float) -> None:
+    """The fender's spring and damper can be exchanged between the two vessel nodes at the
+    scenario's rate (hull_contact.fender.exchange_limits, where the bound is derived: omega h <
+    1/2 with omega^2 = k lam, and the damping inside the stable range for that stiffness, lam =
+    1/m_fender + 1/m_hull the largest relative mobility at the contact). Beyond it the exchanged
+    force pumps energy into the contact: the vessels are thrown apart or the run diverges."""
+    from hull_contact.fender import exchange_limits
+    h = 1.0 / sc.exchange_rate
+    lim = exchange_limits(c.stiffness, c.damping, h, mobility)
+    if lim["stable"]:
+        return
+    where = (f"the effective mass at the contact of {c.fender} on '{c.hull}' is {1.0 / mobility:.3g} kg "
+             f"(1/m_fender + 1/m_hull at the fender point and the most mobile point of the hull's outline)")
+    rate = f"{sc.exchange_rate:g} Hz (exchange_rate)"
+    if lim["omega_h"] >= 0.5:
+        k_max = _round_in(lim["stiffness"], up=False)
+        need = math.sqrt(c.stiffness * mobility) / 0.5
+        raise ScenarioError(
+            f"{path}: key 'contacts[{i}].stiffness': {c.stiffness:g} N/m cannot be exchanged stably at {rate}: {where}, "
+            f"so omega = sqrt(k / m) = {lim['omega_h'] / h:.3g} rad/s and omega h = {lim['omega_h']:.3g}; the exchange "
+            f"needs omega h < 0.5 whatever the damping, i.e. stiffness at most {k_max:g} N/m at this rate (or "
+            f"exchange_rate above {_round_in(need, up=True):g} Hz for this stiffness)")
+    c_lo, c_hi = lim["damping"]
+    if c.damping >= c_hi:
+        raise ScenarioError(
+            f"{path}: key 'contacts[{i}].damping': {c.damping:g} N s/m cannot be exchanged stably at {rate}: {where}; "
+            f"the damper, acting one step late, changes the relative speed per step by c h / m = {lim['b']:.3g} times "
+            f"that speed and overshoots (the exchange needs it below 1): with stiffness {c.stiffness:g} N/m the damping must be below "
+            f"{_round_in(c_hi, up=False):g} N s/m at this rate (and above {_round_in(c_lo, up=True):g})")
+    raise ScenarioError(
+        f"{path}: key 'contacts[{i}].damping': {c.damping:g} N s/m is too little for the exchange at {rate}: {where}; "
+        f"the exchanged spring ({c.stiffness:g} N/m, omega h = {lim['omega_h']:.3g}) gains energy every step "
+        f"that a damping of at least {_round_in(c_lo, up=True):g} N s/m takes out (and below "
+        f"{_round_in(c_hi, up=False):g}); real fenders damp far more")
 
 
 def has_thrusters(sc: Scenario, v: VesselSpec) -> bool:
