@@ -191,6 +191,9 @@ class RopeSpec(_Strict):
     # velocities at t = 0 before step 0 (RopeChain.settle), so the run starts without a spurious load
     equilibrium: bool = False
     deployed_length: Optional[float] = Field(None, gt=0.0, le=_R["deployed_length"].hi)  # also <= the rope file's
+    # layout straight only: lay the whole rope straight even though its ends start closer than its
+    # length (the slack then lies folded along the chord); without it such a layout is refused
+    allow_slack: bool = False
     n_elements: Optional[int] = Field(None, ge=1, le=_R["n_elements"].hi)  # None: the rope file's
 
 
@@ -446,6 +449,9 @@ def _check_references(path: str, sc: Scenario) -> None:
             # the node ignores it: a straight rope is laid with the rope file's length
             raise ScenarioError(f"{path}: key 'ropes[{i}].deployed_length': only for layout slack or winch "
                                 f"(layout is straight: the rope file's length is laid out)")
+        if r.allow_slack and r.layout != "straight":
+            raise ScenarioError(f"{path}: key 'ropes[{i}].allow_slack': only for layout straight (layout "
+                                f"{r.layout} lays its slack out itself)")
     _check_events(path, sc, vessels, driven)
 
 
@@ -670,6 +676,7 @@ def _check_files(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key '{key}.n_elements': an fd_cable rope needs at least 3 nodes, "
                                     f"got {r.n_elements}")
         elif r.layout == "straight":
+            _check_straight_span(path, sc, i, r, params, points)
             pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
             if pa is not None and pb is not None and math.dist(pa, pb) < 1e-6:
                 raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
@@ -687,6 +694,38 @@ def _check_files(path: str, sc: Scenario) -> None:
         if installed_executable(a.package, a.executable) is None:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].executable': {a.package}/{a.executable} not found on "
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
+
+
+STRAIGHT_SLACK_TOLERANCE = 0.02   # a straight layout's ends at least 98 % of the rope's length apart
+
+
+def _check_straight_span(path: str, sc: Scenario, i: int, r: RopeSpec, params, points) -> None:
+    """A straight layout lays the rope file's whole length between the ends. Accepted when the
+    ends start between (1 - STRAIGHT_SLACK_TOLERANCE) L and L (1 + breaking_load / EA) apart: up
+    to 2 % of slack (laid straight, a 2 % longer rope would sag about 9 % of the span) or stretched
+    at most to its breaking load (beyond it, it parts at t = 0). Shorter spans need allow_slack:
+    true; otherwise the message points to the winch or slack layout that lays what was meant."""
+    pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
+    if pa is None or pb is None or math.dist(pa, pb) < 1e-6:
+        return                                   # no position, or the ends coincide (checked after)
+    span, length = math.dist(pa, pb), float(params.length)
+    shortest = (1.0 - STRAIGHT_SLACK_TOLERANCE) * length
+    longest = length * (1.0 + params.breaking_load / params.ea)
+    key = f"{path}: key 'ropes[{i}].layout'"
+    rope = f"the rope ({r.rope_file}) is {length:g} m long"
+    if span > longest:
+        raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope} and reaches at most "
+                            f"{longest:.1f} m at its breaking load ({params.breaking_load / 1e3:.4g} kN, EA "
+                            f"{params.ea:.4g} N): it would part at t = 0; start the vessels closer or use a longer rope")
+    if span >= shortest or r.allow_slack:
+        return
+    deployed = min(math.ceil(span * (1.0 + STRAIGHT_SLACK_TOLERANCE)), length)
+    winch = (f"layout: winch with deployed_length: {deployed:g} (the rest stays on end a's drum), "
+             if r.end_a != "free" else "")
+    raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope}: a straight layout lays all "
+                        f"of it out, {length - span:.1f} m folded along the chord. Use {winch}layout: slack (the whole "
+                        f"rope hangs as a catenary), or allow_slack: true to lay it straight anyway (a straight layout "
+                        f"needs the ends {shortest:.1f} m to {longest:.1f} m apart)")
 
 
 def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
