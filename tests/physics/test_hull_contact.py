@@ -291,3 +291,15 @@ def test_the_runtime_guard_catches_a_1e10_damper_or_spring_at_the_first_contact(
     bad = contact.force(tug, hull, 1.5 * H)
     bad.normal_force = float("nan")
     assert "not finite" in contact.divergence(bad, H)
+
+
+def test_the_slowest_stable_rate_is_the_edge_of_the_bound():
+    """For the 1e8 N/m fender with the default damper on a 6e5 kg pair: stable just above the rate
+    slowest_stable_rate gives, not just below it; and never for an undamped fender."""
+    from hull_contact.fender import slowest_stable_rate
+    k, c = 1.0e8, 4.0e5
+    rate = slowest_stable_rate(k, c, LAM)
+    assert 10.0 < rate < 1000.0
+    assert exchange_limits(k, c, 1.0 / (1.001 * rate), LAM)["stable"]
+    assert not exchange_limits(k, c, 1.0 / (0.999 * rate), LAM)["stable"]
+    assert slowest_stable_rate(k, 0.0, LAM) == math.inf

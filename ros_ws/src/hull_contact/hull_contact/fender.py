@@ -224,13 +224,30 @@ def stable_damping_range(a: float) -> Tuple[float, float]:
 
 def exchange_limits(stiffness: float, damping: float, dt: float, mobility: float) -> dict:
     """The contact's stiffness and damping against what the exchange at step dt (s) carries, for
-    the relative mobility `mobility` (1/kg) at the contact: {'stiffness': k_max, 'damping':
-    (c_min, c_max) for this stiffness (nan when k > k_max), 'stable': bool, 'omega_h', 'b'}."""
+    the relative mobility `mobility` (1/kg) at the contact: {'stiffness': k_max for any damping
+    (omega h = 1/2, reached at 'best_damping'), 'stiffness_here': the largest stiffness for this
+    damping (0 if none), 'damping': (c_min, c_max) for this stiffness (nan when k >= k_max),
+    'stable': bool, 'omega_h', 'b'}."""
     hl = dt * mobility
     a, b = stiffness * dt * hl, damping * hl
     b_lo, b_hi = stable_damping_range(a)
-    return {"stiffness": STIFFNESS_BOUND_OMEGA_H ** 2 / (dt * hl), "damping": (b_lo / hl, b_hi / hl),
-            "stable": a < 0.25 and b_lo < b < b_hi, "omega_h": math.sqrt(a), "b": b}
+    return {"stiffness": STIFFNESS_BOUND_OMEGA_H ** 2 / (dt * hl), "best_damping": 0.25 / hl,
+            "stiffness_here": max(0.0, math.sqrt(b) - b) / (dt * hl) if b < 1.0 else 0.0,
+            "damping": (b_lo / hl, b_hi / hl), "stable": a < 0.25 and b_lo < b < b_hi, "omega_h": math.sqrt(a), "b": b}
+
+
+def slowest_stable_rate(stiffness: float, damping: float, mobility: float) -> float:
+    """The exchange rate (Hz) above which the contact is stable: with x = sqrt(h), the margin
+    sqrt(b) - b - a = sqrt(c lam) x - c lam x^2 - k lam x^4 is concave in x and starts positive,
+    so it has one root; found by bisection (inf when damping is 0: never stable)."""
+    if damping <= 0.0:
+        return math.inf
+    margin = lambda h: math.sqrt(damping * mobility * h) - damping * mobility * h - stiffness * mobility * h * h  # noqa: E731
+    lo, hi = 1e-9, 1.0 / (damping * mobility)          # stable at lo, not at hi (b = 1)
+    for _ in range(200):
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if margin(mid) > 0.0 else (lo, mid)
+    return 1.0 / lo
 
 
 def planar_mobility(model, z: float = 0.0, dt: float = 1e-3) -> np.ndarray:

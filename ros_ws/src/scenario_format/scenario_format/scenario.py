@@ -767,7 +767,7 @@ def _check_contact_exchange(path: str, sc: Scenario, i: int, c: ContactSpec, mob
     1/2 with omega^2 = k lam, and the damping inside the stable range for that stiffness, lam =
     1/m_fender + 1/m_hull the largest relative mobility at the contact). Beyond it the exchanged
     force pumps energy into the contact: the vessels are thrown apart or the run diverges."""
-    from hull_contact.fender import exchange_limits
+    from hull_contact.fender import exchange_limits, slowest_stable_rate
     h = 1.0 / sc.exchange_rate
     lim = exchange_limits(c.stiffness, c.damping, h, mobility)
     if lim["stable"]:
@@ -775,26 +775,31 @@ def _check_contact_exchange(path: str, sc: Scenario, i: int, c: ContactSpec, mob
     where = (f"the effective mass at the contact of {c.fender} on '{c.hull}' is {1.0 / mobility:.3g} kg "
              f"(1/m_fender + 1/m_hull at the fender point and the most mobile point of the hull's outline)")
     rate = f"{sc.exchange_rate:g} Hz (exchange_rate)"
+    k_here = _round_in(lim["stiffness_here"], up=False)
+    need = slowest_stable_rate(c.stiffness, c.damping, mobility)
+    faster = (f"; or exchange_rate above {_round_in(need, up=True):g} Hz for these values" if need <= 1000.0 else
+              f"; no exchange_rate up to 1000 Hz carries these values")
     if lim["omega_h"] >= 0.5:
-        k_max = _round_in(lim["stiffness"], up=False)
-        need = math.sqrt(c.stiffness * mobility) / 0.5
+        here = (f"with this damping ({c.damping:g} N s/m) the stiffness must be below {k_here:g} N/m, and "
+                if k_here > 0 else "")
         raise ScenarioError(
             f"{path}: key 'contacts[{i}].stiffness': {c.stiffness:g} N/m cannot be exchanged stably at {rate}: {where}, "
             f"so omega = sqrt(k / m) = {lim['omega_h'] / h:.3g} rad/s and omega h = {lim['omega_h']:.3g}; the exchange "
-            f"needs omega h < 0.5 whatever the damping, i.e. stiffness at most {k_max:g} N/m at this rate (or "
-            f"exchange_rate above {_round_in(need, up=True):g} Hz for this stiffness)")
-    c_lo, c_hi = lim["damping"]
-    if c.damping >= c_hi:
+            f"needs omega h < 0.5 whatever the damping: {here}no damping allows more than "
+            f"{_round_in(lim['stiffness'], up=False):g} N/m (at {lim['best_damping']:.3g} N s/m) at this rate{faster}")
+    c_lo, c_hi = (_round_in(lim["damping"][0], up=True), _round_in(lim["damping"][1], up=False))
+    stiffer = f", or a stiffness below {k_here:g} N/m for this damping" if k_here > 0 else ""
+    if c.damping >= lim["damping"][1]:
         raise ScenarioError(
             f"{path}: key 'contacts[{i}].damping': {c.damping:g} N s/m cannot be exchanged stably at {rate}: {where}; "
             f"the damper, acting one step late, changes the relative speed per step by c h / m = {lim['b']:.3g} times "
-            f"that speed and overshoots (the exchange needs it below 1): with stiffness {c.stiffness:g} N/m the damping must be below "
-            f"{_round_in(c_hi, up=False):g} N s/m at this rate (and above {_round_in(c_lo, up=True):g})")
+            f"that speed and overshoots (the exchange needs it below 1): with stiffness {c.stiffness:g} N/m the "
+            f"damping must be below {c_hi:g} N s/m at this rate (and above {c_lo:g}){stiffer}{faster}")
     raise ScenarioError(
         f"{path}: key 'contacts[{i}].damping': {c.damping:g} N s/m is too little for the exchange at {rate}: {where}; "
-        f"the exchanged spring ({c.stiffness:g} N/m, omega h = {lim['omega_h']:.3g}) gains energy every step "
-        f"that a damping of at least {_round_in(c_lo, up=True):g} N s/m takes out (and below "
-        f"{_round_in(c_hi, up=False):g}); real fenders damp far more")
+        f"the exchanged spring ({c.stiffness:g} N/m, omega h = {lim['omega_h']:.3g}) gains energy every step: with "
+        f"that stiffness the damping must be at least {c_lo:g} N s/m (and below {c_hi:g}){stiffer}{faster}; real "
+        f"fenders damp far more")
 
 
 def has_thrusters(sc: Scenario, v: VesselSpec) -> bool:
