@@ -729,7 +729,8 @@ def _check_straight_span(path: str, sc: Scenario, i: int, r: RopeSpec, params, p
 
 
 def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
-    """The fender attachment exists, and the fender does not start inside the hull outline."""
+    """The fender attachment exists, the fender does not start inside the hull outline, and the
+    exchange can carry its stiffness and damping (_check_contact_exchange)."""
     import numpy as np
     from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
     vessel_name, fender = c.fender.split("/")
