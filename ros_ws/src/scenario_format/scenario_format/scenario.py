@@ -696,38 +696,6 @@ def _check_files(path: str, sc: Scenario) -> None:
                                 "AMENT_PREFIX_PATH (misspelt, or the workspace is not built / sourced?)")
 
 
-STRAIGHT_SLACK_TOLERANCE = 0.02   # a straight layout's ends at least 98 % of the rope's length apart
-
-
-def _check_straight_span(path: str, sc: Scenario, i: int, r: RopeSpec, params, points) -> None:
-    """A straight layout lays the rope file's whole length between the ends. Accepted when the
-    ends start between (1 - STRAIGHT_SLACK_TOLERANCE) L and L (1 + breaking_load / EA) apart: up
-    to 2 % of slack (laid straight, a 2 % longer rope would sag about 9 % of the span) or stretched
-    at most to its breaking load (beyond it, it parts at t = 0). Shorter spans need allow_slack:
-    true; otherwise the message points to the winch or slack layout that lays what was meant."""
-    pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
-    if pa is None or pb is None or math.dist(pa, pb) < 1e-6:
-        return                                   # no position, or the ends coincide (checked after)
-    span, length = math.dist(pa, pb), float(params.length)
-    shortest = (1.0 - STRAIGHT_SLACK_TOLERANCE) * length
-    longest = length * (1.0 + params.breaking_load / params.ea)
-    key = f"{path}: key 'ropes[{i}].layout'"
-    rope = f"the rope ({r.rope_file}) is {length:g} m long"
-    if span > longest:
-        raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope} and reaches at most "
-                            f"{longest:.1f} m at its breaking load ({params.breaking_load / 1e3:.4g} kN, EA "
-                            f"{params.ea:.4g} N): it would part at t = 0; start the vessels closer or use a longer rope")
-    if span >= shortest or r.allow_slack:
-        return
-    deployed = min(math.ceil(span * (1.0 + STRAIGHT_SLACK_TOLERANCE)), length)
-    winch = (f"layout: winch with deployed_length: {deployed:g} (the rest stays on end a's drum), "
-             if r.end_a != "free" else "")
-    raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope}: a straight layout lays all "
-                        f"of it out, {length - span:.1f} m folded along the chord. Use {winch}layout: slack (the whole "
-                        f"rope hangs as a catenary), or allow_slack: true to lay it straight anyway (a straight layout "
-                        f"needs the ends {shortest:.1f} m to {longest:.1f} m apart)")
-
-
 def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
     """The fender attachment exists, the fender does not start inside the hull outline, and the
     exchange can carry its stiffness and damping (_check_contact_exchange)."""
@@ -801,6 +769,38 @@ def _check_contact_exchange(path: str, sc: Scenario, i: int, c: ContactSpec, mob
         f"the exchanged spring ({c.stiffness:g} N/m, omega h = {lim['omega_h']:.3g}) gains energy every step: with "
         f"that stiffness the damping must be at least {c_lo:g} N s/m (and below {c_hi:g}){stiffer}{faster}; real "
         f"fenders damp far more")
+
+
+STRAIGHT_SLACK_TOLERANCE = 0.02   # a straight layout's ends at least 98 % of the rope's length apart
+
+
+def _check_straight_span(path: str, sc: Scenario, i: int, r: RopeSpec, params, points) -> None:
+    """A straight layout lays the rope file's whole length between the ends. Accepted when the
+    ends start between (1 - STRAIGHT_SLACK_TOLERANCE) L and L (1 + breaking_load / EA) apart: up
+    to 2 % of slack (laid straight, a 2 % longer rope would sag about 9 % of the span) or stretched
+    at most to its breaking load (beyond it, it parts at t = 0). Shorter spans need allow_slack:
+    true; otherwise the message points to the winch or slack layout that lays what was meant."""
+    pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
+    if pa is None or pb is None or math.dist(pa, pb) < 1e-6:
+        return                                   # no position, or the ends coincide (checked after)
+    span, length = math.dist(pa, pb), float(params.length)
+    shortest = (1.0 - STRAIGHT_SLACK_TOLERANCE) * length
+    longest = length * (1.0 + params.breaking_load / params.ea)
+    key = f"{path}: key 'ropes[{i}].layout'"
+    rope = f"the rope ({r.rope_file}) is {length:g} m long"
+    if span > longest:
+        raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope} and reaches at most "
+                            f"{longest:.1f} m at its breaking load ({params.breaking_load / 1e3:.4g} kN, EA "
+                            f"{params.ea:.4g} N): it would part at t = 0; start the vessels closer or use a longer rope")
+    if span >= shortest or r.allow_slack:
+        return
+    deployed = min(math.ceil(span * (1.0 + STRAIGHT_SLACK_TOLERANCE)), length)
+    winch = (f"layout: winch with deployed_length: {deployed:g} (the rest stays on end a's drum), "
+             if r.end_a != "free" else "")
+    raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope}: a straight layout lays all "
+                        f"of it out, {length - span:.1f} m folded along the chord. Use {winch}layout: slack (the whole "
+                        f"rope hangs as a catenary), or allow_slack: true to lay it straight anyway (a straight layout "
+                        f"needs the ends {shortest:.1f} m to {longest:.1f} m apart)")
 
 
 def has_thrusters(sc: Scenario, v: VesselSpec) -> bool:
