@@ -9,7 +9,14 @@ Truths used:
 - friction: a fender sliding along the hull fast (v >> slip speed) feels mu F_n against the slip;
 - pushing: an ASD tug pushing a free S-175 at rest on its side settles where the contact force
   equals the tug's delivered thrust minus its own resistance (the ship file's resistance table
-  at the tug's speed, by hand), within 2 %, and the fender's compression is F / k.
+  at the tug's speed, by hand), within 2 %, and the fender's compression is F / k;
+- the exchange bound (hull_contact.fender, issue 30 item 5): a closed contact stepped like the
+  lockstep network oscillates about its equilibrium at the growth rate of the exchange map's
+  largest root (within 10 %), decays inside the Jury region a < sqrt(b) - b and blows up outside
+  it; an impact keeps less energy than it had inside the bound and gains it well outside; the
+  measured effective mass in surge is the ship file's mass plus its added mass;
+- the runtime guard: every step of stable contacts passes it, a damper of 1e10 N s/m or a
+  stiffness of 1e10 N/m is caught at the first contact step, before its force is applied.
 """
 import math
 import os
@@ -17,7 +24,8 @@ import os
 import numpy as np
 import pytest
 
-from hull_contact.fender import FenderContact, FenderSpec, PlanarPose, contact_from_ship_files, outline_distance
+from hull_contact.fender import (FenderContact, FenderSpec, PlanarPose, contact_from_ship_files, exchange_limits,
+                                  outline_distance, planar_mobility, point_mobility)
 from sim_math.hull_plan import HullDimensions, waterline_outline
 
 SHIPS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "ros_ws", "src", "tug_dynamics", "ships")
@@ -54,11 +62,11 @@ def _free_flight(pose: PlanarPose, accel: np.ndarray, dt: float) -> PlanarPose:
 
 
 def _impact(dt: float, predict: bool, v0: float = 0.5, m_tug: float = 7.5e5, m_hull: float = 3.0e6,
-            k: float = 2.0e6, angle: float = 0.0):
+            k: float = 2.0e6, angle: float = 0.0, damping: float = 0.0):
     """A tug (fender point at its reference point) running at v0 into a box hull at rest, stepped
     like the lockstep network. Returns (energy after / before, max compression, momentum drift,
     analytic max compression)."""
-    spec = FenderSpec(radius=0.5, stiffness=k, damping=0.0, friction=0.0, predict_half_step=predict)
+    spec = FenderSpec(radius=0.5, stiffness=k, damping=damping, friction=0.0, predict_half_step=predict)
     contact = FenderContact(spec, np.zeros(2), BOX)
     c, s = math.cos(angle), math.sin(angle)
     start = np.array([12.0, 0.0])
@@ -147,8 +155,10 @@ def test_a_tug_pushing_a_free_ship_transfers_its_thrust():
     tug.set_command(Command(engine_order=0.5, steering_angle=0.0))
     dt = 0.05
     result = contact.force(_pose(tug), _pose(ship), 0.5 * dt)
+    assert 1.0e5 < 1.0 / contact.mobility < 7.5e5     # the tug's bow, turning, against the S-175's ends
     for _ in range(int(700.0 / dt)):
         nxt = contact.force(_pose(tug), _pose(ship), 1.5 * dt)
+        assert contact.divergence(nxt, dt) is None      # no false alarm in a real push
         force = np.array([*result.force_on_hull, 0.0])
         ship.step(dt, [ExternalWrench(force, np.array([*result.hull_point_body, fender[2]]))])
         tug.step(dt, [ExternalWrench(-force, fender)])
@@ -161,3 +171,135 @@ def test_a_tug_pushing_a_free_ship_transfers_its_thrust():
     assert result.normal_force == pytest.approx(thrust - resistance, rel=0.02)   # measured 0.02 %
     assert result.penetration == pytest.approx(result.normal_force / spec.stiffness, rel=0.01)
     assert result.friction_force < 1e-3 * result.normal_force                    # no sliding beam-on
+
+
+# --- the exchange bound (issue 30 item 5) -------------------------------------------------------
+H, M_TUG, M_HULL = 0.02, 7.5e5, 3.0e6
+LAM = 1.0 / M_TUG + 1.0 / M_HULL
+
+
+def _map_growth(a: float, b: float) -> float:
+    """ln of the largest root of the closed contact's exchange map (per step), from its
+    characteristic polynomial (fender.py)."""
+    return math.log(max(abs(np.roots([1.0, -2.0, 1.0 + 2.0 * a + b, -(a + b)]))))
+
+
+def _push(a: float, b: float, steps: int = 400, thrust: float = 5.0e5, offset: float = 0.01):
+    """A tug pushed by a constant thrust against a free box hull (free bodies, the contact closed),
+    released offset * d_eq off its equilibrium compression d_eq, stepped like the lockstep network
+    with k = a / (h^2 lam), c = b / (h lam). Returns (measured growth per step of the deviation from
+    d_eq: its largest value over steps 200-300 against 100-200; largest deviation / the initial one;
+    the runtime guard's findings)."""
+    k, c = a / (H * H * LAM), b / (H * LAM)
+    contact = FenderContact(FenderSpec(radius=0.5, stiffness=k, damping=c, friction=0.0), np.zeros(2), BOX)
+    contact.mobility = LAM
+    d_eq = thrust * M_HULL / (M_TUG + M_HULL) / k     # the force that accelerates the hull with the tug
+    tug, hull = PlanarPose(10.5 - d_eq * (1.0 + offset), 0.0, 0.0), PlanarPose(0.0, 0.0, 0.0)
+    force = contact.force(tug, hull, 0.5 * H).force_on_hull
+    dev, guard = [], []
+    for _ in range(steps):
+        nxt = contact.force(tug, hull, 1.5 * H)
+        guard.append(contact.divergence(nxt, H))
+        tug = _free_flight(tug, (np.array([-thrust, 0.0]) - force) / M_TUG, H)
+        hull = _free_flight(hull, force / M_HULL, H)
+        force = nxt.force_on_hull
+        dev.append(abs(contact.force(tug, hull).penetration - d_eq))
+    q = steps // 4
+    dev = np.array(dev)
+    return (math.log(dev[3 * q:].max() / dev[q:2 * q].max()) / (2 * q), dev.max() / (offset * d_eq),
+            [g for g in guard if g])
+
+
+@pytest.mark.parametrize("a, b", [(0.2025, 0.25), (0.225, 0.25), (0.09, 0.05), (0.01, 0.8), (0.01, 0.0)])
+def test_closed_contact_grows_or_decays_at_the_exchange_maps_rate(a, b):
+    """The stepped contact against the analytic map: the polynomial (and so the bound) is the
+    exchange's. (0.01, 0): undamped, it grows slowly even at omega h = 0.1 (measured 5.4e-5 per
+    step against 5.1e-5), which is why the scenario check asks for a little damping."""
+    measured, _amp, _guard = _push(a, b)
+    assert measured == pytest.approx(_map_growth(a, b), rel=0.10)   # measured within 0.1-5.4 %
+    assert (measured < 0.0) == ((a + b) ** 2 < b)                    # Jury: stable iff a < sqrt(b) - b
+
+
+@pytest.mark.parametrize("a, b, stable, growth", [
+    (0.225, 0.25, True, 1.0),      # omega h = 0.474, the best damping: never above its start
+    (0.275, 0.25, False, 10.0),    # omega h = 0.524: no damping holds it (measured x88)
+    (1.0, 0.25, False, 1000.0),    # omega h = 1 (measured x7110)
+    (0.01, 1.2, False, 10.0),      # the lagged damper overshoots, c h lam = 1.2 (measured x14)
+])
+def test_a_pushed_contact_beyond_the_bound_blows_up(a, b, stable, growth):
+    lim = exchange_limits(a / (H * H * LAM), b / (H * LAM), H, LAM)
+    assert lim["stable"] is stable and lim["omega_h"] == pytest.approx(math.sqrt(a))
+    _rate, amplification, guard = _push(a, b)
+    if stable:
+        assert amplification <= growth and not guard
+    else:
+        assert amplification > growth
+
+
+@pytest.mark.parametrize("omega_h, b, bound", [(0.474, 0.25, 1.0), (0.1, 0.9, 1.0),     # inside: energy lost
+                                               (1.0, 0.25, 2.0), (0.1, 1.5, 2.0)])     # outside: gained
+def test_an_impact_inside_the_bound_loses_energy_and_outside_gains_it(omega_h, b, bound):
+    """A tug at 0.5 m/s into a free hull, damped: inside the bound the impact keeps less kinetic
+    energy than it had (measured 0.71 and 0.87 of it), well outside it leaves with more (measured
+    5.5 and 3.5 times)."""
+    k, c = omega_h ** 2 / (H * H * LAM), b / (H * LAM)
+    ratio, _peak, drift, _analytic = _impact(H, True, k=k, damping=c)
+    assert exchange_limits(k, c, H, LAM)["stable"] is (bound == 1.0)
+    assert drift < 1e-6 * 0.5 * M_TUG
+    assert (ratio < bound) if bound == 1.0 else (ratio > bound)
+
+
+def test_exchange_limits_are_the_bound_of_the_map():
+    """k_max is omega h = 1/2; the damping range's ends are where the map's largest root reaches 1."""
+    k = 1.0e7
+    lim = exchange_limits(k, 1.0e5, H, LAM)
+    assert math.sqrt(lim["stiffness"] * LAM) * H == pytest.approx(0.5, rel=1e-12)
+    a = k * H * H * LAM
+    for c_end in lim["damping"]:
+        assert _map_growth(a, c_end * H * LAM) == pytest.approx(0.0, abs=1e-6)
+    c_lo, c_hi = lim["damping"]
+    for c, stable in ((0.9 * c_lo, False), (1.1 * c_lo, True), (0.99 * c_hi, True), (1.01 * c_hi, False)):
+        assert exchange_limits(k, c, H, LAM)["stable"] is stable
+        assert (_map_growth(a, c * H * LAM) < 0.0) is stable
+    assert not exchange_limits(lim["stiffness"] * 1.0001, 0.25 / (H * LAM), H, LAM)["stable"]
+
+
+def test_measured_mobility_is_the_ship_files_mass_and_added_mass():
+    """The ASD tug's surge: 1 / (mass (1 + mx/m)) = 1 / (754700 kg * 1.05), from its ship file."""
+    from tug_dynamics.ship_file import load_ship
+    minv = planar_mobility(load_ship(os.path.join(SHIPS, "asd_tug.yaml")))
+    assert 1.0 / minv[0, 0] == pytest.approx(754700.0 * 1.05, rel=1e-6)
+    # at the reference point, surge only: the point's mobility in x is the surge mobility
+    assert point_mobility(minv, 0.0, 0.0, 0.0) == pytest.approx(max(np.linalg.eigvalsh(minv[:2, :2])), rel=1e-9)
+
+
+def test_the_runtime_guard_catches_a_1e10_damper_or_spring_at_the_first_contact():
+    """The first contact step of a tug at 0.5 m/s: the force, not yet applied, would change the
+    relative speed by more than a passive fender can (1e10 N s/m: 167 m/s against 1.02 m/s;
+    1e10 N/m: 3.34 m/s against 2.29 m/s)."""
+    for k, c, quantity in ((2.0e6, 1.0e10, "normal force"), (1.0e10, 4.0e5, "normal force")):
+        contact = FenderContact(FenderSpec(radius=0.5, stiffness=k, damping=c, friction=0.0), np.zeros(2), BOX)
+        contact.mobility = LAM
+        tug, hull = PlanarPose(10.5 + 0.005, 0.0, 0.0, -0.5, 0.0), PlanarPose(0.0, 0.0, 0.0)
+        r = contact.force(tug, hull, 1.5 * H)         # 10 mm in at the middle of its step
+        assert r.in_contact
+        message = contact.divergence(r, H)
+        assert message is not None and quantity in message, message
+    # deep inside the hull: the fender point 3.5 m inside a 10 m beam box (0.5 + 2.5 m allowed)
+    r = contact.force(PlanarPose(6.5, 0.0, 0.0), PlanarPose(0.0, 0.0, 0.0))
+    assert "penetration 4 m" in contact.divergence(r, H)
+    bad = contact.force(tug, hull, 1.5 * H)
+    bad.normal_force = float("nan")
+    assert "not finite" in contact.divergence(bad, H)
+
+
+def test_the_slowest_stable_rate_is_the_edge_of_the_bound():
+    """For the 1e8 N/m fender with the default damper on a 6e5 kg pair: stable just above the rate
+    slowest_stable_rate gives, not just below it; and never for an undamped fender."""
+    from hull_contact.fender import slowest_stable_rate
+    k, c = 1.0e8, 4.0e5
+    rate = slowest_stable_rate(k, c, LAM)
+    assert 10.0 < rate < 1000.0
+    assert exchange_limits(k, c, 1.0 / (1.001 * rate), LAM)["stable"]
+    assert not exchange_limits(k, c, 1.0 / (0.999 * rate), LAM)["stable"]
+    assert slowest_stable_rate(k, 0.0, LAM) == math.inf

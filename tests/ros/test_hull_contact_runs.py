@@ -95,3 +95,32 @@ def test_identical_on_a_second_run_in_one_process(runs):
         again = _physics(runs[other])
         for key in first:
             np.testing.assert_array_equal(first[key], again[key], err_msg=f"{other}: {key}")
+
+
+def test_a_diverging_contact_stops_the_run_naming_the_contact(tmp_path):
+    """Issue 30 item 5: a fender damper of 1e10 N s/m (the schema's maximum) got the quarter line
+    blamed, or the run ended 0 with the pusher thrown off. Run past the scenario check (which
+    refuses it, test_malformed_inputs), the contact node's own guard stops the run at the first
+    contact step, before its force is applied: exit 3, naming the contact, both vessels and the
+    quantity, and no rope or vessel blamed."""
+    import subprocess
+    import sys
+    import os
+    library = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "ros_ws", "src", "scenario_runner",
+                           "scenarios", "assist_s175_push_pull.yaml")
+    text = open(library).read()
+    text = text.replace("    hull: ship\n", "    hull: ship\n    damping: 1.0e+10\n", 1)
+    path = tmp_path / "push_pull_damper_1e10.yaml"
+    path.write_text(text)
+    bypass = ("import sys; import scenario_format.scenario as s; s._check_contact_exchange = lambda *a, **k: None; "
+              "from scenario_runner.run_scenario import main; sys.exit(main(sys.argv[1:]))")
+    with reserved_domain():
+        proc = subprocess.run([sys.executable, "-c", bypass, str(path), "--duration", "10", "--no-record", "--quiet",
+                               "--log-dir", str(tmp_path / "logs")], capture_output=True, text=True, timeout=240)
+    err = proc.stderr
+    assert proc.returncode == 3, proc.stdout + err
+    assert "/push_aft/contact failed at step" in err, err
+    assert "contact 'push_aft' (fender stern_tug/bow_fender on the hull of ship) diverged" in err, err
+    assert "normal force" in err and "more than a passive fender can" in err, err
+    assert "rope" not in err.split("run stopped")[-1].split("\n")[0], err
+

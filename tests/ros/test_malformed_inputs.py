@@ -242,6 +242,27 @@ CASES = {
                                            "hull: barge}\nevents:\n")], {}, ["towline", "namespaces must differ"]),
     "duplicate_vessel_names": ([("  - name: barge", "  - name: tug")], {}, ["'vessels'", "duplicate"]),
     "scenario_name_is_a_path": ([("name: malformed_base", "name: ../../escape")], {}, ["'name'"]),
+    # --- issue 30 item 5: a contact the exchange cannot carry threw the pusher off (exit 0) or was
+    # blamed on a rope
+    "contact_stiffness_1e10": ([("events:\n", "contacts:\n  - {name: push, fender: tug/bow_bollard, hull: barge, "
+                                 "stiffness: 1.0e+10}\nevents:\n")], {},
+                               ["contacts[0].stiffness", "1e+10 N/m", "omega h < 0.5", "no damping allows more than"]),
+    "contact_damping_1e10": ([("events:\n", "contacts:\n  - {name: push, fender: tug/bow_bollard, hull: barge, "
+                               "damping: 1.0e+10}\nevents:\n")], {},
+                             ["contacts[0].damping", "1e+10 N s/m", "must be below"]),
+    "contact_damping_zero": ([("events:\n", "contacts:\n  - {name: push, fender: tug/bow_bollard, hull: barge, "
+                               "damping: 0.0}\nevents:\n")], {}, ["contacts[0].damping", "at least"]),
+    # --- issue 30 item 6: a straight layout laid the whole rope between ends far closer
+    "straight_layout_ends_much_closer_than_the_rope": ([("layout: winch\n    deployed_length: 60.0\n", "layout: straight\n"),
+                                                        ("  - {time: 0.5, rope: towline, payout_rate: 0.5}\n", "")], {},
+                                                       ["ropes[0].layout", "100 m long", "deployed_length",
+                                                        "layout: slack", "allow_slack: true"]),
+    "straight_layout_past_the_breaking_load": ([("layout: winch\n    deployed_length: 60.0\n", "layout: straight\n"),
+                                                ("  - {time: 0.5, rope: towline, payout_rate: 0.5}\n", ""),
+                                                ("initial: {x: -80.0,", "initial: {x: -150.0,")], {},
+                                               ["ropes[0].layout", "breaking load", "part at t = 0"]),
+    "allow_slack_on_a_winch_layout": ([("deployed_length: 60.0", "deployed_length: 60.0\n    allow_slack: true")], {},
+                                      ["ropes[0].allow_slack", "only for layout straight"]),
     # --- issue 30 item 6: orders to a vessel on a prescribed motion were ignored without a word
     "order_to_a_prescribed_motion_vessel": ([("initial: {x: -80.0, y: 5.0, heading_deg: 10.0, speed: 0.0}",
                                               "initial: {x: -80.0, y: 5.0, heading_deg: 10.0}\n"

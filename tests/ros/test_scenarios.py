@@ -238,7 +238,7 @@ ropes:
   - name: line
     end_a: tug/towing_hook
     end_b: fixed
-    end_b_position: [-50.0, 0.0, 0.0]
+    end_b_position: [-100.0, 0.0, 0.0]
 """
 
 
@@ -248,6 +248,9 @@ ropes:
     ("ship_file: harbour_tug.yaml", "ship_file: no_such_tug.yaml", "key 'vessels[0].ship_file': ship file"),
     ("end_a: tug/towing_hook", "end_a: tug/mast_top", "key 'ropes[0].end_a': vessel 'tug' has no attachment"),
     ("end_a: tug/towing_hook", "end_a: barge/bow_bollard", "vessel 'barge' is not in 'vessels'"),
+    # issue 30 item 6: a straight layout silently laid the whole rope between ends far closer
+    ("end_b_position: [-100.0, 0.0, 0.0]", "end_b_position: [-40.0, 0.0, 0.0]",
+     "key 'ropes[0].layout': straight between ends 39.1 m apart, but the rope (table1.yaml) is 100 m long"),
 ])
 def test_bad_scenario_fails_before_any_node_starts(tmp_path, run_in_process, old, new, message):
     proc = _bad(tmp_path, GOOD.replace(old, new), run_in_process)

@@ -29,6 +29,7 @@ from sim_plumbing import cdr
 from sim_contract.node_params import CONTACT_NODE
 from sim_math.data_files import resolve as resolve_data_file
 from sim_plumbing import ros_common as rc
+from sim_plumbing.ros_common import ModelDiverged
 from sim_plumbing.stepping import SteppedNode, StepInput
 
 
@@ -104,6 +105,16 @@ class ContactNode(SteppedNode):
                 self.poses[side] = _pose(msg)
         # from the state of step k, for the step it acts over (k+1 -> k+2): its middle is 1.5 dt on
         self.result = self.contact.force(self.poses["fender"], self.poses["hull"], 1.5 * self.dt)
+        # checked here, before any vessel applies it: a diverging exchange is then named by this node
+        # (a step or more before the rope or vessel it throws about fails)
+        problem = self.contact.divergence(self.result, self.dt)
+        if problem is not None:
+            k = self.step_index
+            detail = (f"contact '{self.contact_name}' (fender {self.fender_vessel}/{self.fender_name} on the hull of "
+                      f"{self.hull_vessel}) diverged at step {k} -> {k + 1} (t = {k * self.dt:.3f} s): {problem}; "
+                      f"check its stiffness and damping against the exchange rate")
+            self.emit_event("contact_failed", detail, self.result.normal_force)
+            raise ModelDiverged(detail)
 
     def publish_outputs(self) -> None:
         r = self.result

@@ -193,6 +193,9 @@ class RopeSpec(_Strict):
     # velocities at t = 0 before step 0 (RopeChain.settle), so the run starts without a spurious load
     equilibrium: bool = False
     deployed_length: Optional[float] = Field(None, gt=0.0, le=_R["deployed_length"].hi)  # also <= the rope file's
+    # layout straight only: lay the whole rope straight even though its ends start closer than its
+    # length (the slack then lies folded along the chord); without it such a layout is refused
+    allow_slack: bool = False
     n_elements: Optional[int] = Field(None, ge=1, le=_R["n_elements"].hi)  # None: the rope file's
 
 
@@ -460,6 +463,9 @@ def _check_references(path: str, sc: Scenario) -> None:
             # the node ignores it: a straight rope is laid with the rope file's length
             raise ScenarioError(f"{path}: key 'ropes[{i}].deployed_length': only for layout slack or winch "
                                 f"(layout is straight: the rope file's length is laid out)")
+        if r.allow_slack and r.layout != "straight":
+            raise ScenarioError(f"{path}: key 'ropes[{i}].allow_slack': only for layout straight (layout "
+                                f"{r.layout} lays its slack out itself)")
     _check_events(path, sc, vessels, driven)
 
 
@@ -685,6 +691,7 @@ def _check_files(path: str, sc: Scenario) -> None:
                 raise ScenarioError(f"{path}: key '{key}.n_elements': an fd_cable rope needs at least 3 nodes, "
                                     f"got {r.n_elements}")
         elif r.layout == "straight":
+            _check_straight_span(path, sc, i, r, params, points)
             pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
             if pa is not None and pb is not None and math.dist(pa, pb) < 1e-6:
                 raise ScenarioError(f"{path}: key '{key}.end_b': both ends start at {[round(c, 3) for c in pa]}: "
@@ -745,7 +752,8 @@ def _check_exchange_rate(path: str, sc: Scenario, i: int, r: "RopeSpec", params,
 
 
 def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
-    """The fender attachment exists, and the fender does not start inside the hull outline."""
+    """The fender attachment exists, the fender does not start inside the hull outline, and the
+    exchange can carry its stiffness and damping (_check_contact_exchange)."""
     import numpy as np
     from hull_contact.fender import FenderSpec, PlanarPose, contact_from_ship_files
     vessel_name, fender = c.fender.split("/")
@@ -765,6 +773,89 @@ def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
         raise ScenarioError(f"{path}: key 'contacts[{i}]': the fender point of {c.fender} starts inside the hull "
                             f"of '{c.hull}' ({start.penetration - c.radius:.2f} m in, near {where}): move the "
                             "vessels apart")
+    _check_contact_exchange(path, sc, i, c, contact.mobility)
+
+
+def _round_in(value: float, up: bool) -> float:
+    """value to 3 significant digits, rounded towards the allowed side (a limit quoted in a
+    message must itself pass)."""
+    if not (math.isfinite(value) and value > 0.0):
+        return value
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return (math.ceil if up else math.floor)(value / scale) * scale
+
+
+def _check_contact_exchange(path: str, sc: Scenario, i: int, c: ContactSpec, mobility: float) -> None:
+    """The fender's spring and damper can be exchanged between the two vessel nodes at the
+    scenario's rate (hull_contact.fender.exchange_limits, where the bound is derived: omega h <
+    1/2 with omega^2 = k lam, and the damping inside the stable range for that stiffness, lam =
+    1/m_fender + 1/m_hull the largest relative mobility at the contact). Beyond it the exchanged
+    force pumps energy into the contact: the vessels are thrown apart or the run diverges."""
+    from hull_contact.fender import exchange_limits, slowest_stable_rate
+    h = 1.0 / sc.exchange_rate
+    lim = exchange_limits(c.stiffness, c.damping, h, mobility)
+    if lim["stable"]:
+        return
+    where = (f"the effective mass at the contact of {c.fender} on '{c.hull}' is {1.0 / mobility:.3g} kg "
+             f"(1/m_fender + 1/m_hull at the fender point and the most mobile point of the hull's outline)")
+    rate = f"{sc.exchange_rate:g} Hz (exchange_rate)"
+    k_here = _round_in(lim["stiffness_here"], up=False)
+    need = slowest_stable_rate(c.stiffness, c.damping, mobility)
+    faster = (f"; or exchange_rate above {_round_in(need, up=True):g} Hz for these values" if need <= 1000.0 else
+              f"; no exchange_rate up to 1000 Hz carries these values")
+    if lim["omega_h"] >= 0.5:
+        here = (f"with this damping ({c.damping:g} N s/m) the stiffness must be below {k_here:g} N/m, and "
+                if k_here > 0 else "")
+        raise ScenarioError(
+            f"{path}: key 'contacts[{i}].stiffness': {c.stiffness:g} N/m cannot be exchanged stably at {rate}: {where}, "
+            f"so omega = sqrt(k / m) = {lim['omega_h'] / h:.3g} rad/s and omega h = {lim['omega_h']:.3g}; the exchange "
+            f"needs omega h < 0.5 whatever the damping: {here}no damping allows more than "
+            f"{_round_in(lim['stiffness'], up=False):g} N/m (at {lim['best_damping']:.3g} N s/m) at this rate{faster}")
+    c_lo, c_hi = (_round_in(lim["damping"][0], up=True), _round_in(lim["damping"][1], up=False))
+    stiffer = f", or a stiffness below {k_here:g} N/m for this damping" if k_here > 0 else ""
+    if c.damping >= lim["damping"][1]:
+        raise ScenarioError(
+            f"{path}: key 'contacts[{i}].damping': {c.damping:g} N s/m cannot be exchanged stably at {rate}: {where}; "
+            f"the damper, acting one step late, changes the relative speed per step by c h / m = {lim['b']:.3g} times "
+            f"that speed and overshoots (the exchange needs it below 1): with stiffness {c.stiffness:g} N/m the "
+            f"damping must be below {c_hi:g} N s/m at this rate (and above {c_lo:g}){stiffer}{faster}")
+    raise ScenarioError(
+        f"{path}: key 'contacts[{i}].damping': {c.damping:g} N s/m is too little for the exchange at {rate}: {where}; "
+        f"the exchanged spring ({c.stiffness:g} N/m, omega h = {lim['omega_h']:.3g}) gains energy every step: with "
+        f"that stiffness the damping must be at least {c_lo:g} N s/m (and below {c_hi:g}){stiffer}{faster}; real "
+        f"fenders damp far more")
+
+
+STRAIGHT_SLACK_TOLERANCE = 0.02   # a straight layout's ends at least 98 % of the rope's length apart
+
+
+def _check_straight_span(path: str, sc: Scenario, i: int, r: RopeSpec, params, points) -> None:
+    """A straight layout lays the rope file's whole length between the ends. Accepted when the
+    ends start between (1 - STRAIGHT_SLACK_TOLERANCE) L and L (1 + breaking_load / EA) apart: up
+    to 2 % of slack (laid straight, a 2 % longer rope would sag about 9 % of the span) or stretched
+    at most to its breaking load (beyond it, it parts at t = 0). Shorter spans need allow_slack:
+    true; otherwise the message points to the winch or slack layout that lays what was meant."""
+    pa, pb = _end_point(path, sc, r, "a", points), _end_point(path, sc, r, "b", points)
+    if pa is None or pb is None or math.dist(pa, pb) < 1e-6:
+        return                                   # no position, or the ends coincide (checked after)
+    span, length = math.dist(pa, pb), float(params.length)
+    shortest = (1.0 - STRAIGHT_SLACK_TOLERANCE) * length
+    longest = length * (1.0 + params.breaking_load / params.ea)
+    key = f"{path}: key 'ropes[{i}].layout'"
+    rope = f"the rope ({r.rope_file}) is {length:g} m long"
+    if span > longest:
+        raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope} and reaches at most "
+                            f"{longest:.1f} m at its breaking load ({params.breaking_load / 1e3:.4g} kN, EA "
+                            f"{params.ea:.4g} N): it would part at t = 0; start the vessels closer or use a longer rope")
+    if span >= shortest or r.allow_slack:
+        return
+    deployed = min(math.ceil(span * (1.0 + STRAIGHT_SLACK_TOLERANCE)), length)
+    winch = (f"layout: winch with deployed_length: {deployed:g} (the rest stays on end a's drum), "
+             if r.end_a != "free" else "")
+    raise ScenarioError(f"{key}: straight between ends {span:.1f} m apart, but {rope}: a straight layout lays all "
+                        f"of it out, {length - span:.1f} m folded along the chord. Use {winch}layout: slack (the whole "
+                        f"rope hangs as a catenary), or allow_slack: true to lay it straight anyway (a straight layout "
+                        f"needs the ends {shortest:.1f} m to {longest:.1f} m apart)")
 
 
 def has_thrusters(sc: Scenario, v: VesselSpec) -> bool:
