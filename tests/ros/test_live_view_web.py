@@ -192,7 +192,7 @@ def _shutdown_counts(node):
     return log, refused, int(forwarded.group(1)) if forwarded else 0
 
 
-async def _websocket_clients(ws, report):
+async def _websocket_clients(ws, report, seen):
     from live_view.probe import Probe
     url = f"ws://127.0.0.1:{ws}"
     # this machine's own page connects (a browser sends its Origin), advertises and publishes
@@ -201,7 +201,16 @@ async def _websocket_clients(ws, report):
     await page.wait_for_topics(["/tug/command"], timeout=30)
     await page.advertise(1, "/tug/command", "json", "tug_msgs/msg/VesselCommand")
     await page.receive(0.3)
-    await page.publish(1, b'{"engine_order": 0.375}')
+    # until the node has taken the advertise (on a loaded machine an order can beat it there and
+    # is refused as an unknown channel): sent again every 2 s until it arrives, at most 5 times
+    for _ in range(5):
+        await page.publish(1, b'{"engine_order": 0.375}')
+        for _ in range(20):
+            await page.receive(0.1)
+            if seen(0.375):
+                break
+        if seen(0.375):
+            break
     for bomb in BOMBS:
         await page.publish(1, bomb)
     await page.run_for(1.5)  # the bucket refills
@@ -236,7 +245,7 @@ def test_websocket_surface(start_node, rclpy_context):
         evil = _handshake(ws, f"127.0.0.1:{ws}", "http://evil.example")
         rebound = [_handshake(ws, f"{name}:{ws}") for name in ("127.attacker.example", "127.0.0.1.nip.io")]
         own = _handshake(ws, f"localhost:{ws}", f"http://localhost:{ws}")
-        asyncio.run(_websocket_clients(ws, report))
+        asyncio.run(_websocket_clients(ws, report, lambda order: order in [m.engine_order for m in run.orders]))
         time.sleep(1.0)
     finally:
         log, refused, forwarded = _shutdown_counts(node)
@@ -264,7 +273,7 @@ def test_websocket_surface(start_node, rclpy_context):
     flooded = engines.count(0.25)
     c.check("shared rate", 1 <= flooded <= RATE * (1 + report["flood_s"]) + 2 and
             refused.get("rate", 0) >= 200 - flooded, (flooded, report["flood_s"], refused))
-    c.check("forwarded, not accepted", forwarded == flooded + 1, (forwarded, flooded, log[-600:]))
+    c.check("forwarded, not accepted", forwarded == flooded + engines.count(0.375), (forwarded, flooded, log[-600:]))
     c.done()
 
 
