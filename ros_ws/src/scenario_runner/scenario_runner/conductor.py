@@ -225,9 +225,9 @@ class Conductor(Node):
             self.take_answers()  # the node writes its channel before it publishes
             if self.confirmed.get(msg.node, {}).get(msg.step) != (msg.ok, msg.error):
                 said = self.confirmed.get(msg.node, {}).get(msg.step)
-                return self._refuse("not the node's", msg, f"{msg.node} said {'nothing' if said is None else said} "
-                                    f"for that step on its own channel ({'ok' if msg.ok else 'failed: ' + msg.error!r} "
-                                    "on the wire): somebody else's answer in its name")
+                return self._refuse("not the node's", msg, f"{msg.node} said {_said(said)} for that step on its own "
+                                    f"channel, the wire {_said((msg.ok, msg.error))}: somebody else's answer in its "
+                                    "name")
             return  # the node's own answer, copied on the wire for observers
         if msg.step >= 1 and msg.step <= self.last_answer.get(msg.node, -1) and msg.node in self.external:
             # an external node answers each step once: a second answer for a step is somebody
@@ -248,6 +248,7 @@ class Conductor(Node):
         self.node_refused[msg.node] = msg.refused
         if not msg.ok and msg.step >= self.awaited - 1:
             self.failures.append(f"{msg.node} failed at step {msg.step}: {msg.error}")
+            return  # the run stops on it: no step bookkeeping
         if msg.step == 0 and self.awaited <= 1:
             self.done.setdefault(0, set()).add(msg.node)  # the ready signal, repeated until triggered
             return
@@ -448,6 +449,12 @@ class Conductor(Node):
         self.event_pub.publish(ev)
 
 
+def _said(answer: Optional[Tuple[bool, str]]) -> str:
+    if answer is None:
+        return "nothing"
+    return "ok" if answer[0] else f"failed ({answer[1]!r})"
+
+
 def _node_of(info) -> str:
     ns = info.node_namespace.rstrip("/")
     return f"{ns}/{info.node_name}"
@@ -528,6 +535,7 @@ class _Session:
         self.sc, self.specs, self.recorder, self.layout = sc, specs, recorder, layout
         self.external = set(external)
         self.seen_in_graph: set = set()  # external nodes seen in the ROS graph (gone_external)
+        self.graph_check = 0.0  # when wait_for looks at the ROS graph next (strangers, external nodes gone)
         self.own_specs = [s for s in specs if s.name not in self.external]  # the nodes this runner starts
         # the external nodes' per-step outputs, subscribed by the recorder: waited for every step
         self.awaited_outputs = external_outputs(sc, sorted(self.external))[1] if recorder and external else ()
@@ -679,7 +687,6 @@ class _Session:
         rescue_at = now + RESCUE_AFTER
         expected = conductor.expected
         done = conductor.done
-        graph_check = now + GRAPH_CHECK_PERIOD
         while done.get(step) != expected:
             try:
                 executor.spin_once(timeout_sec=0.001)
@@ -707,8 +714,8 @@ class _Session:
                 if dead:
                     raise RunError(f"{kind} {dead} died (exit code {group.procs[dead].returncode}) while {what}; "
                                    f"last lines of its log ({group.logs[dead]}):\n{group.tail(dead)}")
-            if step > 0 and now > graph_check:
-                graph_check = now + GRAPH_CHECK_PERIOD
+            if step > 0 and now > self.graph_check:  # kept across steps: a step takes a few ms
+                self.graph_check = now + GRAPH_CHECK_PERIOD
                 self.look_for_strangers(step - 1)
                 gone = self.gone_external() if self.external else []
                 if gone:
