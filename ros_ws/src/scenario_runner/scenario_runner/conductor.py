@@ -7,6 +7,9 @@ Step protocol (see sim_plumbing/stepping.py and the README): for k = 0, 1, ...
   3. each node computes k -> k+1 from inputs stamped k and answers StepDone(k+1);
   4. once every node has answered, step k+1 starts (lockstep) or waits for its wall-clock
      time (realtime; lateness is measured and reported).
+SimStep goes to the nodes this runner started on their private channels first, and only their
+channels' answers count (sim_plumbing/step_channel.py); the wire's copies are for observers,
+external nodes and the recording. Strangers: docs/step-protocol.md, threat model.
 """
 from __future__ import annotations
 

@@ -13,6 +13,14 @@ lockstep (parameter ``lockstep:=true``, what the scenario runner uses)
     published at start-up, with StepDone(0) as the ready signal (repeated until the first
     trigger, so the runner need not be discovered first).
 
+    Whose word counts: a node the runner started holds a private channel to it
+    (sim_plumbing/step_channel.py): it steps on the channel's triggers only (a SimStep on the wire
+    wakes it up; one the channel did not send is refused) and writes each StepDone there first,
+    the copy the runner trusts. A node somebody else started has no channel and steps on the
+    wire's SimStep. A second, different message for one step on a state input (or, without a
+    channel, a second, different SimStep) means somebody else writes it: the node stops stepping
+    and reports CONFLICT_MARK naming the publishers, and the runner stops the run as untrusted.
+
     Run identity: every run has a random id (parameter ``run_id``, handed over by the runner
     that starts the node; a node started by hand with no id joins the run of the first
     SimStep(0) it sees). A SimStep of another run, for a step the node is not at, or a
