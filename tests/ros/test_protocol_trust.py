@@ -304,3 +304,59 @@ def test_a_state_input_twice_for_a_step_with_other_content_is_refused_not_applie
         assert node.complaints.counts["conflict"] == 1
     finally:
         node.destroy_node()
+
+
+def _vessel(rclpy_context, channel=None):
+    """A lockstep tug of run "r" with no inputs but its orders; `channel`: the node's end of a
+    local channel, as the runner of --layout one_process hands it over."""
+    from rclpy.parameter import Parameter
+    from sim_plumbing import step_channel
+    from tug_dynamics.vessel_node import VesselNode
+    step_channel.install((lambda name: channel if name == "/tug/vessel" else None) if channel else None)
+    try:
+        return VesselNode(context=rclpy_context, namespace="/tug", parameter_overrides=[
+            Parameter("ship_file", value="harbour_tug.yaml"), Parameter("lockstep", value=True),
+            Parameter("run_id", value="r")])
+    finally:
+        step_channel.install(None)
+
+
+def test_a_node_with_a_channel_steps_only_on_the_runners_triggers(rclpy_context):
+    """A SimStep on the wire that the channel did not send (right run id, right step) is refused
+    and counted; the runner's own (channel first, then the wire's copy) steps the node once, and
+    its answer goes to the channel."""
+    from sim_plumbing import cdr, step_channel
+    runner_end, node_end = step_channel.local_pair()
+    node = _vessel(rclpy_context, node_end)
+    try:
+        assert node.channel is node_end
+        node._on_trigger_raw(cdr.sim_step_cdr(0, 0, 0.02, [], "r"))      # a stranger's, with the run id
+        assert node.step_index == 0 and node.complaints.counts["unconfirmed trigger"] == 1
+        runner_end.send_trigger(0, [])
+        node._on_trigger_raw(cdr.sim_step_cdr(0, 0, 0.02, [], "r"))      # the runner's copy on the wire
+        assert node.step_index == 1 and node.complaints.counts["unconfirmed trigger"] == 1
+        answers = runner_end.answers()
+        assert answers[-1].step == 1 and answers[-1].ok and answers[-1].refused == 1
+    finally:
+        node.destroy_node()
+
+
+def test_a_node_without_a_channel_stops_on_two_different_triggers_for_a_step(rclpy_context):
+    """Started by somebody else, a node has the wire only: a second SimStep for a step with
+    another `ordered` means a stranger's trigger may have been used; it stops stepping."""
+    from sim_plumbing.cdr import TriggerIn
+    from sim_plumbing.stepping import CONFLICT_MARK
+    node = _vessel(rclpy_context)
+    try:
+        assert node.channel is None
+        node._on_trigger(TriggerIn(0, "r", 0, ()))          # the stranger's, first: no order announced
+        assert node.step_index == 1
+        node._on_trigger(TriggerIn(0, "r", 0, ()))          # an identical copy: refused, nothing more
+        assert node.untrusted is None
+        node._on_trigger(TriggerIn(0, "r", 0, ("tug",)))    # the runner's: it announced an order
+        assert node.untrusted is not None and node.untrusted.startswith(CONFLICT_MARK)
+        assert "/sim/step" in node.untrusted and "SimStep(0)" in node.untrusted
+        node._on_trigger(TriggerIn(node.period_ns, "r", 1, ()))
+        assert node.step_index == 1  # it steps no further
+    finally:
+        node.destroy_node()

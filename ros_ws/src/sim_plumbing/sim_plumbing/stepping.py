@@ -244,9 +244,10 @@ class SteppedNode(Node):
         # wire's copy must be one the channel sent (anything else is somebody else's)
         self._take_channel()
         if self._sent_triggers.get(msg.step) != msg.ordered or msg.run_id != self.run_id:
+            # (no graph look to name the sender: a flood would pay one per message; the runner names
+            # strangers on the protocol topics)
             self.complaints("unconfirmed trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) of run '{msg.run_id}' "
-                            f"refused: not sent by this node's runner (not on its private channel; publishers of "
-                            f"{rc.SIM_STEP_TOPIC}: {', '.join(self.publishers_of(rc.SIM_STEP_TOPIC))})")
+                            "refused: not sent by this node's runner (not on its private channel)")
 
     def _take_channel(self) -> None:
         """Triggers the runner sent on the private channel, taken in order."""
@@ -264,13 +265,14 @@ class SteppedNode(Node):
             return ["(unknown)"]
         return sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}" for i in infos) or ["none"]
 
-    def _conflict(self, text: str) -> None:
+    def _conflict(self, topic: str, what: str) -> None:
         """A second, different message for a step: stop stepping, and say so to the runner now
-        (whatever step it waits for) with the publishers the graph shows."""
+        (whatever step it waits for) with the publishers of `topic` the graph shows."""
         self.complaints.counts["conflict"] += 1  # refused and counted like every refusal
         if self.untrusted is not None:
-            return
-        self.untrusted = text = f"{CONFLICT_MARK}: {text}"
+            return  # said once; the graph is not asked again for every further one
+        text = f"{CONFLICT_MARK}: {topic}: {what} (publishers: {', '.join(self.publishers_of(topic))})"
+        self.untrusted = text
         self.get_logger().error(f"{text}: this node stops stepping, its state cannot be trusted")
         if self.lockstep:
             self._send_done(self.step_index, 0.0, error=text)
@@ -299,8 +301,7 @@ class SteppedNode(Node):
             held = self._prints[spec.topic].get(k)
             if held is not None:
                 if held != data:
-                    self._conflict(f"{spec.topic}: two different messages stamped step {k} (publishers: "
-                                   f"{', '.join(self.publishers_of(spec.topic))})")
+                    self._conflict(spec.topic, f"two different messages stamped step {k}")
                 return  # a copy of what is held or was used: changes nothing
             if k < self.step_index:
                 return  # for a step computed long ago: nothing to use it for
@@ -337,9 +338,8 @@ class SteppedNode(Node):
         if used is not None and used != msg.ordered:
             # without a channel the wire is all there is: a different trigger for a step is a
             # stranger's, and the step may have been computed on it
-            self._conflict(f"{rc.SIM_STEP_TOPIC}: two different SimStep({msg.step}) of this run (ordered "
-                           f"{list(used)} and {list(msg.ordered)}; publishers: "
-                           f"{', '.join(self.publishers_of(rc.SIM_STEP_TOPIC))})")
+            self._conflict(rc.SIM_STEP_TOPIC, f"two different SimStep({msg.step}) of this run (ordered "
+                           f"{list(used)} and {list(msg.ordered)})")
             return
         if msg.step != self.step_index or msg.step in self._triggers:
             self.complaints("unexpected trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) refused: this node "
