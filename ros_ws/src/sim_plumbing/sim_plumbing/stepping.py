@@ -253,7 +253,8 @@ class SteppedNode(Node):
         """Triggers the runner sent on the private channel, taken in order."""
         for t in self.channel.triggers():
             self._sent_triggers[t.step] = t.ordered
-            for old in [s for s in self._sent_triggers if s < t.step - KEPT_STEPS]:
+            # the wire's copy may come late (an executor sitting on it): kept as long as an input may lead
+            for old in [s for s in self._sent_triggers if s < t.step - MAX_LEAD_STEPS]:
                 del self._sent_triggers[old]
             self._on_trigger(cdr.TriggerIn(t.step * self.period_ns, self.run_id, t.step, t.ordered))
 
