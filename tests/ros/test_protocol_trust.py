@@ -212,7 +212,8 @@ def _conductor(rclpy_context, external=()):
 
 def test_the_runner_counts_only_the_channel_of_a_node_it_started(rclpy_context):
     """A node with a channel: its answer on the wire counts for nothing; one the channel did not
-    say (ok or failed) is refused and counted; the channel's failure stops the run."""
+    say (ok or failed), or a second copy of one it said, is refused and counted; the channel's
+    failure stops the run."""
     from sim_plumbing import step_channel
     from sim_plumbing.cdr import DoneIn
     c = _conductor(rclpy_context)
@@ -235,6 +236,8 @@ def test_the_runner_counts_only_the_channel_of_a_node_it_started(rclpy_context):
         wire("/tug/vessel", 1)                                   # the node's own copy: agrees, not counted twice
         assert c.done[1] == {"/tug/vessel"} and c.refused["not the node's"] == 2 and not c.refused["duplicate"]
         assert c.node_refused["/tug/vessel"] == 2
+        wire("/tug/vessel", 1)                                   # a copy of what the channel said: a second one
+        assert c.refused["not the node's"] == 3 and c.done[1] == {"/tug/vessel"}
         tug_node_end.send_answer(step_channel.Answer(1, 0.0, False, 2, "conflicting messages: x"))
         c.take_answers()
         assert c.failures == ["/tug/vessel failed at step 1: conflicting messages: x"]

@@ -121,6 +121,7 @@ class Conductor(Node):
         self.channels: Dict[str, object] = {}
         self.confirmed: Dict[str, Dict[int, Tuple[bool, str]]] = {}  # node -> step -> (ok, error) on its channel
         self.last_answer: Dict[str, int] = {}  # node -> the last step it answered (channel, or wire if external)
+        self.wire_copies: Dict[str, collections.Counter] = {}  # node with a channel -> step -> its StepDones on the wire
         self.strangers: Dict[str, int] = {}  # "node X (publishes T)" on a protocol topic -> step first seen
         # nodes of the run this runner did not start (--external): expected on the domain, and
         # their ready signal counts before they have joined the run (started without a run_id)
@@ -231,6 +232,15 @@ class Conductor(Node):
                 return self._refuse("not the node's", msg, f"{msg.node} said {_said(said)} for that step on its own "
                                     f"channel, the wire {_said((msg.ok, msg.error))}: somebody else's answer in its "
                                     "name")
+            copies = self.wire_copies.setdefault(msg.node, collections.Counter())
+            copies[msg.step] += 1
+            for old in [s for s in copies if s < msg.step - 64]:
+                del copies[old]
+            if msg.step >= 1 and copies[msg.step] > 1:
+                # the node publishes each answer once (only its ready signal repeats): a second copy
+                # is somebody else's, harmless as it says what the channel said, refused and counted
+                return self._refuse("not the node's", msg, "a second copy on the wire of an answer the node gives "
+                                    "once")
             return  # the node's own answer, copied on the wire for observers
         if msg.step >= 1 and msg.step <= self.last_answer.get(msg.node, -1) and msg.node in self.external:
             # an external node answers each step once: a second answer for a step is somebody
