@@ -123,6 +123,9 @@ class Conductor(Node):
         self.last_answer: Dict[str, int] = {}  # node -> the last step it answered (channel, or wire if external)
         self.wire_copies: Dict[str, collections.Counter] = {}  # node with a channel -> step -> its StepDones on the wire
         self.strangers: Dict[str, int] = {}  # "node X (publishes T)" on a protocol topic -> step first seen
+        # nodes whose answers come on the wire only (external, or started without a channel): each
+        # answers a step once, so a second answer in its name is somebody else's
+        self.wire_only = set(external)
         # nodes of the run this runner did not start (--external): expected on the domain, and
         # their ready signal counts before they have joined the run (started without a run_id)
         self.external = set(external)
@@ -242,10 +245,10 @@ class Conductor(Node):
                 return self._refuse("not the node's", msg, "a second copy on the wire of an answer the node gives "
                                     "once")
             return  # the node's own answer, copied on the wire for observers
-        if msg.step >= 1 and msg.step <= self.last_answer.get(msg.node, -1) and msg.node in self.external:
-            # an external node answers each step once: a second answer for a step is somebody
-            # else's in its name, and which one the run went on cannot be told
-            self.failures.append(f"{CONFLICT_MARK}: two StepDone({msg.step}) of the external node {msg.node} "
+        if msg.step >= 1 and msg.step <= self.last_answer.get(msg.node, -1) and msg.node in self.wire_only:
+            # a node without a channel answers each step once: a second answer for a step is
+            # somebody else's in its name, and which one the run went on cannot be told
+            self.failures.append(f"{CONFLICT_MARK}: two StepDone({msg.step}) of {msg.node} (no private channel) "
                                  f"(publishers of {rc.STEP_DONE_TOPIC}: "
                                  f"{', '.join(self.publishers_of(rc.STEP_DONE_TOPIC))}): somebody else answers in "
                                  "its name")
@@ -590,6 +593,7 @@ class _Session:
             self.executor.add_node(node)
         self.procs.start()
         conductor.channels = {**local_channels, **self.procs.channels}
+        conductor.wire_only = conductor.expected - set(conductor.channels)
         self.instruments.start()
         self.wait_for(0, ready_timeout, "starting up")
         self._wait_for_matches(ready_timeout)

@@ -55,7 +55,7 @@ class NodeProcesses:
                 self.recorder.add_pipe_feed(read_fd)
                 env[record_feed.ENV_FD] = str(write_fd)
                 feed_fds = (write_fd,)
-            if self.with_channels:
+            if self.with_channels and (spec.package, spec.executable) in CHANNEL_EXECUTABLES:
                 self.channels[spec.name], node_fd = step_channel.socket_pair()
                 env[step_channel.ENV_FD] = str(node_fd)
                 feed_fds += (node_fd,)
@@ -112,6 +112,12 @@ class NodeProcesses:
 
 
 LAYOUTS = ("processes", "one_process")
+# The executables built on sim_plumbing.stepping, which read the runner's private channel. Any other
+# step participant (an autopilot of somebody else's package declared in the scenario) speaks the
+# protocol on the wire only, and gets no channel: the runner takes its StepDone from the wire, with
+# the trust of an external node (docs/step-protocol.md).
+CHANNEL_EXECUTABLES = {("tug_dynamics", "vessel_node"), ("rope_model", "rope_node"),
+                       ("scenario_runner", "autopilot"), ("hull_contact", "contact_node")}
 
 
 def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
