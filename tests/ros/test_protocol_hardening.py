@@ -260,9 +260,9 @@ class _Endpoint:
 class _Graph:
     """What Conductor.participants_beyond reads of the ROS graph, as given."""
 
-    def __init__(self, step_publishers, step_takers, done_publishers):
+    def __init__(self, step_publishers, step_takers, done_publishers, clock_publishers=("/scenario_runner",)):
         self.graph = {("pub", "/sim/step"): step_publishers, ("sub", "/sim/step"): step_takers,
-                      ("pub", "/sim/step_done"): done_publishers}
+                      ("pub", "/sim/step_done"): done_publishers, ("pub", "/clock"): clock_publishers}
 
     def get_fully_qualified_name(self):
         return "/scenario_runner"

@@ -7,6 +7,9 @@ Step protocol (see sim_plumbing/stepping.py and the README): for k = 0, 1, ...
   3. each node computes k -> k+1 from inputs stamped k and answers StepDone(k+1);
   4. once every node has answered, step k+1 starts (lockstep) or waits for its wall-clock
      time (realtime; lateness is measured and reported).
+SimStep goes to the nodes this runner started on their private channels first, and only their
+channels' answers count (sim_plumbing/step_channel.py); the wire's copies are for observers,
+external nodes and the recording. Strangers: docs/step-protocol.md, threat model.
 """
 from __future__ import annotations
 
@@ -33,10 +36,19 @@ from scenario_format.scenario import Scenario
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import shm_hygiene
+from sim_plumbing import step_channel
 from sim_plumbing import ros_common as rc
-from sim_plumbing.stepping import RESCUE_AFTER, RateLimitedLog
+from sim_plumbing.stepping import CONFLICT_MARK, RESCUE_AFTER, RateLimitedLog
 from scenario_runner.node_processes import LAYOUTS, NodeProcesses, in_process_nodes
-from scenario_runner.run_nodes import NodeSpec, RunError, external_outputs, instrument_specs, node_specs
+from scenario_runner.run_nodes import (NodeSpec, RunError, external_outputs, instrument_specs, node_specs,
+                                      per_step_outputs)
+
+
+class Untrusted(RunError):
+    """The run's result cannot be trusted: a stranger publishes one of its per-step state topics,
+    a node got two different messages for one step, or the step count does not match what a node
+    published. Named; the run stops (exit 5)."""
+
 
 
 class DomainInUse(RunError):
@@ -93,6 +105,8 @@ class RunStats:
     node_refused: Dict[str, int] = dataclasses.field(default_factory=dict)  # node -> messages it refused
     rescued: int = 0  # StepDones the executor held back, taken directly (ros_common.take_missed)
     external: List[str] = dataclasses.field(default_factory=list)  # nodes of the run started by somebody else
+    strangers: Dict[str, int] = dataclasses.field(default_factory=dict)  # stranger on a protocol topic -> step seen
+    outputs_checked: int = 0  # per-step output topics whose recorded count matched the steps
     never_fired: List[str] = dataclasses.field(default_factory=list)  # state-triggered events whose `when` never held
 
 
@@ -102,6 +116,16 @@ class Conductor(Node):
     def __init__(self, sc: Scenario, node_names: List[str], recorder=None, run_id: Optional[str] = None,
                  external: Sequence[str] = (), **kwargs):
         super().__init__("scenario_runner", **kwargs)
+        # node name -> the runner's end of its private channel (step_channel), set once the nodes
+        # are started: the only source of their answers the runner trusts
+        self.channels: Dict[str, object] = {}
+        self.confirmed: Dict[str, Dict[int, Tuple[bool, str]]] = {}  # node -> step -> (ok, error) on its channel
+        self.last_answer: Dict[str, int] = {}  # node -> the last step it answered (channel, or wire if external)
+        self.wire_copies: Dict[str, collections.Counter] = {}  # node with a channel -> step -> its StepDones on the wire
+        self.strangers: Dict[str, int] = {}  # "node X (publishes T)" on a protocol topic -> step first seen
+        # nodes whose answers come on the wire only (external, or started without a channel): each
+        # answers a step once, so a second answer in its name is somebody else's
+        self.wire_only = set(external)
         # nodes of the run this runner did not start (--external): expected on the domain, and
         # their ready signal counts before they have joined the run (started without a run_id)
         self.external = set(external)
@@ -164,12 +188,37 @@ class Conductor(Node):
         if self.recorder:
             self.recorder.record(topic, data)
 
-    def _refuse(self, why: str, msg: cdr.DoneIn, detail: str) -> None:
+    def _refuse(self, why: str, msg: cdr.DoneIn, detail: str, where: str = rc.STEP_DONE_TOPIC) -> None:
         self.refused[why] += 1
-        self.complaints(why, f"{rc.STEP_DONE_TOPIC}: StepDone({msg.step}) from '{msg.node}' refused: {detail}")
+        self.complaints(why, f"{where}: StepDone({msg.step}) from '{msg.node}' refused: {detail}")
+
+    def take_answers(self) -> int:
+        """Answers the nodes sent on their channels since the last look, counted; how many."""
+        n = 0
+        for node, channel in self.channels.items():
+            for a in channel.answers():
+                n += 1
+                confirmed = self.confirmed.setdefault(node, {})
+                confirmed[a.step] = (a.ok, a.error)
+                for old in [s for s in confirmed if s < a.step - 64]:
+                    del confirmed[old]
+                self._count(cdr.DoneIn(a.step * self.period_ns, self.run_id, node, a.step, a.compute_time, a.ok,
+                                       a.refused, a.error), where=f"the channel of {node}")
+        return n
+
+    def send_triggers(self, k: int, ordered: List[str]) -> None:
+        """SimStep(k) to every node on its channel (before the wire's copy: a node that reads a
+        SimStep on the wire finds the channel's first)."""
+        for node, channel in self.channels.items():
+            try:
+                channel.send_trigger(k, ordered)
+            except step_channel.ChannelBroken as exc:
+                raise RunError(f"node {node}: its channel is gone ({exc}) while sending step {k}") from exc
 
     def _on_done(self, msg: cdr.DoneIn) -> None:
-        """Only an answer of this run, from a node of the run, for the step now due, once."""
+        """A StepDone on the wire. A node with a channel answers there: its StepDone on the wire is
+        an observers' copy, checked against the channel (anything else is somebody else's, refused);
+        an external node has only the wire."""
         if msg.run_id != self.run_id:
             if not msg.run_id and msg.step == 0 and msg.node in self.external and self.awaited <= 1:
                 # an external node started without run_id announces itself; it joins this run
@@ -179,19 +228,54 @@ class Conductor(Node):
             return self._refuse("another run", msg, f"run '{msg.run_id}', this run is '{self.run_id}'")
         if msg.node not in self.expected:
             return self._refuse("not in the run", msg, f"nodes of this run are {sorted(self.expected)}")
+        if msg.node in self.channels:
+            self.take_answers()  # the node writes its channel before it publishes
+            if self.confirmed.get(msg.node, {}).get(msg.step) != (msg.ok, msg.error):
+                said = self.confirmed.get(msg.node, {}).get(msg.step)
+                return self._refuse("not the node's", msg, f"{msg.node} said {_said(said)} for that step on its own "
+                                    f"channel, the wire {_said((msg.ok, msg.error))}: somebody else's answer in its "
+                                    "name")
+            copies = self.wire_copies.setdefault(msg.node, collections.Counter())
+            copies[msg.step] += 1
+            for old in [s for s in copies if s < msg.step - 64]:
+                del copies[old]
+            if msg.step >= 1 and copies[msg.step] > 1:
+                # the node publishes each answer once (only its ready signal repeats): a second copy
+                # is somebody else's, harmless as it says what the channel said, refused and counted
+                return self._refuse("not the node's", msg, "a second copy on the wire of an answer the node gives "
+                                    "once")
+            return  # the node's own answer, copied on the wire for observers
+        if msg.step >= 1 and msg.step <= self.last_answer.get(msg.node, -1) and msg.node in self.wire_only:
+            # a node without a channel answers each step once: a second answer for a step is
+            # somebody else's in its name, and which one the run went on cannot be told
+            self.failures.append(f"{CONFLICT_MARK}: two StepDone({msg.step}) of {msg.node} (no private channel) "
+                                 f"(publishers of {rc.STEP_DONE_TOPIC}: "
+                                 f"{', '.join(self.publishers_of(rc.STEP_DONE_TOPIC))}): somebody else answers in "
+                                 "its name")
+            return
+        self._count(msg)
+
+    def publishers_of(self, topic: str) -> List[str]:
+        return sorted(_node_of(i) for i in self.get_publishers_info_by_topic(topic)) or ["none"]
+
+    def _count(self, msg: cdr.DoneIn, where: str = rc.STEP_DONE_TOPIC) -> None:
+        """Only an answer of a node of the run for the step now due, once; a failure whatever the
+        step (a node that stopped on a conflict says so at once)."""
         self.node_refused[msg.node] = msg.refused
+        if not msg.ok and msg.step >= self.awaited - 1:
+            self.failures.append(f"{msg.node} failed at step {msg.step}: {msg.error}")
+            return  # the run stops on it: no step bookkeeping
         if msg.step == 0 and self.awaited <= 1:
             self.done.setdefault(0, set()).add(msg.node)  # the ready signal, repeated until triggered
             return
         if msg.step != self.awaited:
             return self._refuse("step not triggered" if msg.step > self.awaited else "late or duplicate", msg,
-                                f"the step due is {self.awaited}")
+                                f"the step due is {self.awaited}", where)
         answered = self.done.setdefault(msg.step, set())
         if msg.node in answered:
-            return self._refuse("duplicate", msg, "this node has answered that step already")
-        if not msg.ok:
-            self.failures.append(f"{msg.node} failed at step {msg.step}: {msg.error}")
+            return self._refuse("duplicate", msg, "this node has answered that step already", where)
         answered.add(msg.node)
+        self.last_answer[msg.node] = msg.step
         self.compute_times[msg.node].append(msg.compute_time)
 
     def participants_beyond(self, own: Iterable[str]) -> List[str]:
@@ -206,6 +290,7 @@ class Conductor(Node):
         found = []
         for topic, kind, infos, allowed in (
                 (rc.SIM_STEP_TOPIC, "publishes", self.get_publishers_info_by_topic(rc.SIM_STEP_TOPIC), {me}),
+                (T.CLOCK, "publishes", self.get_publishers_info_by_topic(T.CLOCK), {me}),
                 (rc.SIM_STEP_TOPIC, "takes", self.get_subscriptions_info_by_topic(rc.SIM_STEP_TOPIC), own),
                 (rc.STEP_DONE_TOPIC, "answers on", self.get_publishers_info_by_topic(rc.STEP_DONE_TOPIC), own)):
             what = "scenario runner" if kind == "publishes" else "node"
@@ -215,6 +300,33 @@ class Conductor(Node):
                 elif count > 1:
                     found.append(f"{count} nodes named {node} ({kind} {topic}): one is not this run's")
         return found
+
+    def state_intruders(self, owners: Dict[str, str]) -> List[str]:
+        """Publishers of the run's per-step state topics (topic -> owner node) other than one
+        owner each: a stranger's message there could be taken for the owner's (a vessel moved
+        41.8 m sideways by a republished towline wrench)."""
+        found = []
+        for topic, owner in sorted(owners.items()):
+            for node, count in sorted(collections.Counter(_node_of(i) for i in
+                                                          self.get_publishers_info_by_topic(topic)).items()):
+                if "_UNKNOWN_" in node:
+                    continue  # its name is not discovered yet: named at the next look
+                if node != owner:
+                    found.append(f"node {node} publishes {topic} (a per-step state topic of {owner})")
+                elif count > 1:
+                    found.append(f"{count} nodes named {node} publish {topic}: one is not this run's")
+        return found
+
+    def note_protocol_strangers(self, k: int) -> None:
+        """Publishers on /sim/step, /clock or /sim/step_done that are not this run's (after step 0:
+        the look before it refused them): their messages are refused (run id, channels), and they
+        are named once in the log and in the summary."""
+        for found in self.participants_beyond(self.expected):
+            if "_UNKNOWN_" in found or "(takes " in found or found in self.strangers:
+                continue  # a subscriber only reads
+            self.strangers[found] = k
+            self.get_logger().warning(f"a stranger on the step protocol's topics since step {k}: {found}; its "
+                                      "messages are refused (run id, the nodes' private channels)")
 
     def check_domain(self, executor, wait: Optional[float] = None) -> None:
         """Refuse to start on a domain where another run (or its leftover nodes) is present,
@@ -331,8 +443,10 @@ class Conductor(Node):
         # the trigger first: the nodes start computing while /clock goes out (they stamp by
         # step number and do not read the clock to compute)
         self.awaited = k + 1
+        ordered = sorted(set(ordered + self.piloted))
+        self.send_triggers(k, ordered)
         self._publish(self.step_pub, rc.SIM_STEP_TOPIC, cdr.sim_step_cdr(
-            stamp_ns, k, self.period_ns * 1e-9, sorted(set(ordered + self.piloted)), self.run_id))
+            stamp_ns, k, self.period_ns * 1e-9, ordered, self.run_id))
         self._publish(self.clock_pub, "/clock", cdr.clock_cdr(stamp_ns))
         if self.recorder:
             self.recorder.log_time_ns = (k + 1) * self.period_ns
@@ -349,6 +463,12 @@ class Conductor(Node):
                            detail=detail, value=float("nan"))
         ev.header.stamp = rc.step_time(k, self.period_ns)
         self.event_pub.publish(ev)
+
+
+def _said(answer: Optional[Tuple[bool, str]]) -> str:
+    if answer is None:
+        return "nothing"
+    return "ok" if answer[0] else f"failed ({answer[1]!r})"
 
 
 def _node_of(info) -> str:
@@ -417,6 +537,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
             session.start(extra_nodes or [], ready_timeout)
             session.step(n_steps, stall_timeout, on_step)
             session.settle(on_finished(n_steps * session.conductor.period_ns) if on_finished else (lambda: True))
+            session.check_result()
             return session.stats
         finally:
             session.close()
@@ -430,11 +551,14 @@ class _Session:
         self.sc, self.specs, self.recorder, self.layout = sc, specs, recorder, layout
         self.external = set(external)
         self.seen_in_graph: set = set()  # external nodes seen in the ROS graph (gone_external)
+        self.graph_check = 0.0  # when wait_for looks at the ROS graph next (strangers, external nodes gone)
         self.own_specs = [s for s in specs if s.name not in self.external]  # the nodes this runner starts
         # the external nodes' per-step outputs, subscribed by the recorder: waited for every step
         self.awaited_outputs = external_outputs(sc, sorted(self.external))[1] if recorder and external else ()
         self.stop: Optional[StopSignals] = None  # set by run() for the time the run handles the signals
-        self.procs = NodeProcesses(self.own_specs if layout == "processes" else [], log_dir, recorder)
+        self.procs = NodeProcesses(self.own_specs if layout == "processes" else [], log_dir, recorder, channels=True)
+        # the per-step state topics of every node of the run: topic -> the node that publishes it
+        self.state_owners = per_step_outputs(sc, [s.name for s in specs])
         # bridge equipment: own processes in either layout, outside the step protocol
         self.instruments = NodeProcesses(instruments, log_dir)
         self.conductor = Conductor(sc, [s.name for s in specs], recorder, run_id, external=self.external)
@@ -455,13 +579,21 @@ class _Session:
                                         f"processes from {shm_hygiene.SHM_DIR}")
         if recorder is not None and self.layout == "one_process":
             record_feed.install(recorder.feed_in_process)
+        local_channels = {}
+        if self.layout == "one_process":  # nodes in this process: a pair of queues each, no descriptor
+            pairs = {s.name: step_channel.local_pair() for s in self.own_specs}
+            local_channels = {name: pair[0] for name, pair in pairs.items()}
+            step_channel.install(lambda name: pairs[name][1] if name in pairs else None)
         try:
             self.local_nodes = in_process_nodes(self.own_specs) if self.layout == "one_process" else []
         finally:
             record_feed.install(None)
+            step_channel.install(None)
         for node in extra_nodes + ([recorder] if recorder else []) + self.local_nodes:
             self.executor.add_node(node)
         self.procs.start()
+        conductor.channels = {**local_channels, **self.procs.channels}
+        conductor.wire_only = conductor.expected - set(conductor.channels)
         self.instruments.start()
         self.wait_for(0, ready_timeout, "starting up")
         self._wait_for_matches(ready_timeout)
@@ -469,7 +601,8 @@ class _Session:
         # before step 0, so nothing of it can mix into the run
         own = conductor.expected | {n.get_fully_qualified_name() for n in extra_nodes + self.local_nodes
                                     + ([recorder] if recorder else [])}
-        conductor.refuse_if_found(self.executor, lambda: conductor.participants_beyond(own),
+        conductor.refuse_if_found(self.executor, lambda: conductor.participants_beyond(own)
+                                  + conductor.state_intruders(self.state_owners),
                                   " (seen once this run's nodes were up; nothing was stepped)")
         if self.external:
             self.gone_external()  # notes the external nodes in the graph: from now on, leaving it stops the run
@@ -571,7 +704,6 @@ class _Session:
         rescue_at = now + RESCUE_AFTER
         expected = conductor.expected
         done = conductor.done
-        graph_check = now + GRAPH_CHECK_PERIOD
         while done.get(step) != expected:
             try:
                 executor.spin_once(timeout_sec=0.001)
@@ -579,8 +711,9 @@ class _Session:
                 raise  # the context was shut down: the caller finalises the recording
             except Exception as exc:  # an in-process node failed in its callback
                 raise RunError(f"a node failed while {what}: {exc!r}") from exc
+            conductor.take_answers()
             if conductor.failures:
-                raise RunError(conductor.failures[0])
+                self.raise_failure()
             now = time.monotonic()
             if now < next_check:
                 continue
@@ -598,9 +731,10 @@ class _Session:
                 if dead:
                     raise RunError(f"{kind} {dead} died (exit code {group.procs[dead].returncode}) while {what}; "
                                    f"last lines of its log ({group.logs[dead]}):\n{group.tail(dead)}")
-            if self.external and step > 0 and now > graph_check:
-                graph_check = now + GRAPH_CHECK_PERIOD
-                gone = self.gone_external()
+            if step > 0 and now > self.graph_check:  # kept across steps: a step takes a few ms
+                self.graph_check = now + GRAPH_CHECK_PERIOD
+                self.look_for_strangers(step - 1)
+                gone = self.gone_external() if self.external else []
                 if gone:
                     raise RunError(f"node(s) {', '.join(gone)} left the network while {what}: external, their DDS "
                                    "participant is no longer announced (process ended, or its host is down or "
@@ -616,6 +750,48 @@ class _Session:
                 raise RunError(f"node(s) {', '.join(missing)} stopped answering: no StepDone({step}) within "
                                f"{timeout:g} s while {what}{note}")
 
+    def raise_failure(self) -> None:
+        """The first failure a node reported (or the runner found), as Untrusted if it is a
+        conflict: two different messages for one step."""
+        text = self.conductor.failures[0]
+        if CONFLICT_MARK in text:
+            raise Untrusted(f"{text}; the run cannot be trusted")
+        raise RunError(text)
+
+    def look_for_strangers(self, k: int) -> None:
+        """Untrusted if a stranger publishes one of the run's per-step state topics; strangers on
+        the protocol topics are named (their messages are refused)."""
+        found = self.conductor.state_intruders(self.state_owners)
+        if found:
+            raise Untrusted(f"a stranger publishes the run's state (seen at step {k}): {'; '.join(found)}; the run "
+                            "cannot be trusted")
+        self.conductor.note_protocol_strangers(k)
+
+    def check_result(self) -> None:
+        """After the last step: no late failure or intrusion, and the step count the summary will
+        state is what every node published: each node's last answer on its channel, and with a
+        recording every per-step output topic's count (step 0 and each step run). Untrusted
+        naming the node otherwise."""
+        conductor, recorder, steps = self.conductor, self.recorder, self.stats.steps_done
+        conductor.take_answers()
+        if conductor.failures:
+            self.raise_failure()
+        self.look_for_strangers(steps)
+        self.stats.strangers = dict(conductor.strangers)
+        short = [f"{n} answered step {conductor.last_answer.get(n, 0)}" for n in sorted(conductor.channels)
+                 if conductor.last_answer.get(n, 0) != steps]
+        if recorder:
+            recorder.flush()
+            for topic, owner in sorted(self.state_owners.items()):
+                n = recorder.counts.get(topic, 0)
+                # fed by the node: exactly one a step; subscribed (external): a repeat may be recorded
+                if n != steps + 1 and not (owner in self.external and n > steps):
+                    short.append(f"{owner} published {n} message(s) on {topic}, expected {steps + 1} (steps 0-{steps})")
+                else:
+                    self.stats.outputs_checked += 1
+        if short:
+            raise Untrusted(f"{steps} steps were counted, but {'; '.join(short)}: the run cannot be trusted")
+
     def gone_external(self) -> List[str]:
         """External nodes no longer in the ROS graph: their participant stopped announcing itself
         for its lease duration (Fast DDS default 20 s; 3 s with scripts/fastdds_lan.xml)."""
@@ -626,6 +802,7 @@ class _Session:
     def close(self) -> None:
         """Protocol counts into the stats, then stop the nodes and the executor."""
         self.stats.refused = dict(self.conductor.refused)
+        self.stats.strangers = dict(self.conductor.strangers)
         events = self.sc.events
         self.stats.never_fired = [f"events[{i}] (when {events[i].when.describe()})" for i in self.conductor.triggered
                                   if i not in self.conductor.fired]

@@ -14,6 +14,7 @@ from rclpy.node import Node
 from scenario_runner.run_nodes import NodeSpec, RunError, executable_path
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
+from sim_plumbing import step_channel
 
 
 def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
@@ -28,10 +29,13 @@ def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
 class NodeProcesses:
     """The node processes of a run, each in its own process group, output to a log file."""
 
-    def __init__(self, specs: List[NodeSpec], log_dir: str, recorder=None):
+    def __init__(self, specs: List[NodeSpec], log_dir: str, recorder=None, channels: bool = False):
         self.specs = specs
         self.log_dir = log_dir
         self.recorder = recorder  # gets a pipe feed from every node process
+        # step participants: each gets a private channel to the runner (sim_plumbing/step_channel.py)
+        self.with_channels = channels
+        self.channels: Dict[str, step_channel.RunnerEnd] = {}
         self.procs: Dict[str, subprocess.Popen] = {}
         self.logs: Dict[str, str] = {}
 
@@ -44,12 +48,17 @@ class NodeProcesses:
             self.logs[spec.name] = log
             feed_fds = ()
             env.pop(record_feed.ENV_FD, None)
+            env.pop(step_channel.ENV_FD, None)
             if self.recorder is not None:
                 read_fd, write_fd = os.pipe()
                 _grow_pipe(write_fd)
                 self.recorder.add_pipe_feed(read_fd)
                 env[record_feed.ENV_FD] = str(write_fd)
                 feed_fds = (write_fd,)
+            if self.with_channels and (spec.package, spec.executable) in CHANNEL_EXECUTABLES:
+                self.channels[spec.name], node_fd = step_channel.socket_pair()
+                env[step_channel.ENV_FD] = str(node_fd)
+                feed_fds += (node_fd,)
             with open(log, "wb") as out:
                 try:
                     self.procs[spec.name] = subprocess.Popen(
@@ -57,7 +66,7 @@ class NodeProcesses:
                         stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True, pass_fds=feed_fds)
                 finally:
                     for fd in feed_fds:
-                        os.close(fd)  # the node holds the write end: the pipe ends when it exits
+                        os.close(fd)  # the node holds its ends: the pipe and the channel end when it exits
 
     def cpu_seconds(self) -> float:
         """CPU time (user + system, all threads) of the node processes so far; nan without /proc."""
@@ -98,9 +107,17 @@ class NodeProcesses:
             except subprocess.TimeoutExpired:
                 os.killpg(p.pid, signal.SIGKILL)
                 p.wait()
+        for channel in self.channels.values():
+            channel.close()
 
 
 LAYOUTS = ("processes", "one_process")
+# The executables built on sim_plumbing.stepping, which read the runner's private channel. Any other
+# step participant (an autopilot of somebody else's package declared in the scenario) speaks the
+# protocol on the wire only, and gets no channel: the runner takes its StepDone from the wire, with
+# the trust of an external node (docs/step-protocol.md).
+CHANNEL_EXECUTABLES = {("tug_dynamics", "vessel_node"), ("rope_model", "rope_node"),
+                       ("scenario_runner", "autopilot"), ("hull_contact", "contact_node")}
 
 
 def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:

@@ -62,6 +62,18 @@ def external_outputs(sc: Scenario, external: Sequence[str]) -> Tuple[Tuple[str, 
     return outputs, every_step
 
 
+def per_step_outputs(sc: Scenario, names: Sequence[str]) -> Dict[str, str]:
+    """topic -> the node that publishes it, for the per-step state outputs (the contract's "every
+    step": odometry, attachments, status, thrusters, rope state, end wrenches) of these nodes: the
+    topics a stranger must not publish, and whose count is checked against the steps run."""
+    out = {}
+    for topic in external_outputs(sc, names)[1]:
+        owner = [n for n in names if _published_by(topic, [n])]
+        if len(owner) == 1:
+            out[topic] = owner[0]
+    return out
+
+
 def resolve_external(specs: List["NodeSpec"], wanted: Sequence[str]) -> List[str]:
     """Node names ("/tug/vessel") of `--external` items: "all", a node name or a namespace
     ("tug", "/tug"). ValueError naming the item that matches no node of the scenario."""

@@ -9,8 +9,10 @@ runner drives nodes somebody else started (other PCs; --print-nodes gives their 
 waits for them to announce themselves and records their outputs by subscription. Exit status:
 0 done, 2 invalid scenario or output (also: another run still writing the same --output, whose
 recording is left untouched), 3 a node died / stopped answering / failed, 4 the ROS domain is
-in use by another run (refused before step 0, no recording left), 130 Ctrl-C, 143 SIGTERM (both stop the
-nodes and finalise the recording).
+in use by another run (refused before step 0, no recording left), 5 the run cannot be trusted (a
+stranger publishes its state, a node got two different messages for one step, or the step count
+does not match what a node published: named; the recording is kept for inspection), 130 Ctrl-C,
+143 SIGTERM (both stop the nodes and finalise the recording).
 """
 from __future__ import annotations
 
@@ -130,6 +132,12 @@ def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
         lines.append("  refused protocol messages (logged, not used): " + ", ".join(
             [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +
             [f"{node}: {n}" for node, n in sorted(stats.node_refused.items()) if n]))
+    if stats.strangers:
+        lines.append("  strangers on the step protocol's topics (their messages refused): " + "; ".join(
+            f"{who} from step {k}" for who, k in sorted(stats.strangers.items())))
+    if stats.outputs_checked:
+        lines.append(f"  step count checked: {stats.steps_done} steps, as recorded of every node "
+                     f"({stats.outputs_checked} per-step output topics)")
     if stats.never_fired:
         lines.append(f"  never triggered (their condition did not hold before the end): {', '.join(stats.never_fired)}")
     if sc.mode == "realtime":
@@ -428,6 +436,11 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
         sys.stderr.write(f"run_scenario: refused to start: {exc}\n")
         refused = True
         return None, 4
+    except cd.Untrusted as exc:
+        if progress:
+            progress.close()
+        sys.stderr.write(f"run_scenario: run stopped, untrusted: {exc}\n")
+        return None, 5
     except cd.RunError as exc:
         if progress:
             progress.close()

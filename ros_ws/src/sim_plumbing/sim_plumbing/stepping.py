@@ -13,6 +13,14 @@ lockstep (parameter ``lockstep:=true``, what the scenario runner uses)
     published at start-up, with StepDone(0) as the ready signal (repeated until the first
     trigger, so the runner need not be discovered first).
 
+    Whose word counts: a node the runner started holds a private channel to it
+    (sim_plumbing/step_channel.py): it steps on the channel's triggers only (a SimStep on the wire
+    wakes it up; one the channel did not send is refused) and writes each StepDone there first,
+    the copy the runner trusts. A node somebody else started has no channel and steps on the
+    wire's SimStep. A second, different message for one step on a state input (or, without a
+    channel, a second, different SimStep) means somebody else writes it: the node stops stepping
+    and reports CONFLICT_MARK naming the publishers, and the runner stops the run as untrusted.
+
     Run identity: every run has a random id (parameter ``run_id``, handed over by the runner
     that starts the node; a node started by hand with no id joins the run of the first
     SimStep(0) it sees). A SimStep of another run, for a step the node is not at, or a
@@ -35,12 +43,14 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rclpy.serialization import serialize_message
 from tug_msgs.msg import SimStep, StepDone
 
 from sim_contract.node_params import STEPPING
 from sim_plumbing import cdr
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
+from sim_plumbing import step_channel
 
 
 # Inputs are stamped with the step they belong to; nothing legitimate is more than a step or two
@@ -50,6 +60,15 @@ MAX_LEAD_STEPS = 100
 # An order the runner announced but the node refused: the slot is filled, the last valid order held.
 REJECTED_ORDER = object()
 RESCUE_AFTER = 0.1  # s without a step before poll() takes what the executor may have missed
+# Steps back for which a node keeps what it used (inputs, triggers): a different message for one
+# of them arriving later is found out (the step was computed on a message that was not the only one).
+KEPT_STEPS = 16
+
+
+# Starts the error a node reports when it got two different messages for one step on one input
+# (or two different triggers): one is not from the run's own publisher, and which one was used
+# cannot be told. The node stops stepping; the runner stops the run as untrusted.
+CONFLICT_MARK = "conflicting messages"
 
 
 class RateLimitedLog:
@@ -122,8 +141,14 @@ class SteppedNode(Node):
         self.ready_to_step = ready
         self.inputs = inputs
         self._buffer: Dict[str, Dict[int, Any]] = {i.topic: {} for i in inputs}
+        # the serialized state input held or used for each step (the last KEPT_STEPS): a second,
+        # different one for that step is a conflict (CONFLICT_MARK), an identical copy changes nothing
+        self._prints: Dict[str, Dict[int, bytes]] = {i.topic: {} for i in inputs}
+        self.untrusted: Optional[str] = None  # why this node stopped stepping (a conflict)
         self._latest: Dict[str, Any] = {}
         self._triggers: Dict[int, cdr.TriggerIn] = {}
+        self._used_triggers: Dict[int, Tuple[str, ...]] = {}  # step -> ordered of the trigger taken
+        self.channel = None
         self._triggered = False
         self.namespace_name = self.get_namespace().strip("/")
         self._wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
@@ -145,6 +170,10 @@ class SteppedNode(Node):
                 sub = self.create_subscription(spec.msg_type, spec.topic, callback, qos, raw=True)
             self._taken.append((sub, callback))
         if self.lockstep:
+            # Started by the scenario runner: its private channel carries the triggers and takes
+            # the answers; a SimStep on the wire is then only a wake-up (sim_plumbing/step_channel.py).
+            self.channel = step_channel.for_node(self.get_fully_qualified_name())
+            self._sent_triggers: Dict[int, Tuple[str, ...]] = {}  # step -> ordered, as the channel sent them
             self.done_pub = self.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
             self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name(), self.run_id)
             self._taken.append((self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger_raw,
@@ -201,15 +230,55 @@ class SteppedNode(Node):
         msg = cdr.decode_or_report(spec.decode, data, lambda why: self.complaints(
             "undecodable " + spec.topic, f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {why}"))
         if msg is not None:
-            self._on_input(spec, msg)
+            self._on_input(spec, msg, data)
 
     def _on_trigger_raw(self, data: bytes) -> None:
         msg = cdr.decode_or_report(cdr.decode_sim_step, data, lambda why: self.complaints(
             "undecodable trigger", f"{rc.SIM_STEP_TOPIC}: undecodable SimStep dropped: {why}"))
-        if msg is not None:
+        if msg is None:
+            return
+        if self.channel is None:
             self._on_trigger(msg)
+            return
+        # the runner writes the trigger to the channel before it publishes: read it now, then the
+        # wire's copy must be one the channel sent (anything else is somebody else's)
+        self._take_channel()
+        if self._sent_triggers.get(msg.step) != msg.ordered or msg.run_id != self.run_id:
+            # (no graph look to name the sender: a flood would pay one per message; the runner names
+            # strangers on the protocol topics)
+            self.complaints("unconfirmed trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) of run '{msg.run_id}' "
+                            "refused: not sent by this node's runner (not on its private channel)")
 
-    def _on_input(self, spec: StepInput, msg: Any) -> None:
+    def _take_channel(self) -> None:
+        """Triggers the runner sent on the private channel, taken in order."""
+        for t in self.channel.triggers():
+            self._sent_triggers[t.step] = t.ordered
+            # the wire's copy may come late (an executor sitting on it): kept as long as an input may lead
+            for old in [s for s in self._sent_triggers if s < t.step - MAX_LEAD_STEPS]:
+                del self._sent_triggers[old]
+            self._on_trigger(cdr.TriggerIn(t.step * self.period_ns, self.run_id, t.step, t.ordered))
+
+    def publishers_of(self, topic: str) -> List[str]:
+        """The nodes publishing `topic`, as the ROS graph names them (to name an intruder)."""
+        try:
+            infos = self.get_publishers_info_by_topic(topic)
+        except Exception:  # noqa: BLE001 - naming is a courtesy; the refusal stands without it
+            return ["(unknown)"]
+        return sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}" for i in infos) or ["none"]
+
+    def _conflict(self, topic: str, what: str) -> None:
+        """A second, different message for a step: stop stepping, and say so to the runner now
+        (whatever step it waits for) with the publishers of `topic` the graph shows."""
+        self.complaints.counts["conflict"] += 1  # refused and counted like every refusal
+        if self.untrusted is not None:
+            return  # said once; the graph is not asked again for every further one
+        text = f"{CONFLICT_MARK}: {topic}: {what} (publishers: {', '.join(self.publishers_of(topic))})"
+        self.untrusted = text
+        self.get_logger().error(f"{text}: this node stops stepping, its state cannot be trusted")
+        if self.lockstep:
+            self._send_done(self.step_index, 0.0, error=text)
+
+    def _on_input(self, spec: StepInput, msg: Any, raw: Optional[bytes] = None) -> None:
         accepted = self.accept_input(spec, msg)
         if accepted:
             self._latest[spec.topic] = msg
@@ -226,6 +295,18 @@ class SteppedNode(Node):
                             f"{MAX_LEAD_STEPS} steps ahead of this node (step {self.step_index}): refused")
             return
         buf = self._buffer[spec.topic]
+        if spec.kind == "state" and accepted:
+            # one message per step from the run's publisher; a second, different one is a
+            # stranger's (or the first was): refused, and the run cannot be trusted any more
+            data = raw if raw is not None else serialize_message(msg)
+            held = self._prints[spec.topic].get(k)
+            if held is not None:
+                if held != data:
+                    self._conflict(spec.topic, f"two different messages stamped step {k}")
+                return  # a copy of what is held or was used: changes nothing
+            if k < self.step_index:
+                return  # for a step computed long ago: nothing to use it for
+            self._prints[spec.topic][k] = data
         if spec.kind == "order":
             k = max(k, self.step_index)
             if not accepted:
@@ -244,6 +325,8 @@ class SteppedNode(Node):
         self._advance()
 
     def _on_trigger(self, msg: cdr.TriggerIn) -> None:
+        if self.untrusted is not None:
+            return
         if not self.run_id and msg.step == 0 and msg.run_id:
             self.run_id = msg.run_id  # started by hand: join the first run that starts
             self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name(), self.run_id)
@@ -252,6 +335,13 @@ class SteppedNode(Node):
             self.complaints("foreign trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) of run "
                             f"'{msg.run_id}' refused (this node is in run '{self.run_id}')")
             return
+        used = self._used_triggers.get(msg.step)
+        if used is not None and used != msg.ordered:
+            # without a channel the wire is all there is: a different trigger for a step is a
+            # stranger's, and the step may have been computed on it
+            self._conflict(rc.SIM_STEP_TOPIC, f"two different SimStep({msg.step}) of this run (ordered "
+                           f"{list(used)} and {list(msg.ordered)})")
+            return
         if msg.step != self.step_index or msg.step in self._triggers:
             self.complaints("unexpected trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) refused: this node "
                             f"is at step {self.step_index}" + (" and holds that trigger already"
@@ -259,6 +349,9 @@ class SteppedNode(Node):
             return
         self._triggered = True
         self._triggers[msg.step] = msg
+        self._used_triggers[msg.step] = msg.ordered
+        for old in [s for s in self._used_triggers if s < msg.step - KEPT_STEPS]:
+            del self._used_triggers[old]
         self._advance()
 
     def missing_inputs(self, k: int) -> List[str]:
@@ -275,9 +368,12 @@ class SteppedNode(Node):
 
     def poll(self) -> None:
         """Called by the spin loop after every round (not by a timer: see ros_common.take_missed).
-        A lockstep node that has not advanced for RESCUE_AFTER takes what its readers hold."""
+        A lockstep node takes what its channel holds, and one that has not advanced for
+        RESCUE_AFTER takes what its readers hold."""
         if not self.lockstep:
             return
+        if self.channel is not None:
+            self._take_channel()
         now = time.monotonic()
         if self.step_index != self._progress[0]:
             self._progress = (self.step_index, now)
@@ -317,7 +413,7 @@ class SteppedNode(Node):
 
     def _ready(self, k: int) -> bool:
         trigger = self._triggers.get(k)
-        if trigger is None or not self.ready_to_step:
+        if trigger is None or not self.ready_to_step or self.untrusted is not None:
             return False
         ordered = self.namespace_name in trigger.ordered
         for spec in self.inputs:
@@ -338,6 +434,9 @@ class SteppedNode(Node):
                 inputs[spec.topic] = None if msg is REJECTED_ORDER else msg
                 for old in [s for s in buf if s <= k]:
                     del buf[old]
+                prints = self._prints[spec.topic]
+                for old in [s for s in prints if s < k - KEPT_STEPS]:
+                    del prints[old]
             t0 = time.perf_counter()
             try:
                 self.compute_step(inputs)
@@ -361,6 +460,12 @@ class SteppedNode(Node):
         self.publish_outputs()
 
     def _send_done(self, step: int, compute_time: float, error: str = "") -> None:
+        if self.channel is not None:  # first on the channel, the runner's trusted copy
+            try:
+                self.channel.send_answer(step_channel.Answer(step, compute_time, not error, self.complaints.total,
+                                                             error))
+            except step_channel.ChannelBroken as exc:
+                self.complaints("channel", f"the runner's channel is gone ({exc}); the runner has ended")
         self.done_pub.publish(self._done_cdr.encode(step * self.period_ns, step, compute_time, error,
                                                     self.complaints.total))
 
