@@ -114,3 +114,23 @@ def test_clock_that_jumps_is_not_followed():
     assert guard.observe(10_100_000_000, 0.1) is None
     assert guard.observe(0, 0.2) is None  # a new run or a replay from the start
     assert guard.observe(50_000_000_000, 0.3) is None  # a start at an offset
+
+
+def test_a_vessel_on_a_prescribed_motion_offers_the_web_no_order_topic():
+    """The live view serves order topics only of vessels that take orders: an order to a vessel
+    on a prescribed motion is refused at the web edge, not answered "accepted" and then refused
+    by the vessel (issue 30 item 3)."""
+    import os
+    from ament_index_python.packages import get_package_share_directory
+    from scenario_format.scenario import load_scenario
+    from scenario_runner.run_scenario import live_topics
+    sc = load_scenario(os.path.join(get_package_share_directory("scenario_runner"), "scenarios",
+                                    "seed000_sinusoidal_sway.yaml"))
+    served = {t for t, _type, _latched in live_topics(sc)}
+    moving = [v.name for v in sc.vessels if v.motion is not None]
+    free = [v.name for v in sc.vessels if v.motion is None]
+    assert moving
+    for name in moving:
+        assert f"/{name}/command" not in served and f"/{name}/odom" in served
+    for name in free:
+        assert f"/{name}/command" in served

@@ -238,8 +238,12 @@ def live_topics(sc: Scenario) -> List[Tuple[str, str, bool]]:
     vessel scenes."""
     from rclpy.qos import DurabilityPolicy
     from sim_plumbing.msg_definitions import type_name
+    # a vessel on a prescribed motion takes no orders: the web clients are refused them at the edge
+    # (the vessel would refuse them too, after the live view had answered "accepted")
+    no_orders = {T.vessel_topic(v.name, name) for v in sc.vessels if v.motion is not None
+                 for name in (T.COMMAND, T.THRUSTER_COMMAND)}
     topics = [(t, type_name(cls), qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)
-              for t, cls, qos in run_nodes.contract_topics(sc)]
+              for t, cls, qos in run_nodes.contract_topics(sc) if t not in no_orders]
     extra = [(rc.TF_TOPIC, "tf2_msgs/msg/TFMessage", False), (rc.TF_STATIC_TOPIC, "tf2_msgs/msg/TFMessage", True)]
     extra += [(T.vessel_topic(v.name, T.MARKERS), "visualization_msgs/msg/MarkerArray", True) for v in sc.vessels]
     have = {t[0] for t in topics}
