@@ -276,3 +276,23 @@ def test_fd_cable_in_waves_is_reproducible_and_hs_zero_is_calm():
     a, b = _fd_run(sea), _fd_run(sea)
     assert np.array_equal(a, b)
     assert np.abs(a - calm).max() > 0.01
+
+
+def test_wet_kinematics_are_the_fields_below_the_surface_and_its_surface_values_above():
+    """waves.wave_kinematics_wet (what the rope samples) against the field's own kernel: the
+    same values (1e-12) at points in the water, and at a point above the surface those at the
+    surface (z = eta) rather than zero."""
+    from sea_environment.waves import WaveField, wave_kinematics, wave_kinematics_wet
+    sea = WaveField.irregular(3.0, 9.0, 0.7, spreading_s=6.0, components=60, seed=8, depth=40.0, ramp_time=5.0)
+    w = sea.packed
+    scratch = np.empty(2 * 60)
+    above = float(sea.elevation(-8.0, 4.0, 60.0)) + 0.3
+    for x, y, z, t in ((3.0, -7.0, -2.0, 2.0), (50.0, 11.0, -30.0, 40.0), (-8.0, 4.0, above, 60.0)):
+        wet = np.array(wave_kinematics_wet(w, 0, x, y, z, t, scratch))
+        ref = np.array(wave_kinematics(w, 0, x, y, z, t))
+        if z <= ref[0]:
+            np.testing.assert_allclose(wet, ref[:7], rtol=1e-12, atol=1e-12)
+        else:
+            surf = np.array(wave_kinematics(w, 0, x, y, ref[0], t))
+            assert np.abs(surf[1:4]).max() > 0.1
+            np.testing.assert_allclose(wet, surf[:7], rtol=1e-12, atol=1e-12)

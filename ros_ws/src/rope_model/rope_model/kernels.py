@@ -34,7 +34,12 @@ arrays per connection made the kernel 14-70 % slower). The arguments are few and
 (numba's dispatch costs about 50 ns per array argument): the state S and flags F
 (RopeChain's X, E, V, W, ... are views into them), one float array io for parameters,
 attachment data and outputs, and the work space ws. kernels_reference.py is a plain numpy
-transcription of the same sub-step, used as a test oracle.
+transcription of the same sub-step, used as a test oracle (of the calm sea: it has no waves).
+
+Waves (issue 31): sample_waves writes the sea's particle velocity and acceleration (Airy,
+Wheeler-stretched) and the local elevation eta at each element once per exchange step; drag
+acts relative to current + particles, Morison's inertia is added (_wave_inertia) and the
+immersion and water entry are judged against eta (README, "Waves").
 """
 import math
 from collections import namedtuple
