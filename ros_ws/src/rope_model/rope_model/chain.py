@@ -323,10 +323,12 @@ class RopeChain:
         self._io[K.IO_CUR] = _vec3(value, "current")
 
     # ------------------------------------------------------------------ environment
-    # columns of env, the kernel state's S[:N, SCUR:SDEPTH + 1] (see _pack): current (3),
-    # wind (3), seabed depth
+    # columns of env, the kernel state's S[:N, SCUR:] (see _pack): current (3), wind (3),
+    # seabed depth, and the waves (particle velocity 3, acceleration 3, surface elevation;
+    # written by the kernel's sample_waves, zero without a sea)
     ENV_CUR, ENV_WIND, ENV_DEPTH = 0, K.SWIND - K.SCUR, K.SDEPTH - K.SCUR
-    ENV_COLS = K.SDEPTH + 1 - K.SCUR
+    ENV_WAVE_VEL, ENV_WAVE_ACC, ENV_ETA = K.SWV - K.SCUR, K.SWA - K.SCUR, K.SETA - K.SCUR
+    ENV_COLS = K.S_COLS - K.SCUR
 
     @classmethod
     def _calm_env(cls, n):
@@ -341,8 +343,9 @@ class RopeChain:
 
     def attach_environment(self, data) -> None:
         """From now on every step samples the environment itself at the element centres (at
-        its start; the current, wind and seabed depth set_environment would take) from `data`,
-        a sea_environment.sampler.EnvironmentSampler's packed array, whose time it advances by
+        its start; the current, wind and seabed depth set_environment would take, and the waves
+        of its sea at the step's middle: kernels.sample_waves) from `data`, a
+        sea_environment.sampler.EnvironmentSampler's packed array, whose time it advances by
         each step's dt. None detaches (the last values stay, as after set_environment)."""
         self._environment = data
 
@@ -394,6 +397,7 @@ class RopeChain:
             env[:, c0:c0 + 3] = cur
         env[:, w0:w0 + 3] = 0.0 if wnd is None else wnd
         env[:, self.ENV_DEPTH] = math.inf if dep is None else dep
+        env[:, self.ENV_WAVE_VEL:] = 0.0  # the caller's environment has no waves
 
     @staticmethod
     def _env_vectors(v, what, n):
@@ -701,8 +705,8 @@ class RopeChain:
             d[key] = S[:n, col:col + 3]
         S[:n, K.SL] = L
         d["_L"] = S[:n, K.SL]
-        S[:n, K.SCUR:K.SDEPTH + 1] = d["_env"]
-        d["_env"] = S[:n, K.SCUR:K.SDEPTH + 1]
+        S[:n, K.SCUR:] = d["_env"]
+        d["_env"] = S[:n, K.SCUR:]
         for key, col in (("_breaking_load", K.SB), ("_tensions", K.ST)):
             S[:, col] = d[key]
             d[key] = S[:, col]
@@ -773,7 +777,7 @@ class RopeChain:
             if self._environment is not None:    # at the step's start, as the kernel's path below
                 if not self._packed:
                     self._pack()
-                K.sample_environment(self._S, self._io, self._environment)
+                K.sample_environment(self._S, self._io, self._environment, dt)
                 self._environment[K.P_TIME] += dt
             st = drum.step(self, dt, n_sub, h)
         else:  # the kernel restores the last good state itself on divergence, moves the

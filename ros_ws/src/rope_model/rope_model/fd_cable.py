@@ -246,6 +246,7 @@ def _parameter_vector(p):
     P[FK.P_KT] = 0.5 * rho * math.pi * p.diameter * p.drag_tangential  # Eq 6: R_t on pi*d
     P[FK.P_KN] = 0.5 * rho * p.diameter * p.drag_normal
     P[FK.P_KB] = 0.5 * rho * p.diameter * p.drag_binormal
+    P[FK.P_RHOA] = rho * p.area  # Froude-Krylov per metre (Morison's inertia in waves)
     return P
 
 
@@ -279,6 +280,9 @@ class FdCable:
         self.tangential_reference = (None if tangential_reference is None
                                      else _vec3(tangential_reference, "tangential_reference"))
         self.heading = float(heading)
+        # waves at the nodes, H order (index 0 = the free end), world: None = calm (set_waves)
+        self._wave_vel = None
+        self._wave_acc = None
         p = params
         self._P = _parameter_vector(p)
         # Newton convergence scales: forces by the cable weight, velocities 1 m/s, rad, 1/m
@@ -303,9 +307,34 @@ class FdCable:
         return self._R.T @ w
 
     def _cur_paper(self):
-        """(6,) paper frame: the current (normal drag) and the tangential drag's reference."""
+        """(n, 9) per node, paper frame (fd_kernels.CUR_*): the water velocity (normal drag:
+        current + waves), the tangential drag's reference and the waves' acceleration."""
         ref = self.current if self.tangential_reference is None else self.tangential_reference
-        return np.concatenate([self._R.T @ self.current, self._R.T @ ref])
+        cur = np.zeros((self.n, FK.CUR_COLS))
+        cur[:, FK.CUR_WATER:FK.CUR_WATER + 3] = self._R.T @ self.current
+        cur[:, FK.CUR_REF:FK.CUR_REF + 3] = self._R.T @ ref
+        if self._wave_vel is not None:
+            wv = self._wave_vel @ self._R          # rows R^T v: world -> paper
+            cur[:, FK.CUR_WATER:FK.CUR_WATER + 3] += wv
+            if self.tangential_reference is None:  # the reference is the water itself
+                cur[:, FK.CUR_REF:FK.CUR_REF + 3] += wv
+            cur[:, FK.CUR_ACC:FK.CUR_ACC + 3] = self._wave_acc @ self._R
+        return cur
+
+    def set_waves(self, velocity=None, acceleration=None):
+        """The wave particles' velocity and acceleration at the nodes for the coming step,
+        (N, 3) each, world ENU, in the order of `positions` (index 0 = the towing point);
+        None: a calm sea. The drag then acts on the velocity relative to current + waves, and
+        Morison's inertia rho A ((1 + C_a) a_n + a_t) is added (fd_kernels' docstring)."""
+        if velocity is None:
+            self._wave_vel = self._wave_acc = None
+            return
+        v = np.asarray(velocity, float)
+        a = np.asarray(acceleration, float)
+        if v.shape != (self.n, 3) or a.shape != (self.n, 3) or not (np.isfinite(v).all() and np.isfinite(a).all()):
+            raise ValueError(f"set_waves: expected finite (N, 3) = ({self.n}, 3) velocity and acceleration, "
+                             f"got shapes {v.shape}, {a.shape}")
+        self._wave_vel, self._wave_acc = v[::-1].copy(), a[::-1].copy()
 
     def _guess_straight(self):
         """Straight cable trailing 45 deg downstream (or hanging): a rough, generic guess."""

@@ -27,6 +27,13 @@ e = T/EA; mr = m + ma (added mass on the whole normal acceleration, frame-invari
 (the paper's Eq 12 literally: added mass on vn., vb. only). Fluid acceleration terms vanish
 for a uniform steady current. Drag Eq 6 on the velocity relative to the current (R_t on
 v_t - u_t; see FD_CABLE.md, 'Tangential drag: statics against the turn').
+
+Waves (issue 31): the water velocity of each node is the current plus the wave particles'
+(Airy with Wheeler stretching, sea_environment.waves; zero for a node in the air), and the
+particles' acceleration a adds Morison's inertia (Morison et al. 1950; DNV-RP-C205 6.2) per
+unit length, rho A ((1 + C_a) a_n + a_t) on the normal (n, b) and tangential parts (Froude-
+Krylov alone along the axis: the model has no tangential added mass) to R of rows 0-2. The
+added mass's reaction to the cable's own acceleration is already in K (m + m_a).
 """
 import cmath
 import math
@@ -35,7 +42,8 @@ import numpy as np
 from numba import njit
 
 from sea_environment.environment import current_xy_at, tidal_factor
-from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at
+from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at, wave_offset
+from sea_environment.waves import wave_kinematics
 from sim_math.linalg import lu_factor, lu_solve_columns
 
 NV = 10
@@ -46,8 +54,11 @@ H_FORCE = slice(H_T, H_SB + 1)  # (T, Sn, Sb), N: the internal force in the loca
 H_VEL = slice(H_VT, H_VB + 1)  # (vt, vn, vb), m/s: the velocity in the local triad
 H_ANGLES = slice(H_PHI, H_THETA + 1)  # (phi, theta), rad: the triad's angles (Eq 1)
 # parameter vector layout
-P_M, P_MA, P_MR, P_W0, P_EA, P_EI, P_KT, P_KN, P_KB = range(9)
-NP = 9
+P_M, P_MA, P_MR, P_W0, P_EA, P_EI, P_KT, P_KN, P_KB, P_RHOA = range(10)
+NP = 10
+# columns of a node's row of `cur` (paper frame): the water velocity the normal drag acts on
+# (current + waves), the tangential drag's reference, the wave particles' acceleration
+CUR_WATER, CUR_REF, CUR_ACC, CUR_COLS = 0, 3, 6, 9
 # rows of a cell's 10 equations that go to the block row of its left node (Y) and of its right
 # node (X): Y holds the vt', vn', vb', phi', theta' rows whose J/ds diagonal covers exactly the
 # unknowns the free-end BC (T, Sn, Sb, On, Ob) leaves open, so the first diagonal block is
@@ -70,9 +81,11 @@ def local_triad(phi, th, out):
 def node_terms(H, Hold, P, cur, use_k, L, g):
     """L(H) of Eq 10 (re-derived) and g = K(H) (H - Hold) of Eq 12 (re-derived).
 
-    Generic in the dtype of H (complex for the complex-step Jacobian). cur (6,): the uniform
-    current (cur[0:3]) and the velocity the tangential drag R_t is measured against (cur[3:6];
-    the current itself for Morison drag on the relative velocity), paper frame, m/s.
+    Generic in the dtype of H (complex for the complex-step Jacobian). cur (9,), this node's:
+    the water velocity (cur[0:3]: current + wave particles), the velocity the tangential drag
+    R_t is measured against (cur[3:6]; the water's for Morison drag on the relative velocity),
+    paper frame, m/s, and the wave particles' acceleration (cur[6:9], m/s^2; zero on a calm
+    sea), whose Morison inertia joins R.
     """
     T, Sn, Sb, vt, vn, vb, ph, th, On, Ob = (H[0], H[1], H[2], H[3], H[4], H[5], H[6], H[7],
                                              H[8], H[9])
@@ -94,6 +107,14 @@ def node_terms(H, Hold, P, cur, use_k, L, g):
     vp = cmath.sqrt(vnr * vnr + vbr * vbr)
     Rn = -P[P_KN] * vnr * vp * se
     Rb = -P[P_KB] * vbr * vp * se
+    if cur[6] != 0.0 or cur[7] != 0.0 or cur[8] != 0.0:   # waves: Morison's inertia
+        an = -cur[6] * sp + cur[7] * cp
+        ab = cur[6] * st * cp + cur[7] * st * sp + cur[8] * ct
+        at = cur[6] * ct * cp + cur[7] * ct * sp - cur[8] * st
+        ra = P[P_RHOA]
+        Rt = Rt + ra * at
+        Rn = Rn + (ra + ma) * an
+        Rb = Rb + (ra + ma) * ab
     e3 = e1 * e1 * e1
     L[0] = Sn * Ob - Sb * On + w0 * ct * cp - Rt
     L[1] = -Ob * (T + Sb * tt) - w0 * sp - Rn
@@ -177,7 +198,7 @@ def linearise_nodes(H, Hold, P, cur, use_k, Lv, gv, dL, dg):
         for k in range(NV):
             _load_node(H, j, Hc)
             Hc[k] += 1j * CSTEP
-            node_terms(Hc, Ho, P, cur, use_k, Lc, gc)
+            node_terms(Hc, Ho, P, cur[j], use_k, Lc, gc)
             for i in range(NV):
                 dL[j, i, k] = Lc[i].imag / CSTEP
                 dg[j, i, k] = gc[i].imag / CSTEP
@@ -195,7 +216,7 @@ def node_values(H, P, cur, Lv):
     gc = np.empty(NV, np.complex128)
     for j in range(n):
         _load_node(H, j, Hc)
-        node_terms(Hc, Hc, P, cur, False, Lc, gc)
+        node_terms(Hc, Hc, P, cur[j], False, Lc, gc)
         for i in range(NV):
             Lv[j, i] = Lc[i].real
 
@@ -436,6 +457,22 @@ def node_positions(H, R, ea, ds, top, out):
         out[n - 1 - k, 1] = top[1] - sy
         out[n - 1 - k, 2] = top[2] - sz
         dx1, dy1, dz1 = dx, dy, dz
+
+
+@njit(cache=True)
+def sample_waves(positions, env, t, out):
+    """The waves of the sea packed in env (sampler.P_WAVE_AT) at the nodes at time t into out
+    (n, 6): the particles' velocity and acceleration, world ENU (Airy, Wheeler-stretched, zero
+    in the air: the towed cable is a submerged model, a node above the surface feels none).
+    Returns False (out untouched) on a calm sea."""
+    at = wave_offset(env)
+    if at == 0:
+        return False
+    for i in range(positions.shape[0]):
+        _eta, u, v, w, ax, ay, az, _p = wave_kinematics(env, at, positions[i, 0], positions[i, 1],
+                                                        positions[i, 2], t)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = u, v, w, ax, ay, az
+    return True
 
 
 @njit(cache=True)

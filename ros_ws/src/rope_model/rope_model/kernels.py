@@ -34,7 +34,12 @@ arrays per connection made the kernel 14-70 % slower). The arguments are few and
 (numba's dispatch costs about 50 ns per array argument): the state S and flags F
 (RopeChain's X, E, V, W, ... are views into them), one float array io for parameters,
 attachment data and outputs, and the work space ws. kernels_reference.py is a plain numpy
-transcription of the same sub-step, used as a test oracle.
+transcription of the same sub-step, used as a test oracle (of the calm sea: it has no waves).
+
+Waves (issue 31): sample_waves writes the sea's particle velocity and acceleration (Airy,
+Wheeler-stretched) and the local elevation eta at each element once per exchange step; drag
+acts relative to current + particles, Morison's inertia is added (_wave_inertia) and the
+immersion and water entry are judged against eta (README, "Waves").
 """
 import math
 from collections import namedtuple
@@ -43,7 +48,8 @@ import numpy as np
 from numba import njit
 
 from sea_environment.environment import tidal_factor
-from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at, flow_at_point, wind_at_10m
+from sea_environment.sampler import P_DEPTH_MIN, P_TIME, depth_at, flow_at_point, wave_offset, wind_at_10m
+from sea_environment.waves import W_N, wave_kinematics_wet
 from sim_math.linalg import lu_factor, lu_solve, lu_solve_columns
 
 # status codes returned by run_substeps
@@ -77,7 +83,12 @@ SX, SE, SV, SW, SL, SB, ST = 0, 3, 6, 9, 12, 13, 14
 # current of io[IO_CUR]), wind (3 from SWIND) and seabed depth below the water surface
 # (SDEPTH, m, positive down; inf = no seabed)
 SCUR, SWIND, SDEPTH = 15, 18, 21
-S_COLS = 22
+# waves at element j (sample_environment, from the sea packed in the environment; zero on a
+# calm sea): the water particles' velocity (3 columns from SWV, added to the current) and
+# acceleration (SWA) at the element centre, or at the surface for a centre above it, and the
+# local surface elevation eta (SETA, m), against which the element's immersion is judged
+SWV, SWA, SETA = 22, 25, 28
+S_COLS = 29
 F_OK, F_ARMED = 0, 1
 F_COLS = 2
 # io: float64 (IO_ROWS, 3), RopeChain._io; the attributes att_pos, att_vel etc. are views
@@ -313,6 +324,21 @@ def _morison_drag(p, rho, l, r0, r1, r2, ex, ey, ez):
 
 
 @njit(cache=True, inline="always", fastmath=FMA)
+def _wave_inertia(p, vol, fr, a0, a1, a2, ex, ey, ez):
+    """Inertia term of Morison's equation (Morison et al. 1950; DNV-RP-C205 6.2) for the wave
+    particle acceleration a at the element: Froude-Krylov plus added mass on the normal part,
+    rho Vol f (1 + C_a) a_n, and Froude-Krylov alone on the tangential part, rho Vol f a_t (the
+    model's axial added mass m_x ~ 0, Eq 9). The reaction of the added mass to the element's
+    own acceleration, -C_a rho Vol f dV_n/dt, is the mass matrix's M_A (Eq 9). f: the immersed
+    fraction."""
+    at = a0 * ex + a1 * ey + a2 * ez
+    c = p.rho_w * vol * fr
+    cn = c * (1.0 + p.Ca)
+    return (cn * (a0 - at * ex) + c * at * ex, cn * (a1 - at * ey) + c * at * ey,
+            cn * (a2 - at * ez) + c * at * ez)
+
+
+@njit(cache=True, inline="always", fastmath=FMA)
 def _fluid_inertia_forces(ma, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz):
     """Fluid Coriolis force C_A of Eq (8) in world form, -(dM_A/dt) V_r with dE/dt = W x E,
     and the Munk moment of Eq (8) rows 4-5, (m_z - m_x) w u, (m_x - m_y) u v. r: velocity
@@ -351,11 +377,13 @@ def _relaxation_forces(relax, m00, m11, m22, m01, m02, m12, Ip, vx, vy, vz, wx, 
 
 @njit(cache=True, inline="always")
 def _element_state(S, j):
-    """Length, centre height, axis e, velocity V and angular velocity W of element j, and
-    the current and wind at its centre (the per-element part of the current)."""
+    """Length, centre height, axis e, velocity V and angular velocity W of element j, the
+    current and wind at its centre (the per-element part of the current) and the waves there
+    (particle velocity, acceleration, surface elevation)."""
     return (S[j, SL], S[j, SX + 2], S[j, SE], S[j, SE + 1], S[j, SE + 2], S[j, SV], S[j, SV + 1],
             S[j, SV + 2], S[j, SW], S[j, SW + 1], S[j, SW + 2], S[j, SCUR], S[j, SCUR + 1],
-            S[j, SCUR + 2], S[j, SWIND], S[j, SWIND + 1], S[j, SWIND + 2])
+            S[j, SCUR + 2], S[j, SWIND], S[j, SWIND + 1], S[j, SWIND + 2], S[j, SWV],
+            S[j, SWV + 1], S[j, SWV + 2], S[j, SWA], S[j, SWA + 1], S[j, SWA + 2], S[j, SETA])
 
 
 @njit(cache=True, inline="always", fastmath=FMA)
@@ -365,13 +393,17 @@ def _element_terms(state, p):
     water entry, relaxation) and their velocity Jacobian C. Returns its basis b1, b2, the
     right-hand side h f (5) and the upper triangle of M - h theta C: entries 00, 11, 22,
     01, 02, 12 and 33 = 44 (no translation-rotation coupling, 34 = 0)."""
-    l, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, uc0, uc1, uc2, ua0, ua1, ua2 = state
-    # current at the element: the uniform part plus the element's own (a sampled field)
-    uc0 += p.cur0
-    uc1 += p.cur1
-    uc2 += p.cur2
+    (l, z, ex, ey, ez, vx, vy, vz, wx, wy, wz, uc0, uc1, uc2, ua0, ua1, ua2, uw0, uw1, uw2,
+     aw0, aw1, aw2, eta) = state
+    # water velocity at the element: the uniform current plus the element's own (a sampled
+    # field) plus the wave particles' (zero on a calm sea: adding 0.0 changes no bit)
+    uc0 += p.cur0 + uw0
+    uc1 += p.cur1 + uw1
+    uc2 += p.cur2 + uw2
     p0, p1, p2, q0, q1, q2 = _basis(ex, ey, ez)
-    fr, dfr, m1 = immersion(z, ez, 0.5 * l, p.radius)
+    # immersion against the local surface eta (a horizontal plane at the element: the wave
+    # slope k a, at most about 0.3 before breaking, is neglected across the element's section)
+    fr, dfr, m1 = immersion(z - eta, ez, 0.5 * l, p.radius)
     m, vol, ma, rot_fac, Ip = _element_inertia(p, l, fr)
     m00, m11, m22, m01, m02, m12 = _mass_matrix(m, ma, ex, ey, ez)
     # force F, moment t and the velocity Jacobian C (symmetric) of the element forces
@@ -380,6 +412,12 @@ def _element_terms(state, p):
     F1 = 0.0
     F2, t0, t1 = _gravity_and_buoyancy(p, m, vol, fr, m1, ex, ey)
     t2 = 0.0
+    if fr > 0.0 and (aw0 != 0.0 or aw1 != 0.0 or aw2 != 0.0):  # Morison's wave inertia
+        # (a calm sea has no acceleration: skipped, the calm path's arithmetic unchanged)
+        d0, d1, d2 = _wave_inertia(p, vol, fr, aw0, aw1, aw2, ex, ey, ez)
+        F0 += d0
+        F1 += d1
+        F2 += d2
     for part in range(2):  # water part on the velocity relative to the current, air part
         if part == 0:  # relative to the wind
             rho = p.rho_w * fr
@@ -414,7 +452,9 @@ def _element_terms(state, p):
     t0 += u0
     t1 += u1
     t2 += u2
-    mdot = p.Ca * p.rho_w * vol * dfr * vz
+    # rate of immersion: the element's vertical speed relative to the surface's, which is the
+    # wave particles' vertical speed there (linear theory: w = d eta / dt at the surface)
+    mdot = p.Ca * p.rho_w * vol * dfr * (vz - uw2)
     if mdot > 0.0:
         (d0, d1, d2, e00, e11, e22, e01, e02, e12, u0, u1, u2,
          erot) = _water_entry_impact(mdot, rot_fac, r0, r1, r2, ue, ex, ey, ez, wx, wy, wz)
@@ -1272,7 +1312,10 @@ def set_environment(S, io, cur, wind, depth):
         for a in range(3):
             S[j, SCUR + a] = cur[j, a]
             S[j, SWIND + a] = wind[j, a]
+            S[j, SWV + a] = 0.0  # the caller's environment has no waves
+            S[j, SWA + a] = 0.0
         S[j, SDEPTH] = depth[j]
+        S[j, SETA] = 0.0
     for a in range(3):
         io[IO_CUR, a] = 0.0
     return -1
@@ -1282,12 +1325,15 @@ SEABED_MARGIN = 5.0  # m: further than any element moves in one exchange step (2
 
 
 @njit(cache=True)
-def sample_environment(S, io, env):
+def sample_environment(S, io, env, dt):
     """The environment (env: a sea_environment.sampler.EnvironmentSampler's data, at its
     time) at every element centre into S's SCUR / SWIND / SDEPTH columns (horizontal current
     and wind; inf: no seabed within the element's reach), the uniform current io[IO_CUR] set to 0: what
-    RopeChain.set_environment takes, sampled here instead of by the caller."""
+    RopeChain.set_environment takes, sampled here instead of by the caller; and the waves, if
+    the environment has a sea, into SWV / SWA / SETA (sample_waves) at the middle of the
+    exchange step dt about to be taken."""
     N = S.shape[0] - 1
+    sample_waves(S, env, env[P_TIME] + 0.5 * dt)
     tide = tidal_factor(env, env[P_TIME])
     w10 = wind_at_10m(env)
     # two loops, the depth's branch written out in the loop: as one loop, or through a helper
@@ -1312,11 +1358,37 @@ def sample_environment(S, io, env):
 
 
 @njit(cache=True)
+def sample_waves(S, env, t):
+    """The waves of the sea packed in env (sampler.P_WAVE_AT; nothing on a calm sea) at every
+    element centre at time t into SWV / SWA / SETA: Airy kinematics with Wheeler (1970)
+    stretching above the mean surface (waves.wave_kinematics_wet: at the surface for a centre
+    above it; zero below the bottom).
+
+    Once per exchange step, at its middle (the frozen forcing is then centred in time: its
+    error over the step is of order (omega dt)^2 / 24, 1e-4 at dt = 0.02 s and T = 4 s) and
+    at the element positions of its start (an element moves k |V| dt of a wave's phase in
+    the step, 1e-3 rad at 1 m/s): per sub-step the sum over 100-200 components would cost
+    n_sub times as much for no visible change; the immersion itself follows each sub-step's
+    position against this eta."""
+    at = wave_offset(env)
+    N = S.shape[0] - 1
+    if at == 0:
+        return
+    scratch = np.empty(2 * int(env[at + W_N]))
+    for j in range(N):
+        eta, u, v, w, ax, ay, az = wave_kinematics_wet(env, at, S[j, SX], S[j, SX + 1],
+                                                       S[j, SX + 2], t, scratch)
+        S[j, SWV], S[j, SWV + 1], S[j, SWV + 2] = u, v, w
+        S[j, SWA], S[j, SWA + 1], S[j, SWA + 2] = ax, ay, az
+        S[j, SETA] = eta
+
+
+@njit(cache=True)
 def run_substeps_in_environment(S, F, io, ws, h, n_sub, payout_a, dt, env):
     """run_substeps over the exchange step dt in the environment sampled at its start
     (sample_environment), the environment's time then advanced by dt: one compiled call, as
     a separate one costs about a tenth of a short rope's step (benchmarks/bench_rope.py)."""
-    sample_environment(S, io, env)
+    sample_environment(S, io, env, dt)
     st = run_substeps(S, F, io, ws, h, n_sub, payout_a, dt)
     env[P_TIME] += dt
     return st

@@ -219,16 +219,21 @@ class CableAdapter:
     def attach_environment(self, env: Environment) -> None:
         """From now on every step samples `env` at the nodes first, from t = 0, in one compiled
         call (fd_kernels.sample_environment; what set_environment takes: the mean current; the
-        seabed check)."""
+        seabed check) and the waves at each node (fd_kernels.sample_waves, FdCable.set_waves)."""
         self._env = EnvironmentSampler(env).data
+        self._waves = np.zeros((self.cable.n, 6))
 
     def step(self, dt: float) -> None:
         env = self._env
         if env is not None:
-            cx, cy, below, depth = FK.sample_environment(self.cable.positions, env)
+            pos = self.cable.positions
+            cx, cy, below, depth = FK.sample_environment(pos, env)
             if below >= 0:
-                raise _on_seabed(below, self.cable.positions[below, 2], depth)
+                raise _on_seabed(below, pos[below, 2], depth)
             self.cable.current = np.array([cx, cy, 0.0])
+            # the waves at the nodes at the step's middle (as the rope chain: kernels.sample_waves)
+            if FK.sample_waves(pos, env, env[P_TIME] + 0.5 * dt, self._waves):
+                self.cable.set_waves(self._waves[:, :3], self._waves[:, 3:])
             env[P_TIME] += dt
         self.cable.step(dt)
 

@@ -422,10 +422,10 @@ def load_scenario(path: str, check_files: bool = True) -> Scenario:
         raise ScenarioError("\n".join(lines)) from None
     sc._path = os.path.abspath(path)
     waves = sc.environment.waves
-    if waves is not None and waves.hs > 0.0:   # issue 31: the sea is modelled, the bodies do not feel it yet
-        sc._warnings.append(f"environment.waves (Hs {waves.hs:g} m, Tp {waves.tp:g} s): the wave field is built and "
-                            "recorded in the environment, but vessels, ropes and cables do not feel it yet; the run's "
-                            "physics is the calm-water one")
+    if waves is not None and waves.hs > 0.0:   # issue 31: ropes and cables feel the sea, the vessels not yet
+        sc._warnings.append(f"environment.waves (Hs {waves.hs:g} m, Tp {waves.tp:g} s): ropes and towed cables feel "
+                            "the waves (Morison drag and inertia; a rope's immersion against the local surface), but "
+                            "the vessels do not feel it yet; their physics is the calm-water one")
     _check_references(path, sc)
     if check_files:
         _check_files(path, sc)

@@ -2,7 +2,8 @@
 vessel (`sample`) the current at its reference point, the apparent wind and Blendermann's wind
 force, the depth, Ankudinov's shallow-water factors, squat, the under-keel clearance and the
 bottom's friction when aground; for a point of a rope or cable (`flow_at_point`, `depth_at`)
-the current, the wind at its height and the depth. No ROS.
+the current, the wind at its height and the depth; the waves (waves.WaveField.packed) are
+appended for the rope and cable kernels (at data[P_WAVE_AT], `wave_offset`). No ROS.
 
 The models call these from inside their own compiled steps, once per exchange step, on the state
 they have just reached (the values then hold over the next step). Every piece is a kernel the
@@ -49,6 +50,11 @@ DEEP, UNIFORM_DEPTH, DEPTH_GRID = 0.0, 1.0, 2.0
  E_APPARENT_SPEED, E_APPARENT_ANGLE, E_DEPTH, E_SQUAT, E_CLEARANCE, E_GROUNDED,
  E_F_YV, E_F_YR, E_F_NV, E_F_NR, N_SAMPLE) = range(19)
 E0 = N_PARAMS                   # where the sample starts in the data array
+# after the sample: where the wave field's packed array (waves.WaveField.packed) starts in the
+# data array, 0 for a calm sea. Placed after the sample, not among the P_* above, so no
+# existing offset moves (compiled callers bake them in as constants).
+P_WAVE_AT = E0 + N_SAMPLE
+N_FIXED = P_WAVE_AT + 1         # parameters + sample + the wave offset; records follow
 
 
 class EnvironmentSampler:
@@ -59,7 +65,7 @@ class EnvironmentSampler:
     def __init__(self, env: Environment, *, length: float = math.nan, beam: float = math.nan,
                  draft: float = math.nan, volume: float = math.nan, windage=None, rho_water: float = 1025.0,
                  rho_air: float = 1.225, ground_friction: float = 0.4, ground_slip: float = 0.05):
-        p = np.zeros(N_PARAMS + N_SAMPLE)
+        p = np.zeros(N_FIXED)
         p[:N_CURRENT] = env.current.packed
         gust, grid = np.zeros(0), np.zeros((0, 0))
         if env.wind is not None:
@@ -92,7 +98,12 @@ class EnvironmentSampler:
         p[P_RHO_WATER], p[P_RHO_AIR], p[P_FRICTION], p[P_SLIP] = rho_water, rho_air, ground_friction, ground_slip
         p[P_GUST_AT], p[P_GUST_N] = p.size, gust.size
         p[P_GRID_AT] = p.size + gust.size
-        self.data = np.concatenate([p, gust, grid.ravel()])
+        # the waves last (a calm sea, env.waves None: nothing appended, P_WAVE_AT 0): the
+        # rope and cable kernels sample them from this one array (kernels.sample_environment)
+        waves = env.waves.packed if getattr(env, "waves", None) is not None else np.zeros(0)
+        if waves.size:
+            p[P_WAVE_AT] = p.size + gust.size + grid.size
+        self.data = np.concatenate([p, gust, grid.ravel(), waves])
         self.out = self.data[E0:E0 + N_SAMPLE]
 
     @property
@@ -108,6 +119,12 @@ class EnvironmentSampler:
         (and keeps in .out) the E_* values."""
         sample(self.data, x, y, yaw, u, v)
         return self.out
+
+
+@njit(cache=True, inline="always")
+def wave_offset(data):
+    """Where the packed wave field starts in data (waves.wave_kinematics' `at`); 0: calm sea."""
+    return int(data[P_WAVE_AT])
 
 
 @njit(cache=True)

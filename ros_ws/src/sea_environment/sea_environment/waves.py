@@ -394,3 +394,60 @@ def wave_kinematics(w, at, x, y, z, t):
         az -= aw * om * fs * c
         p += uh * w[j + C_CELERITY]
     return (eta, r * u, r * v, r * wz, r * ax + dr * u, r * ay + dr * v, r * az + dr * wz, r * p)
+
+
+@njit(cache=True)
+def wave_kinematics_wet(w, at, x, y, z, t, scratch):
+    """(eta, u, v, w, ax, ay, az) for a body of the rope or cable at (x, y, z), time t: the
+    kinematics of wave_kinematics at min(z, eta), i.e. the surface's own values for a point
+    above it (an element whose centre is in the air but whose underside is wet feels the water
+    at the surface: the immersed part scales the loads, not a jump to zero as its centre
+    emerges); zero below the bottom. scratch: float array of at least 2 N (the cosines and
+    sines of the first pass, so each component costs one cos, one sin and at most one exp). Terms
+    whose depth factor exp(k z') is below exp(-40) ~ 4e-18 are skipped (a deep element
+    of a rope need not pay for the short components)."""
+    n = int(w[at + W_N])
+    r, dr = wave_ramp(w, at, t)
+    if n == 0 or r == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    eta = 0.0
+    for i in range(n):
+        j = at + N_HEADER + i * STRIDE
+        th = w[j + C_KX] * x + w[j + C_KY] * y - w[j + C_OMEGA] * t + w[j + C_PHASE]
+        c = math.cos(th)
+        eta += w[j + C_A] * c
+        scratch[2 * i] = c
+        scratch[2 * i + 1] = math.sin(th)
+    eta *= r
+    h = w[at + W_DEPTH]
+    deep = math.isinf(h)
+    zc = min(z, eta)
+    if not deep and (zc < -h or h + eta <= 0.0):
+        return eta, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    zs = zc - eta if deep else (zc - eta) * h / (h + eta)      # Wheeler (1970)
+    zs = min(zs, 0.0)
+    u = v = wz = ax = ay = az = 0.0
+    for i in range(n):
+        j = at + N_HEADER + i * STRIDE
+        k = w[j + C_K]
+        if k * zs < -40.0:
+            continue
+        om = w[j + C_OMEGA]
+        c = scratch[2 * i]
+        s = scratch[2 * i + 1]
+        ez = math.exp(k * zs) * w[j + C_INV_S]
+        if deep:
+            fc = fs = ez
+        else:
+            e2 = math.exp(-2.0 * max(k * (zs + h), 0.0))
+            fc, fs = ez * (1.0 + e2), ez * (1.0 - e2)
+        aw = w[j + C_A] * om
+        uh = aw * fc * c
+        ah = aw * om * fc * s
+        u += uh * w[j + C_DX]
+        v += uh * w[j + C_DY]
+        wz += aw * fs * s
+        ax += ah * w[j + C_DX]
+        ay += ah * w[j + C_DY]
+        az -= aw * om * fs * c
+    return (eta, r * u, r * v, r * wz, r * ax + dr * u, r * ay + dr * v, r * az + dr * wz)
