@@ -156,8 +156,8 @@ class Recording:
         m = re.fullmatch(r"/(.+)/end_([ab])/wrench", topic)
         if m and short == "geometry_msgs/WrenchStamped" and (want_r is None or m.group(1) in want_r):
             s = self._wrench.setdefault(m.group(1), {}).setdefault(m.group(2), _Series())
-            return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [math.sqrt(
-                msg.wrench.force.x ** 2 + msg.wrench.force.y ** 2 + msg.wrench.force.z ** 2)]), ("header", "wrench"))
+            return _Handler(lambda msg, log, s=s: s.add(_stamp_ns(msg), log, [math.hypot(
+                msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z)]), ("header", "wrench"))
         if topic == "/scenario/events" and short == "tug_msgs/ScenarioEvent":
             return _Handler(lambda msg, log: self.events.append({
                 "stamp_ns": _stamp_ns(msg), "step": int(msg.step), "source": msg.source, "kind": msg.kind,
@@ -184,8 +184,9 @@ class Recording:
             quat[i] = (qq.x, qq.y, qq.z, qq.w)
         fa, fb = msg.end_a_force, msg.end_b_force
         tens = np.asarray(msg.connection_tensions, float)
-        return {"pos": pos, "quat": quat, "tension_a": math.sqrt(fa.x ** 2 + fa.y ** 2 + fa.z ** 2),
-                "tension_b": math.sqrt(fb.x ** 2 + fb.y ** 2 + fb.z ** 2), "broken": bool(msg.broken),
+        # hypot: a damaged message's huge components give inf, not an OverflowError
+        return {"pos": pos, "quat": quat, "tension_a": math.hypot(fa.x, fa.y, fa.z),
+                "tension_b": math.hypot(fb.x, fb.y, fb.z), "broken": bool(msg.broken),
                 "max_tension": float(tens.max()) if tens.size else math.nan,
                 "stretched": float(msg.stretched_length), "unstretched": float(msg.unstretched_length)}
 

@@ -119,6 +119,7 @@ class Conductor(Node):
         # node name -> the runner's end of its private channel (step_channel), set once the nodes
         # are started: the only source of their answers the runner trusts
         self.channels: Dict[str, object] = {}
+        self.broken_channels: Dict[str, tuple] = {}   # node -> (when, why) its channel broke
         self.confirmed: Dict[str, Dict[int, Tuple[bool, str]]] = {}  # node -> step -> (ok, error) on its channel
         self.last_answer: Dict[str, int] = {}  # node -> the last step it answered (channel, or wire if external)
         self.wire_copies: Dict[str, collections.Counter] = {}  # node with a channel -> step -> its StepDones on the wire
@@ -210,10 +211,15 @@ class Conductor(Node):
         """SimStep(k) to every node on its channel (before the wire's copy: a node that reads a
         SimStep on the wire finds the channel's first)."""
         for node, channel in self.channels.items():
+            if node in self.broken_channels:
+                continue
             try:
                 channel.send_trigger(k, ordered)
             except step_channel.ChannelBroken as exc:
-                raise RunError(f"node {node}: its channel is gone ({exc}) while sending step {k}") from exc
+                # most often the node's process has died: the wait that follows names that (exit
+                # code, log); a channel gone with the process alive stops the run a second later
+                self.broken_channels[node] = (time.monotonic(), f"node {node}: its channel is gone ({exc}) while "
+                                                                f"sending step {k}")
 
     def _on_done(self, msg: cdr.DoneIn) -> None:
         """A StepDone on the wire. A node with a channel answers there: its StepDone on the wire is
@@ -731,6 +737,9 @@ class _Session:
                 if dead:
                     raise RunError(f"{kind} {dead} died (exit code {group.procs[dead].returncode}) while {what}; "
                                    f"last lines of its log ({group.logs[dead]}):\n{group.tail(dead)}")
+            for when, why in conductor.broken_channels.values():
+                if now > when + 1.0:
+                    raise RunError(why)
             if step > 0 and now > self.graph_check:  # kept across steps: a step takes a few ms
                 self.graph_check = now + GRAPH_CHECK_PERIOD
                 self.look_for_strangers(step - 1)
