@@ -309,6 +309,7 @@ class LiveViewNode(Node):
         self.order_time_ns = 0  # the time orders are stamped with (the guarded clock stand-alone)
         self.allowed_origins = trust.parse_origins(self.get_parameter("allowed_origins").value)
         self._input_pubs: Dict[str, object] = {}
+        self._topic_types: Dict[str, str] = {}   # topic -> its type, set before its channel is advertised
         self.subscribed_once = False
         self.servers: List[object] = []
 
@@ -410,10 +411,14 @@ class LiveViewNode(Node):
         except (OSError, LookupError, ImportError, AttributeError, ValueError):
             self.complaints("unknown type", f"{topic}: type {full_type} not installed here: not served", "warning")
             return False
-        channel = self._foxglove.Channel(topic, schema=schema, message_encoding="cdr", context=self.fg_context)
-        slot = self.slots[topic] = TopicSlot(topic, full_type, policy_of(topic, full_type), channel)
+        # the order publisher and the topic's type first: the channel is advertised to clients at
+        # once (foxglove-sdk's thread), and a client may advertise its own channel on it before
+        # this thread has gone on (client_advertise reads _topic_types)
         if full_type in client_input.CHECKS:
             self._input_pubs[topic] = self.create_publisher(msg_class, topic, rc.COMMAND_QOS)
+        self._topic_types[topic] = full_type
+        channel = self._foxglove.Channel(topic, schema=schema, message_encoding="cdr", context=self.fg_context)
+        slot = self.slots[topic] = TopicSlot(topic, full_type, policy_of(topic, full_type), channel)
         if topic not in self.offered:
             self.create_subscription(msg_class, topic, slot.offer if topic != "/clock" else self._on_clock,
                                      subscription_qos(topic, transient_local), raw=True)
@@ -503,24 +508,24 @@ class LiveViewNode(Node):
 
     def client_advertise(self, client_id: int, channel) -> None:
         key = (client_id, channel.id)
-        slot = self.slots.get(channel.topic)
+        full_type = self._topic_types.get(channel.topic)
         why = None
         if sum(1 for c, _ in self.client_channels if c == client_id) >= MAX_CLIENT_CHANNELS:
             why = f"client {client_id} advertises more than {MAX_CLIENT_CHANNELS} channels"
-        elif slot is None or slot.full_type not in client_input.CHECKS:
+        elif full_type not in client_input.CHECKS or channel.topic not in self._input_pubs:
             why = (f"client {client_id} advertised '{channel.topic[:200]}': clients may publish only on the vessel "
                    f"command and rope winch topics ({', '.join(sorted(self._input_pubs)) or 'none here'})")
         elif channel.encoding not in client_input.ENCODINGS:
             why = f"client {client_id} advertised {channel.topic} with encoding {channel.encoding[:50]!r}"
-        elif channel.encoding == "cdr" and not client_input.schema_matches(slot.full_type, channel.schema_name):
+        elif channel.encoding == "cdr" and not client_input.schema_matches(full_type, channel.schema_name):
             why = (f"client {client_id} advertised {channel.topic} as {channel.schema_name[:100]!r}, "
-                   f"expected {slot.full_type}")
+                   f"expected {full_type}")
         if why is not None:
             if len(self._refused_channels) < 10_000:
                 self._refused_channels[key] = why
             self._refuse("channel", why)
             return
-        self.client_channels[key] = (channel.topic, slot.full_type, channel.encoding)
+        self.client_channels[key] = (channel.topic, full_type, channel.encoding)
 
     def _rate_ok(self, client_kind: str, full_type: str, label: str) -> bool:
         """One shared bucket per kind of client and kind of order (trust.SharedLimits)."""
