@@ -25,6 +25,9 @@ Writes to the output directory (default: <recording without .mcap>_analysis/):
   rope_pitch.png       pitch angles of the same elements over time
   turn_<vessel>.png    a turning manoeuvre: track in approach-course axes with advance, transfer,
                        tactical diameter and the fitted steady circle
+  sea_peaks.png        (a run at sea) exceedance of the tension peaks above the mean at each rope
+                       end, log scale, with the fitted Weibull and the Rayleigh of the record
+  sea_motion_spectra.png  (a run at sea) Welch spectra of each vessel's heave, roll, pitch, yaw
   summary.json, summary.csv (entity, quantity, value, unit), vessel_<name>.csv, rope_<name>.csv
 
 This module is the command (its arguments, what it prints); the recording is read into arrays
@@ -33,6 +36,14 @@ summary_files.py. The manoeuvre measures are defined once in sim_math/turning.py
 sim_math/trials.py (zig-zag, stopping, the IMO MSC.137(76) criteria; docs/tools.md). Vessel
 lengths and breaking loads come from the runner's "tugsim" metadata record, or --length /
 --breaking-load.
+
+A run at sea (the scenario's environment.waves with hs > 0, or --waves) also gets the sea
+statistics (recording/sea_statistics.py; docs/tools.md "Sea statistics"): per rope end the
+tension's mean, standard deviation, significant value, maximum, peak over mean, slack events
+and the peaks' Weibull and Rayleigh fits; per vessel the Welch spectra of its motions, their
+significant values 4 sqrt(m0) and peak periods; over the window --sea-window, else from the
+end of the wave start-up ramp, else the whole run. The sea state is read from the scenario the
+recording's particulars name (beside the recording, else in the scenario library) or --scenario.
 Exit status: 0 done; 1 done on the readable part of a damaged file; 2 nothing to analyse.
 """
 from __future__ import annotations
@@ -45,7 +56,8 @@ from typing import Dict, List, Optional
 
 from recording.figures import make_figures
 from recording.mcap_io import McapFile, McapReadError, locate_recording
-from recording.measures import KN, analyse_trials, analyse_turns, summarise
+from recording.measures import KN, analyse_sea, analyse_trials, analyse_turns, sea_summary, summarise
+from recording.sea_statistics import DEFAULT_SEGMENT, DEFAULT_SLACK_FRACTION
 from recording.recorded_run import Recording
 from recording.summary_files import write_csvs, write_summary_json
 
@@ -88,6 +100,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="heading change before which the turn is never taken as steady (default 180)")
     p.add_argument("--elements", type=int, default=5, help="rope elements per height/pitch figure (default 5)")
     p.add_argument("--snapshots", type=int, default=6, help="rope shapes drawn in the XY figure (default 6)")
+    sea = p.add_argument_group("a run at sea (sea statistics)")
+    sea.add_argument("--waves", action="store_true", help="the sea statistics even when the recording's scenario "
+                     "has no waves (or is not found)")
+    sea.add_argument("--no-waves", action="store_true", help="no sea statistics, even for a run in waves")
+    sea.add_argument("--scenario", metavar="FILE", help="the scenario of the sea state (waves, start-up ramp); "
+                     "default: the one the recording's particulars name, beside the recording or in the library")
+    sea.add_argument("--sea-window", type=float, nargs=2, metavar=("T0", "T1"),
+                     help="window of the sea statistics (simulation s); default: from the end of the wave "
+                          "start-up ramp, else the whole run")
+    sea.add_argument("--slack-fraction", type=float, default=DEFAULT_SLACK_FRACTION, metavar="F",
+                     help=f"a rope is slack below F times its breaking load (default {DEFAULT_SLACK_FRACTION:g})")
+    sea.add_argument("--welch-segment", type=float, default=DEFAULT_SEGMENT, metavar="S",
+                     help=f"Welch segment length of the motion spectra, s (default {DEFAULT_SEGMENT:g}; "
+                          "the window's length when shorter)")
     p.add_argument("--dpi", type=int, default=110)
     p.add_argument("--no-figures", action="store_true", help="only the summary files")
     p.add_argument("--quiet", action="store_true")
@@ -103,6 +129,12 @@ def main(argv: Optional[List[str]] = None) -> int:
         breaking = _named_values(args.breaking_load, "--breaking-load")
     except ValueError as exc:
         parser.error(str(exc))
+    if args.sea_window and not args.sea_window[0] < args.sea_window[1]:
+        parser.error(f"--sea-window {args.sea_window[0]:g} {args.sea_window[1]:g}: T0 must be before T1")
+    if not 0.0 <= args.slack_fraction < 1.0:
+        parser.error(f"--slack-fraction {args.slack_fraction:g}: expected 0 <= F < 1")
+    if not args.welch_segment > 0.0:
+        parser.error(f"--welch-segment {args.welch_segment:g}: expected a positive number of seconds")
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
     try:
         rec = read_recording(args, say)
@@ -120,8 +152,20 @@ def main(argv: Optional[List[str]] = None) -> int:
     breaking = {**{n: r.get("breaking_load") for n, r in known.get("ropes", {}).items()}, **breaking}
     turns = analyse_turns(rec, args.turn_start, args.turn_end, args.steady_from_deg)
     summary = summarise(rec, turns, analyse_trials(rec), lengths, breaking)
+    sea = None
+    try:
+        waves, waves_note = sea_state(args, rec)
+    except ValueError as exc:
+        sys.stderr.write(f"analyze: {exc}\n")
+        return EXIT_NOTHING
+    if waves_note:
+        say(f"analyze: {waves_note}")
+    if not args.no_waves and (args.waves or (waves and waves.get("hs", 0.0) > 0.0)):
+        window = args.sea_window or (None, None)
+        sea = analyse_sea(rec, waves, window[0], window[1], breaking, args.slack_fraction, args.welch_segment)
+        sea_summary(sea, summary)
     figures = [] if args.no_figures else make_figures(rec, out_dir, args.elements, args.snapshots, args.dpi, turns,
-                                                      breaking)
+                                                      breaking, sea)
     summary["figures"] = figures
     files = [write_summary_json(summary, out_dir)] + write_csvs(rec, summary, out_dir)
     report(say, args.recording, rec.file, summary)
@@ -143,6 +187,38 @@ def read_recording(args, say) -> Recording:
     for note in sorted(set(rec.decoder.notes)):
         sys.stderr.write(f"analyze: {note}\n")
     return rec
+
+
+def sea_state(args, rec: Recording):
+    """(waves, note): the sea state of the run as a dict (hs, tp, from_deg, spectrum, ramp_time:
+    the start-up ramp, s; with "scenario": the file read) from --scenario, else from the
+    scenario the recording's particulars name (beside the recording, else in the scenario
+    library: the recording carries its name, not its environment); None without waves (or
+    none found). The note says why none was read; ValueError for a --scenario that does not load."""
+    from scenario_format.scenario import ScenarioError, load_scenario
+    from sim_math.data_files import resolve as resolve_data_file
+    path = args.scenario
+    if path is None:
+        name = rec.particulars.get("scenario")
+        if not name:
+            return None, None
+        path = resolve_data_file("scenario_runner", "scenarios", os.path.basename(str(name)),
+                                 relative_to=os.path.abspath(args.recording))
+        if not os.path.isfile(path):
+            return None, (f"the recording's scenario {name} is not beside it nor in the scenario library: no sea "
+                          f"state (give --scenario FILE, or --waves for the sea statistics over the whole run)")
+    try:
+        sc = load_scenario(path, check_files=False)
+    except ScenarioError as exc:
+        if args.scenario is not None:
+            raise ValueError(f"--scenario: {exc}") from None
+        return None, f"the recording's scenario does not load ({exc}): no sea state"
+    w = sc.environment.waves
+    if w is None or w.hs == 0.0:
+        return None, None
+    ramp = 3.0 * w.tp if w.ramp_time is None else w.ramp_time  # as sea_environment.environment.wave_field
+    return ({"hs": w.hs, "tp": w.tp, "from_deg": w.from_deg, "spectrum": w.spectrum, "ramp_time": ramp,
+             "scenario": os.path.abspath(path)}, None)
 
 
 def report(say, recording: str, f: McapFile, summary: dict) -> None:
@@ -187,6 +263,50 @@ def report(say, recording: str, f: McapFile, summary: dict) -> None:
                 + (f", peak {100 * r['peak_over_breaking_load']:.0f} % of the breaking load"
                    if r.get("peak_over_breaking_load") is not None else "")
                 + (f", parted at {r['broken_at']:.1f} s" if r.get("broken") else ""))
+    if "sea" in summary:
+        report_sea(say, summary)
+
+
+def _num(value, fmt: str = ".2f", scale: float = 1.0) -> str:
+    return "-" if value is None else f"{value * scale:{fmt}}"
+
+
+def report_sea(say, summary: dict) -> None:
+    """The sea statistics: the window, per rope end a line of tension statistics, per vessel a
+    line of significant motions and peak periods."""
+    sea = summary["sea"]
+    w = sea.get("waves")
+    state = (f"waves Hs {w['hs']:g} m, Tp {w['tp']:g} s, from {w['from_deg']:g} deg ({w['spectrum']}), start-up "
+             f"ramp {w['ramp_time']:g} s" if w else "sea state not known")
+    lo, hi = sea.get("window_start"), sea.get("window_end")
+    say(f"  sea statistics: {state}; window {_num(lo, '.1f')} .. {_num(hi, '.1f')} s ({sea['window_source']})")
+    for note in sea.get("notes", []):
+        say(f"    note: {note}")
+    for name, r in summary["ropes"].items():
+        for e in ("a", "b"):
+            st = r.get(f"sea_end_{e}")
+            if not st or not st.get("samples"):
+                continue
+            slack = ("slack not counted (no breaking load)" if st.get("slack_events") is None else
+                     f"{st['slack_events']} slack event(s) below {st['slack_threshold'] / 1e3:.1f} kN, "
+                     f"{st['slack_time']:.1f} s slack" + (f", snatch {st['snatch_max'] / 1e3:.1f} kN"
+                                                         if st.get("snatch_max") is not None else ""))
+            say(f"    rope {name} end {e}: tension mean {_num(st['tension_mean'], '.1f', 1e-3)} kN, std "
+                f"{_num(st['tension_std'], '.1f', 1e-3)} kN, significant {_num(st['tension_significant'], '.1f', 1e-3)} "
+                f"kN, max {_num(st['tension_max'], '.1f', 1e-3)} kN (peak/mean {_num(st['peak_over_mean'])}), "
+                f"{st['peaks']} peaks; {slack}; Weibull shape {_num(st['weibull_shape'])} scale "
+                f"{_num(st['weibull_scale'], '.1f', 1e-3)} kN (KS {_num(st['weibull_ks'], '.3f')}), Rayleigh KS "
+                f"{_num(st['rayleigh_ks'], '.3f')}")
+    for name, v in summary["vessels"].items():
+        parts = []
+        for key, unit, scale in (("heave", "m", 1.0), ("roll", "deg", 180 / math.pi), ("pitch", "deg", 180 / math.pi),
+                                 ("yaw", "deg", 180 / math.pi)):
+            sp = v.get(f"sea_{key}")
+            if sp and sp.get("m0") is not None:
+                parts.append(f"{key} {_num(sp['significant'], '.2f', scale)} {unit}"
+                             + (f" Tp {sp['peak_period']:.1f} s" if sp.get("peak_period") is not None else ""))
+        if parts:
+            say(f"    vessel {name} (significant 4 sqrt(m0)): " + ", ".join(parts))
 
 
 if __name__ == "__main__":

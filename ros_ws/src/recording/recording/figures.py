@@ -44,8 +44,9 @@ class _Figures:
 
 def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int = 6, dpi: int = 110,
                  turns: Optional[Dict[str, dict]] = None,
-                 breaking: Optional[Dict[str, Optional[float]]] = None) -> List[str]:
-    """Every figure the recording has data for (see the module docstring); their paths."""
+                 breaking: Optional[Dict[str, Optional[float]]] = None, sea: Optional[dict] = None) -> List[str]:
+    """Every figure the recording has data for (see the module docstring); with `sea`
+    (measures.analyse_sea) the sea statistics' figures too; their paths."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -68,6 +69,9 @@ def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int
     for name, m in (turns or {}).items():
         if "_along" in m:
             _turn_figure(out, name, m)
+    if sea is not None:
+        _sea_peaks_figure(out, sea)
+        _motion_spectra_figure(out, sea)
     return out.files
 
 
@@ -282,3 +286,65 @@ def _turn_figure(out: _Figures, name: str, m: dict) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     out.save(fig, f"turn_{name}.png")
+
+
+def _sea_peaks_figure(out: _Figures, sea: dict) -> None:
+    """Per rope, the exceedance probability of the tension peaks' amplitudes above the mean at
+    each end (empirical, plotting position i / (n + 1)) on a log scale, with the fitted Weibull
+    and the Rayleigh of the record's standard deviation."""
+    from recording import sea_statistics as ss
+    ends = [(name, e, st) for name, r in sea["ropes"].items() for e, st in r.items() if len(st.get("_amplitudes", ()))]
+    if not ends:
+        return
+    fig, axs = out.plt.subplots(len(ends), 1, figsize=(8, 3.6 * len(ends)), squeeze=False)
+    for a, (name, e, st) in zip(axs[:, 0], ends):
+        amp = st["_amplitudes"] / 1e3
+        a.semilogy(amp, ss.empirical_exceedance(amp), ".", ms=3, label=f"{name} {e.replace('_', ' ')}: "
+                   f"{amp.size} peaks (maxima between mean up-crossings)")
+        x = np.linspace(0.0, max(amp.max(), 1e-9) * 1.15, 200)
+        if st.get("weibull_shape"):
+            a.semilogy(x, ss.weibull_exceedance(x, st["weibull_shape"], st["weibull_scale"] / 1e3), "-",
+                       label=f"Weibull fit: shape {st['weibull_shape']:.2f}, scale {st['weibull_scale'] / 1e3:.1f} kN "
+                             f"(KS D {st['weibull_ks']:.3f})")
+        if st.get("_sigma"):
+            a.semilogy(x, ss.rayleigh_exceedance(x, st["_sigma"] / 1e3), "--",
+                       label=f"Rayleigh, sigma {st['_sigma'] / 1e3:.1f} kN" +
+                             (f" (KS D {st['rayleigh_ks']:.3f})" if st.get("rayleigh_ks") is not None else ""))
+        a.set_ylim(max(0.5 / (amp.size + 1), 1e-4), 1.0)
+        a.set_xlabel("peak tension above the mean (kN)")
+        a.set_ylabel("probability of exceedance")
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=7)
+    lo, hi = sea.get("window_start"), sea.get("window_end")
+    axs[0, 0].set_title("Towline tension peaks" + (f" from {lo:.0f} s" if lo is not None else "")
+                        + (f" to {hi:.0f} s" if hi is not None else ""))
+    out.save(fig, "sea_peaks.png")
+
+
+def _motion_spectra_figure(out: _Figures, sea: dict) -> None:
+    """Welch spectra of every vessel's heave, roll, pitch and yaw (one panel each; deg for the
+    angles), with the significant value 4 sqrt(m0) and the peak period in the legend."""
+    panels = (("heave", "heave (m^2 s)", 1.0), ("roll", "roll (deg^2 s)", math.degrees(1.0)),
+              ("pitch", "pitch (deg^2 s)", math.degrees(1.0)), ("yaw", "yaw (deg^2 s)", math.degrees(1.0)))
+    if not sea["vessels"]:
+        return
+    fig, axs = out.plt.subplots(len(panels), 1, figsize=(8, 2.6 * len(panels)), sharex=True)
+    segment = None
+    for a, (key, label, scale) in zip(axs, panels):
+        for name, motions in sea["vessels"].items():
+            sp = motions.get(key, {})
+            if "_f" not in sp:
+                continue
+            segment = sp["segment"]
+            unit = "m" if key == "heave" else "deg"
+            tp = f", Tp {sp['peak_period']:.1f} s" if sp.get("peak_period") is not None else ""
+            a.plot(sp["_f"], sp["_S"] * scale ** 2, label=f"{name}: 4 sqrt(m0) = {4 * math.sqrt(sp['m0']) * scale:.3g} "
+                                                            f"{unit}{tp}")
+        a.set_ylabel(label)
+        a.grid(alpha=0.3)
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=7)
+    axs[-1].set_xlabel("frequency (Hz)")
+    axs[-1].set_xlim(0.0, 0.5)
+    axs[0].set_title("Motion spectra (Welch, Hann" + (f", {segment:.0f} s segments" if segment else "") + ", 50 % overlap)")
+    out.save(fig, "sea_motion_spectra.png")

@@ -17,6 +17,7 @@ import numpy as np
 
 from sim_math import trials
 from sim_math.turning import turning_measures
+from recording import sea_statistics
 from recording.recorded_run import Recording, status_column
 
 KN = 1852.0 / 3600.0  # m/s per knot
@@ -262,3 +263,88 @@ def summarise(rec: Recording, turns: Dict[str, dict], manoeuvres: Optional[Dict[
         "vessels": vessels, "ropes": ropes,
         "events": [{k: v for k, v in e.items() if k != "stamp_ns"} for e in rec.events],
     })
+
+
+# ---------------------------------------------------------------------------------------
+# A run at sea: tension statistics and motion spectra (recording/sea_statistics.py)
+# ---------------------------------------------------------------------------------------
+# the motions of a vessel whose spectra are taken: (key in the summary, record, unit)
+MOTIONS = (("heave", "z", "m"), ("roll", "roll", "rad"), ("pitch", "pitch", "rad"), ("yaw", "yaw_unwrapped", "rad"),
+           ("surge_velocity", "u", "m/s"), ("sway_velocity", "v", "m/s"))
+
+
+def analyse_sea(rec: Recording, waves: Optional[dict] = None, start: Optional[float] = None,
+                end: Optional[float] = None, breaking: Optional[Dict[str, Optional[float]]] = None,
+                slack_fraction: float = sea_statistics.DEFAULT_SLACK_FRACTION,
+                segment: float = sea_statistics.DEFAULT_SEGMENT) -> dict:
+    """The sea statistics of a recording over one window: per rope end its tension statistics
+    (sea_statistics.tension_statistics; the slack threshold slack_fraction of the breaking load,
+    none without one), per vessel the Welch spectra of its motions (MOTIONS). The window is
+    [start, end] when given, else from the end of the wave start-up ramp (waves["ramp_time"])
+    when the sea state is known, else the whole run; a rope's window ends where it parted.
+    Keys starting with "_" hold the arrays of the figures."""
+    breaking = breaking or {}
+    notes: List[str] = []
+    ends = [float(v["t"][-1]) for v in rec.vessels.values()] + [float(r["t"][-1]) for r in rec.ropes.values()
+                                                                  if "t" in r and len(r["t"])]
+    t_last = max(ends) if ends else None
+    if start is not None:
+        source = "--sea-window"
+    elif waves and waves.get("ramp_time"):
+        start, source = float(waves["ramp_time"]), "after the wave start-up ramp"
+        if t_last is not None and start >= t_last:
+            notes.append(f"the recording ends ({t_last:.1f} s) before the wave start-up ramp does ({start:.1f} s): "
+                         f"the whole run is analysed")
+            start, source = None, "whole run (shorter than the start-up ramp)"
+    else:
+        source = "whole run"
+    out = {"window_start": start, "window_end": end if end is not None else t_last, "window_source": source, "waves": waves,
+           "slack_fraction": slack_fraction, "welch": {"segment": segment, "window": "hann", "overlap": 0.5,
+                                                       "detrend": "linear"},
+           "vessels": {}, "ropes": {}, "notes": notes}
+    for name, r in rec.ropes.items():
+        if "t" in r and len(r["t"]):
+            series = {e: (r["t"], r[f"tension_{e}"]) for e in ("a", "b")}
+        else:
+            series = {e: (r[f"wrench_{e}"]["t"], r[f"wrench_{e}"]["tension"]) for e in ("a", "b") if f"wrench_{e}" in r}
+        stop = end
+        if "broken" in r and np.any(r["broken"]):
+            parted = float(r["t"][np.argmax(r["broken"])])
+            stop = parted if stop is None else min(stop, parted)
+            notes.append(f"rope {name} parted at {parted:.1f} s: its statistics end there")
+        load = breaking.get(name)
+        threshold = slack_fraction * load if load else math.nan
+        if not load:
+            notes.append(f"rope {name}: no breaking load (give --breaking-load {name}=N): slack events not counted")
+        rs = {}
+        for e, (t, x) in series.items():
+            m = sea_statistics.window_mask(t, start, stop)
+            st = sea_statistics.tension_statistics(t[m], x[m], threshold)
+            if not load:
+                st.update(slack_threshold=None, slack_events=None, slack_time=None, slack_at_start=None, snatch_max=None)
+            st["window_start"], st["window_end"] = (float(t[m][0]), float(t[m][-1])) if m.any() else (None, None)
+            rs[f"end_{e}"] = st
+        out["ropes"][name] = rs
+    for name, v in rec.vessels.items():
+        m = sea_statistics.window_mask(v["t"], start, end)
+        vs = {}
+        for key, col, unit in MOTIONS:
+            sp = sea_statistics.motion_spectrum(v["t"][m], v[col][m], segment)
+            sp["unit"] = unit
+            vs[key] = sp
+        out["vessels"][name] = vs
+    return out
+
+
+def sea_summary(sea: dict, summary: dict) -> None:
+    """Puts the sea statistics into a summary: per rope sea_end_a / sea_end_b, per vessel
+    sea_<motion>, and the window and settings as summary["sea"] (JSON-clean)."""
+    for name, ends in sea["ropes"].items():
+        rs = summary["ropes"].setdefault(name, {})
+        for e, st in ends.items():
+            rs[f"sea_{e}"] = _clean(st)
+    for name, motions in sea["vessels"].items():
+        vs = summary["vessels"].setdefault(name, {})
+        for key, sp in motions.items():
+            vs[f"sea_{key}"] = _clean(sp)
+    summary["sea"] = _clean({k: v for k, v in sea.items() if k not in ("ropes", "vessels")})

@@ -34,6 +34,7 @@ not exist, e.g. the peak period of a record of zeros: never NaN).
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Dict, Optional, Sequence
 
 import numpy as np
@@ -84,9 +85,11 @@ def fit_weibull(amplitudes: np.ndarray) -> Dict[str, Optional[float]]:
     from scipy import stats
     a = np.asarray(amplitudes, float)
     a = a[a > 0.0]
-    if a.size < 3 or np.ptp(a) <= 0.0:
+    if a.size < 3 or np.ptp(a) <= 1e-9 * a.max():  # all alike (a regular record's peaks): no distribution
         return {"weibull_shape": None, "weibull_scale": None, "weibull_ks": None}
-    shape, _loc, scale = stats.weibull_min.fit(a, floc=0.0)
+    with warnings.catch_warnings():  # nearly alike: scipy's start guess warns, the fit is still made
+        warnings.simplefilter("ignore", RuntimeWarning)
+        shape, _loc, scale = stats.weibull_min.fit(a, floc=0.0)
     d = stats.kstest(a, "weibull_min", args=(shape, 0.0, scale)).statistic
     return {"weibull_shape": _f(shape), "weibull_scale": _f(scale), "weibull_ks": _f(d)}
 

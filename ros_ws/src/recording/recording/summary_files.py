@@ -26,6 +26,24 @@ TURN_UNITS = {"t0": "s", "t1": "s", "approach_speed": "m/s", "approach_heading":
               "breaking_load": "N", "peak_over_breaking_load": "1"}
 
 
+# the sea statistics (measures.analyse_sea): a rope end's sea_end_a / sea_end_b and a vessel's
+# sea_<motion>, whose spectral values are in the motion's own unit (its "unit" entry)
+SEA_UNITS = {"slack_threshold": "N", "amplitude_significant": "N", "weibull_scale": "N", "snatch_max": "N",
+             "upcrossing_period": "s", "slack_time": "s", "window_start": "s", "window_end": "s",
+             "peak_period": "s", "tz": "s", "segment": "s", "peak_over_mean": "1",
+             "amplitude_significant_over_std": "1", "weibull_shape": "1", "weibull_ks": "1", "rayleigh_ks": "1"}
+
+
+def _sea_unit(key: str, values: dict) -> str:
+    """The unit of a quantity of one sea statistics entry."""
+    unit = values.get("unit", "")
+    if key == "m0":
+        return f"{unit}^2" if unit else ""
+    if key in ("significant", "unit"):
+        return unit if key == "significant" else ""
+    return SEA_UNITS.get(key, _units(key))
+
+
 def _units(key: str) -> str:
     """The unit of a summary quantity, from its key."""
     if key in TURN_UNITS:
@@ -74,7 +92,8 @@ def write_csvs(rec: Recording, summary: dict, out_dir: str) -> List[str]:
                                 continue
                             for j, item in enumerate(tv if isinstance(tv, list) else [tv]):
                                 key = f"{k}.{tk}" + (f"[{j}]" if isinstance(tv, list) else "")
-                                w.writerow([entity, key, "" if item is None else item, _units(tk)])
+                                unit = _sea_unit(tk, val) if k.startswith("sea_") else _units(tk)
+                                w.writerow([entity, key, "" if item is None else item, unit])
                     else:
                         w.writerow([entity, k, "" if val is None else val, _units(k)])
     files.append(path)
