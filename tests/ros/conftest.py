@@ -171,6 +171,28 @@ def start_node(ros_domain, tmp_path, request) -> Callable[..., NodeProcess]:
             print(f"----- log of {' '.join(node.args)} -----\n{node.log()}")
 
 
+# The layout of runs whose tests judge the physics: every node in the runner's process. Its
+# recording equals the process layout's number for number (test_recording's and
+# test_hull_contact_runs' both-layouts tests; the step protocol makes the layout invisible), and it
+# costs a third of the CPU (no interpreter and DDS hop per node; measured 2.7x on the default
+# demo), so the two workers of the suite are not starved. Tests of the process layout itself
+# (protocol, trust, kills, several hosts, live view, replay) pass layout="processes".
+PHYSICS_LAYOUT = "one_process"
+
+
+def record_scenario(scenario, output, *args, layout: str = PHYSICS_LAYOUT, timeout: float = 600.0,
+                    returncode: int | None = 0, env: dict | None = None) -> subprocess.CompletedProcess:
+    """run_scenario (its installed console script, a process of its own) on a scenario file or
+    library name, recording to `output`, in the caller's ROS_DOMAIN_ID (the ros_domain fixture, or
+    reserved_domain() in a module fixture). Asserts the exit status unless returncode is None."""
+    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(scenario), "--output",
+                           str(output), "--quiet", "--layout", layout, *map(str, args)],
+                          capture_output=True, text=True, timeout=timeout, env=env)
+    if returncode is not None:
+        assert proc.returncode == returncode, f"exit {proc.returncode}:\n{proc.stdout}{proc.stderr}"
+    return proc
+
+
 def entry_function(package: str, executable: str) -> Callable:
     """The function the installed console script `executable` of package calls: its
     console_scripts entry point (setup.py), loaded as the script loads it."""

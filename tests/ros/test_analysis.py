@@ -23,7 +23,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import executable_path
+from conftest import executable_path, record_scenario
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(180)]
 
@@ -61,9 +61,7 @@ def record(scenario, output, *extra):
     from domain_coordinator import domain_id
     with domain_id() as did:
         env = dict(os.environ, ROS_DOMAIN_ID=str(did), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-        out = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(scenario), "--output",
-                              str(output), "--quiet", *extra], env=env, capture_output=True, text=True, timeout=150)
-    assert out.returncode == 0, out.stdout + out.stderr
+        record_scenario(scenario, output, *extra, env=env, timeout=150)
     return output
 
 

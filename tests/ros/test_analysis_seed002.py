@@ -6,16 +6,14 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import executable_path
+from conftest import executable_path, record_scenario
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(400)]
 
 
 def test_analysis_turning_diameter_matches_the_vessel_library(tmp_path, ros_domain):
     rec = tmp_path / "turn.mcap"
-    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), "seed002_barge_turn_gamma20.yaml",
-                           "--output", str(rec), "--quiet"], capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    record_scenario("seed002_barge_turn_gamma20.yaml", rec, timeout=300)
     # The turn is driven by the towline angle, not the helm: it starts at t = 0.
     out = tmp_path / "analysis"
     ana = subprocess.run([executable_path("recording", "analyze"), str(rec), "-o", str(out), "--turn-start",

@@ -1,12 +1,11 @@
 """The vessel-rope coupling converges with the exchange rate: halving the exchange period changes
 the steady towline tension of the 5 kn straight tow (Yoon, Lee, Park & Kim, towing rope, 4.4) by < 1 %."""
-import subprocess
 
 import numpy as np
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import record_scenario
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 
@@ -35,9 +34,7 @@ def test_halving_the_exchange_period_changes_steady_tension_by_less_than_1_perce
         path = tmp_path / f"tow_{int(rate)}.yaml"
         path.write_text(yaml.safe_dump(sc))
         out = tmp_path / f"tow_{int(rate)}.mcap"
-        proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out),
-                               "--quiet"], capture_output=True, text=True, timeout=500)
-        assert proc.returncode == 0, proc.stdout + proc.stderr
+        record_scenario(path, out, timeout=500)
         tension = towline_tension(out, 45.0)  # after the start-up surge (the barge settles by ~45 s)
         means[rate] = tension.mean()
         assert tension.min() > 0.5 * means[rate]  # taut and towing, not snatching

@@ -68,8 +68,11 @@ def test_stray_triggers_and_answers_change_nothing(tmp_path, ros_domain, rclpy_c
     from tug_msgs.msg import SimStep, StepDone
     from sim_plumbing import ros_common as rc
     clean = tmp_path / "clean.mcap"
-    # long enough (about 7 s of wall time) for the stranger to be discovered while the run steps
-    assert subprocess.run(runner(clean, duration=120), capture_output=True, text=True, timeout=240).returncode == 0
+    # the undisturbed run in one process (the same physics, a third of the CPU); the disturbed one
+    # below, long enough (about 7 s of wall time) for the stranger to be discovered while it steps,
+    # in the process layout the stranger's messages reach
+    assert subprocess.run(runner(clean, "--layout", "one_process", duration=120), capture_output=True, text=True,
+                          timeout=240).returncode == 0
     stop = threading.Event()
     sent = [0]
     disturbed = tmp_path / "disturbed.mcap"

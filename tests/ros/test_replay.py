@@ -26,7 +26,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import executable_path, spin_until
+from conftest import executable_path, record_scenario, spin_until
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(150)]
 
@@ -58,10 +58,7 @@ def demo_recording(tmp_path_factory):
     d = tmp_path_factory.mktemp("demo")
     with domain_id() as did:
         env = dict(os.environ, ROS_DOMAIN_ID=str(did), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-        out = subprocess.run([executable_path("scenario_runner", "run_scenario"), "default_demo.yaml", "--duration",
-                              "6", "--output", str(d / "demo.mcap"), "--quiet"], env=env, capture_output=True,
-                             text=True, timeout=120)
-    assert out.returncode == 0, out.stdout + out.stderr
+        record_scenario("default_demo.yaml", d / "demo.mcap", "--duration", 6, env=env, timeout=120)
     return d / "demo.mcap"
 
 

@@ -15,13 +15,12 @@ tests/physics/test_rope_coupling.py.
 """
 import math
 import os
-import subprocess
 
 import numpy as np
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import record_scenario
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 TF = 9806.65
@@ -33,9 +32,7 @@ def _share(*parts):
 
 
 def _run(path, out, *extra):
-    proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out),
-                           "--quiet", *extra], capture_output=True, text=True, timeout=500)
-    return proc
+    return record_scenario(path, out, *extra, timeout=500)
 
 
 def _decoded(path, topics):

@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import executable_path, record_scenario
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
 
@@ -42,10 +42,7 @@ def recording(ros_domain, tmp_path_factory):
     """One short real run, recorded once for the whole module (in the first test's domain)."""
     if "path" not in _recorded:
         out = tmp_path_factory.mktemp("rosbag2") / "tow.mcap"
-        proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration",
-                               str(DURATION), "--output", str(out), "--quiet"], capture_output=True, text=True,
-                              timeout=240)
-        assert proc.returncode == 0, proc.stdout + proc.stderr
+        record_scenario(SCENARIO, out, "--duration", DURATION, timeout=240)
         _recorded["path"] = out
     return _recorded["path"]
 

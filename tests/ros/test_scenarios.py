@@ -6,13 +6,12 @@ Bad scenarios fail before any node starts, naming the problem."""
 import glob
 import math
 import os
-import subprocess
 
 import numpy as np
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import record_scenario
 from test_recording import decoded
 
 pytestmark = [pytest.mark.ros]
@@ -24,11 +23,6 @@ G = 9.80665
 def _library():
     from ament_index_python.packages import get_package_share_directory
     return sorted(glob.glob(os.path.join(get_package_share_directory("scenario_runner"), "scenarios", "*.yaml")))
-
-
-def run_scenario(*args, timeout=240):
-    return subprocess.run([executable_path("scenario_runner", "run_scenario"), *args, "--quiet"],
-                          capture_output=True, text=True, timeout=timeout)
 
 
 def test_library_has_every_paper_case():
@@ -211,8 +205,7 @@ def test_scenario_runs_and_its_recording_holds_physics(path, ros_domain, tmp_pat
                 for t, ms in _decoded(out, topics, until_s=DURATION + 2.0).items()}
     else:
         out = tmp_path / "run.mcap"
-        proc = run_scenario(path, "--duration", str(DURATION), "--output", str(out))
-        assert proc.returncode == 0, proc.stdout + proc.stderr
+        proc = record_scenario(path, out, "--duration", DURATION, timeout=240)
         assert "simulated" in proc.stdout
         msgs = _decoded(out, topics)
     for v in vessels:

@@ -16,13 +16,12 @@ Truths, none of them the code's own output:
 import glob
 import math
 import os
-import subprocess
 
 import numpy as np
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import record_scenario
 
 pytestmark = [pytest.mark.ros]
 
@@ -68,11 +67,7 @@ def _ship_file(name):
 
 
 def _run(path, out, duration=None):
-    args = [executable_path("scenario_runner", "run_scenario"), path, "--output", str(out), "--quiet"]
-    if duration is not None:
-        args += ["--duration", str(duration)]
-    proc = subprocess.run(args, capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    record_scenario(path, out, *(() if duration is None else ("--duration", duration)), timeout=900)
 
 
 WHOLE_RUN = ("default_demo", "tow_snatch_load",  # run whole for their own tests anyway

@@ -12,7 +12,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import executable_path
+from conftest import executable_path, record_scenario
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(240)]
 
@@ -21,11 +21,8 @@ def _run(name, out, duration):
     from domain_coordinator import domain_id
     with domain_id() as did:
         env = dict(os.environ, ROS_DOMAIN_ID=str(did), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-        res = subprocess.run([executable_path("scenario_runner", "run_scenario"),
-                              name if name.endswith(".yaml") else f"{name}.yaml", "--output",
-                              str(out), "--duration", str(duration), "--quiet"], env=env, capture_output=True,
-                             text=True, timeout=200)
-    assert res.returncode == 0, res.stdout + res.stderr
+        res = record_scenario(name if name.endswith(".yaml") else f"{name}.yaml", out, "--duration", duration,
+                              env=env, timeout=200)
     _run.stdout = res.stdout
     return out
 
