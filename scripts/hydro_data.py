@@ -39,8 +39,8 @@ waterline (body axes REP-103: x forward, y port, z up); rotations in rad.
 
 Grids: w from 0.2 rad/s to max(2.5, 2.5 sqrt(45 m / L)) rad/s (small hulls, e.g. the 1/9 tank
 model, get the Froude-scaled range), 30 values (coarse 12); relative heading beta 0..360 deg
-step 15 deg (coarse 30 deg). Panel size h = L / 40 (coarse L / 20), at most T / 1 across the
-draft; the mesh is adequate for wavelengths above ~6 h (the RAOs at shorter waves are small).
+step 15 deg (coarse 30 deg). Panel size h = L / 40 (coarse L / 20) and at most h across the
+draft (ships: at least 10 panels, coarse 6, from waterline to keel); the mesh is adequate for wavelengths above ~6 h (the RAOs at shorter waves are small).
 
 Mean wave drift (surge, sway force and yaw moment per unit amplitude squared): Maruo's (1960)
 far-field formula (momentum flux through a control surface at infinity; Newman 1967 for the yaw
@@ -212,12 +212,12 @@ def waterplane_exponent(bm: float, volume: float, L: float, B: float) -> float:
     return 0.5 * (lo + hi)
 
 
-def ship_mesh(L: float, B: float, T: float, volume: float, pw: float, h: float):
+def ship_mesh(L: float, B: float, T: float, volume: float, pw: float, h: float, nz_min: int = 10):
     """The parametric hull (module docstring), port half meshed and mirrored about xOz; the keel
     exponent p_k solved (bisection) so the mesh displaces `volume`."""
     import capytaine as cpt
     nx = max(8, 2 * math.ceil(L / h / 2))
-    nz = max(6, math.ceil((T + 0.5 * B) / h))
+    nz = max(nz_min, math.ceil((T + 0.5 * B) / h))
     lo, hi = 0.05, pw
     if 2.0 * _half_volume(_ship_vertices(L, B, T, pw, lo, nx, nz), nx, nz) > volume:
         raise ValueError("displacement too small for the parametric hull")
@@ -256,7 +256,7 @@ def make_body(p: dict, coarse: bool):
     if p["box"]:
         mesh = box_mesh(p["L"], p["B"], p["cb"] * p["T"], h)
     else:
-        mesh, pk = ship_mesh(p["L"], p["B"], p["T"], p["m"] / p["rho"], p["pw"], h)
+        mesh, pk = ship_mesh(p["L"], p["B"], p["T"], p["m"] / p["rho"], p["pw"], h, 6 if coarse else 10)
         p["notes"]["geometry"] += f" (p_k = {pk:.4g})"
     if p["x_g"] != 0.0:
         mesh = mesh.translated((p["x_g"], 0.0, 0.0))                  # LCB at LCG: trimmed equilibrium
