@@ -18,16 +18,22 @@ water_density rho; block coefficient Cb = m / (rho L B T), the files' own defini
   floats at equilibrium with the file's mass and keeps the full L x B waterplane of a raked-end
   barge (the rake removes volume below the waterline, not waterplane).
 - ships (harbour_tug, asd_tug, s175_003): a simple parametric hull of the file's L, B, T and Cb:
-  half-breadth y(x, z) = B/2 (1 - |2x/L|^p) (1 - |z/T|^q), z in [-T, 0], which has
-  Cm = q / (q + 1) and Cb = Cm p / (p + 1). q = 9 (midship coefficient Cm = 0.90, a round
-  bilge) for all three; p from the file's Cb. The hull is wall-sided at the waterline.
+  half-breadth y(x, z) = B/2 (1 - |2x/L|^p(z)) (1 - |z/T|^q), z in [-T, 0], q = 9 (midship
+  coefficient Cm = q / (q + 1) = 0.90, a round bilge; wall-sided at the waterline) and the
+  waterline exponent varying with depth, p(z) = p_k + (p_w - p_k) (1 - |z|/T)^3, so the
+  waterplane can be full (Cwp = p_w / (p_w + 1)) while the ends below are fine (V-shaped).
+  p_w: where the file has roll.bm (the tugs), the waterline whose I_T = (2/3) int y^3 dx gives
+  that BM (the simulator's own roll model's figure); else Cwp = (1 + 2 Cb) / 3 (Schneekluth &
+  Bertram 1998, U-sections). p_k: solved (bisection) so the mesh displaces m / rho. The hull is
+  shifted along x so its centre of buoyancy is at the file's x_g (trimmed equilibrium).
 Both are symmetric port/starboard (xOz): only relative headings 0..180 deg are solved; 180..360
 are mirrored (sway, roll, yaw, drift Y and N change sign). An interior lid on the waterplane
 removes the irregular frequencies.
 
 Mass properties (the ship files give m, x_g and the yaw radius of gyration; the rest chosen):
 - the vertical centre of gravity: roll.z_g of the file when it has a `roll:` section (the two
-  tugs, the simulator's own roll model), else z_g = 0 (KG = T: G on the still waterline).
+  tugs, the simulator's own roll model); barges z_g = 0 (KG = T: G on the still waterline);
+  the S-175 (no roll section) G placed for GM_T = 1.0 m (a loaded container ship's order).
 - roll radius of gyration: roll.radius_of_gyration of the file, else 0.35 B; pitch 0.25 L;
   yaw: hull.yaw_radius_of_gyration; no products of inertia.
 - viscous roll damping (potential roll damping alone gives an unbounded resonance): a linear
@@ -40,7 +46,8 @@ waterline (body axes REP-103: x forward, y port, z up); rotations in rad.
 Grids: w from 0.2 rad/s to max(2.5, 2.5 sqrt(45 m / L)) rad/s (small hulls, e.g. the 1/9 tank
 model, get the Froude-scaled range), 30 values (coarse 12); relative heading beta 0..360 deg
 step 15 deg (coarse 30 deg). Panel size h = L / 40 (coarse L / 20) and at most h across the
-draft (ships: at least 10 panels, coarse 6, from waterline to keel); the mesh is adequate for wavelengths above ~6 h (the RAOs at shorter waves are small).
+draft (ships: at least 10 panels, coarse 6, from waterline to keel); the mesh is adequate for
+wavelengths above ~6 h (the RAOs at shorter waves are small).
 
 Mean wave drift (surge, sway force and yaw moment per unit amplitude squared): Maruo's (1960)
 far-field formula (momentum flux through a control surface at infinity; Newman 1967 for the yaw
@@ -50,7 +57,7 @@ near-field (pressure integration) method because it needs only the Kochin functi
 faster with the panel size and does not need the relative wave elevation along the waterline,
 which a coarse mesh gets poorly (Faltinsen 1990 ch. 5; Newman 1977 ch. 6). Only the diagonal
 (one frequency, one direction) terms are kept: the mean drift in a sea of many components is
-sum_i a_i^2 D(w_i, beta_i) (Faltinsen 1990 eq. 5.41, Newman's approximation aside).
+sum_i a_i^2 D(w_i, beta_i) (Faltinsen 1990 ch. 5, Newman's approximation aside).
 
 Conventions (e^{-i w t} time dependence, Capytaine's): the incident wave is
 eta = Re(a exp(i (k (x cos beta + y sin beta) - w t))) in body axes, beta the direction the waves
@@ -274,7 +281,7 @@ def make_body(p: dict, coarse: bool):
 
 
 def rigid_inertia(m: float, rg, kxx: float, kyy: float, kzz: float) -> np.ndarray:
-    """6x6 rigid-body mass matrix about the origin for G at rg (Fossen 2021 eq. 3.44)."""
+    """6x6 rigid-body mass matrix about the origin for G at rg (Fossen 2021 ch. 3)."""
     rg = np.asarray(rg, float)
     S = np.array([[0.0, -rg[2], rg[1]], [rg[2], 0.0, -rg[0]], [-rg[1], rg[0], 0.0]])
     Ig = m * np.diag([kxx ** 2, kyy ** 2, kzz ** 2])

@@ -11,13 +11,14 @@ Truths and tolerances:
   shipped grid's linear interpolation), and against a hand estimate w_n = sqrt(rho g A_wp /
   (m + A33)) with A33 = 1/2 C_A rho pi B^2 L / 4 (the high-frequency free-surface limit: half
   the infinite-fluid added mass of a thin rectangular plate, C_A(L/B) from DNV-RP-C205 (2010)
-  Table D-2 / A-2: 0.830 at 3, 0.871 at 4) (5 %: the plate value is a high-frequency limit).
-- Froude-Krylov heave force on a box in long-crested head seas (Faltinsen 1990 eq. 3.26; only
+  App. D, Table D-2, 3-D bodies: 0.830 at 3, 0.871 at 4) (5 %: the plate value is a
+  high-frequency limit).
+- Froude-Krylov heave force on a box in long-crested head seas (Faltinsen 1990 ch. 3; only
   the bottom carries vertical pressure): F3 = rho g a B L e^(-kT) sin(kL/2)/(kL/2), zero at
   lambda = L. Capytaine's own incident-pressure integration on a box mesh made here (0.3 % of
   rho g a B L e^(-kT); the zero to 1e-9 of it).
 - mean drift in short beam waves on a wall-sided hull tends to the total-reflection limit
-  1/2 rho g a^2 L (Faltinsen 1990 eq. 5.42, Maruo 1960): shipped barge_002_full (draft 2.57 m;
+  1/2 rho g a^2 L (Faltinsen 1990 ch. 5, Maruo 1960): shipped barge_002_full (draft 2.57 m;
   kT = 1.64 at the highest frequency, where a fixed barrier transmits a few % of the energy):
   mean over the five highest frequencies within 8 %, the highest within 5 %.
 - response model: a regular wave; heave = a |RAO| cos(k.x - w t + arg RAO) exactly (1e-9);

@@ -38,11 +38,11 @@ component:
     two vessels see the phase difference k.dx of their positions (Newman 1977, Marine
     Hydrodynamics, 6.17; Faltinsen 1990, Sea Loads on Ships and Offshore Structures, ch. 3).
   dxi_j/dt = r sum_i a_i omega_e,i |X_ij| sin(theta_i + arg X_ij) + r'(t) sum_i a_i |X_ij| cos(...),
-    omega_e,i = omega_i - k_i u cos(beta_i), the encounter frequency (Fossen 2021 eq. 10.68;
-    Faltinsen 1990 eq. 3.2): along a track at speed u, d theta_i / dt = -omega_e,i. Evaluating
+    omega_e,i = omega_i - k_i u cos(beta_i), the encounter frequency (Fossen 2021 ch. 10;
+    Faltinsen 1990 ch. 3): along a track at speed u, d theta_i / dt = -omega_e,i. Evaluating
     theta_i at the vessel's current position therefore carries the encounter frequency in the
     displacement too; omega_e appears explicitly only in the velocity.
-  Mean drift (Faltinsen 1990 ch. 5, eq. 5.41 without cross terms; Maruo 1960 far-field data):
+  Mean drift (Faltinsen 1990 ch. 5, without cross terms; Maruo 1960 far-field data):
     F = r(t)^2 sum_i a_i^2 D(omega_i, beta_i), D per unit amplitude squared, the same
     interpolation. Slowly-varying (difference-frequency) drift is not modelled.
 Limits: zero-speed, deep-water data (the RAO is taken at the wave frequency; only the time
