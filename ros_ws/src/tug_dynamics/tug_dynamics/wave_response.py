@@ -12,7 +12,8 @@ BEM code Capytaine). ROS-free, numpy only at run time (no capytaine import).
     resp.drift_force(psi, t)                               # the drift alone (it needs no position)
 
 One WaveResponse per vessel (it holds per-component tables of that hull); evaluate costs a few
-vectorised numpy operations over the N wave components (~20 us for N = 150).
+vectorised numpy operations over the N wave components (about 50 us for N = 150-200 on a
+shared core).
 
 Axes and inputs: world ENU (x east, y north), psi the heading (rad, math angle from east, CCW;
 REP-103), u the forward speed through the water (m/s, body x), (x, y) the position of the body
