@@ -2,7 +2,7 @@
 precomputed hydrodynamic data (ships/hydro/<ship>.npz, made by scripts/hydro_data.py with the
 BEM code Capytaine). ROS-free, numpy only at run time (no capytaine import).
 
-    from tug_dynamics.wave_response import HydroData, WaveResponse
+    from tug_dynamics.wave_response import HydroData, WaveResponse, hydro_path
     hydro = HydroData.load(hydro_path("asd_tug"))        # ValueError naming file and key if bad
     resp = WaveResponse(hydro, wave_field)                # sea_environment.waves.WaveField
     s = resp.evaluate(x, y, psi, u, t)                     # every vessel step
