@@ -12,6 +12,8 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/ships", glob("ships/*.yaml")),
+        # hydrodynamic data of the displacement hulls (scripts/hydro_data.py; tug_dynamics.wave_response)
+        ("share/" + package_name + "/ships/hydro", glob("ships/hydro/*.npz")),
     ],
     install_requires=["setuptools"],
     zip_safe=True,
