@@ -5,6 +5,7 @@ bisection, the Airy orbit speed a omega, the spatial phase k x between two bodie
 stretching at the surface, the ramp, the compiled kernel against numpy, and the scenario's bad
 input. No ROS."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -337,10 +338,35 @@ def test_scenario_waves_reach_the_nodes_environment(tmp_path):
     assert Environment.from_parameter("{}")[0].waves is None
 
 
-def test_a_sea_the_bodies_do_not_feel_yet_is_said_before_the_run(tmp_path):
-    """Until the vessel and rope models take the wave field (issue 31), a scenario with waves
-    says so: the run would otherwise look like a run in waves."""
-    from scenario_format.scenario import load_scenario
-    assert any("do not feel it yet" in w for w in load_scenario(_scenario(tmp_path, GOOD), check_files=False).warnings)
-    calm = load_scenario(_scenario(tmp_path, {**GOOD, "hs": 0.0}), check_files=False)
-    assert calm.warnings == []
+def _ship_scenario(tmp_path, ship_file, waves):
+    import yaml
+    doc = {"name": "waves_ship", "duration": 10.0, "environment": {"waves": waves},
+           "vessels": [{"name": "boat", "ship_file": ship_file, "initial": {"x": 0.0, "y": 0.0}}]}
+    path = tmp_path / "waves_ship.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return str(path)
+
+
+def test_waves_a_hull_cannot_take_are_refused_before_the_run(tmp_path):
+    """The planing hull is calm-water only (seed 004): refused with waves, fine on a calm sea;
+    a displacement hull without its hydrodynamic data file, or with a damaged one, is refused
+    naming the file (and the key); the shipped hulls take waves."""
+    import shutil
+    from scenario_format.scenario import ScenarioError, load_scenario
+    from tug_dynamics.ship_file import ships_dir
+    with pytest.raises(ScenarioError, match="(?s)key 'environment.waves': vessel 'boat'.*planing hull.*calm-water"):
+        load_scenario(_ship_scenario(tmp_path, "planing_40ft.yaml", GOOD))
+    load_scenario(_ship_scenario(tmp_path, "planing_40ft.yaml", {**GOOD, "hs": 0.0}))
+    load_scenario(_ship_scenario(tmp_path, "harbour_tug.yaml", GOOD))
+    own = tmp_path / "my_tug.yaml"
+    shutil.copy(os.path.join(ships_dir(), "harbour_tug.yaml"), own)
+    with pytest.raises(ScenarioError, match=r"(?s)vessel 'boat'.*hydro/my_tug.npz: hydrodynamic data file not found"):
+        load_scenario(_ship_scenario(tmp_path, str(own), GOOD))
+    (tmp_path / "hydro").mkdir()
+    with np.load(os.path.join(ships_dir(), "hydro", "harbour_tug.npz")) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["rao_phase"] = arrays["rao_phase"][:, :, :5]
+    np.savez(tmp_path / "hydro" / "my_tug.npz", **arrays)
+    with pytest.raises(ScenarioError, match=r"(?s)my_tug.npz.*rao_phase"):
+        load_scenario(_ship_scenario(tmp_path, str(own), GOOD))
+    assert load_scenario(_ship_scenario(tmp_path, "harbour_tug.yaml", GOOD)).warnings == []

@@ -421,11 +421,6 @@ def load_scenario(path: str, check_files: bool = True) -> Scenario:
         lines = [f"{path}: key '{_key_path(e['loc']) or '(top)'}': {_explain(e)}" for e in exc.errors()]
         raise ScenarioError("\n".join(lines)) from None
     sc._path = os.path.abspath(path)
-    waves = sc.environment.waves
-    if waves is not None and waves.hs > 0.0:   # issue 31: ropes and cables feel the sea, the vessels not yet
-        sc._warnings.append(f"environment.waves (Hs {waves.hs:g} m, Tp {waves.tp:g} s): ropes and towed cables feel "
-                            "the waves (Morison drag and inertia; a rope's immersion against the local surface), but "
-                            "the vessels do not feel it yet; their physics is the calm-water one")
     _check_references(path, sc)
     if check_files:
         _check_files(path, sc)
@@ -635,6 +630,8 @@ def _end_point(path: str, sc: Scenario, r: RopeSpec, end: str, points: Dict[str,
 def _check_files(path: str, sc: Scenario) -> None:
     from rope_model.models import MODELS, load_params as load_rope_params
     from tug_dynamics.ship_file import load_ship
+    from tug_dynamics.seakeeping import waves_refused
+    waves = sc.environment.waves
     points: Dict[str, Dict[str, Any]] = {}
     models: Dict[str, Any] = {}
     for i, v in enumerate(sc.vessels):
@@ -649,6 +646,10 @@ def _check_files(path: str, sc: Scenario) -> None:
             what = "ship file (with ship_overrides)" if v.ship_overrides else "ship file"
             raise ScenarioError(f"{path}: key '{key}': {what} '{v.ship_file}' is not usable:\n"
                                 f"  {_load_error(exc)}") from None
+        refused = waves_refused(models[v.name], ship) if waves is not None and waves.hs > 0.0 else ""
+        if refused:
+            raise ScenarioError(f"{path}: key 'environment.waves': vessel '{v.name}' ({key} '{v.ship_file}') cannot "
+                                f"take waves:\n  {refused}")
     for i, r in enumerate(sc.ropes):
         key = f"ropes[{i}]"
         rope = resolve("rope_model", "ropes", r.rope_file, path)

@@ -171,6 +171,10 @@ VESSEL_STATUS_FLOATS_B = ("speed_through_water", "heel", "trim", "rise", "girtin
 # the environment block (tug_dynamics.environment_loads.EnvironmentStatus), then `grounded`
 VESSEL_STATUS_FLOATS_ENV = ("apparent_wind_speed", "apparent_wind_angle", "water_depth", "squat",
                             "under_keel_clearance")
+# the sea block (tug_dynamics.seakeeping.SeaStatus), after `grounded`
+VESSEL_STATUS_FLOATS_SEA = ("wave_elevation", "wave_significant_height", "wave_encounter_period",
+                            "wave_encounter_angle", "heave", "roll", "pitch")
+CALM_SEA = (0.0,) * len(VESSEL_STATUS_FLOATS_SEA)
 
 
 class VesselStatusEncoder:
@@ -181,6 +185,7 @@ class VesselStatusEncoder:
     _B = struct.Struct("<6d?")
     _C = struct.Struct("<II")
     _D = struct.Struct("<5d?")
+    _E = struct.Struct(f"<{len(VESSEL_STATUS_FLOATS_SEA)}d")
 
     def __init__(self, frame_id: str, vessel: str, contact_names: Sequence[str] = ()):
         t = self.t = Template()
@@ -191,6 +196,7 @@ class VesselStatusEncoder:
         t.slot(self._B, 8)   # 6 doubles, girting_warning
         t.slot(self._C, 4)   # commands_rejected, commands_clamped
         t.slot(self._D, 8)   # environment: 5 doubles, grounded
+        t.slot(self._E, 8)   # the sea: 7 doubles
         n = self.n_contacts = len(contact_names)
         t.const(_U32, 4, n)
         for name in contact_names:
@@ -204,10 +210,11 @@ class VesselStatusEncoder:
     def encode(self, stamp_ns: int, step: int, floats_a: Sequence[float], anchor_state: int,
                floats_b: Sequence[float], girting_warning: bool, rejected: int, clamped: int,
                floats_env: Sequence[float] = (0.0, 0.0, math.inf, 0.0, math.inf), grounded: bool = False,
-               contact_forces: Sequence[float] = (), contact_points: Sequence[float] = ()) -> bytes:
+               contact_forces: Sequence[float] = (), contact_points: Sequence[float] = (),
+               floats_sea: Sequence[float] = CALM_SEA) -> bytes:
         """contact_forces / contact_points: 3 doubles per contact, flattened, in the names' order."""
         groups = [stamp_parts(stamp_ns), (step,), (*floats_a, anchor_state), (*floats_b, girting_warning),
-                  (rejected, clamped), (*floats_env, grounded)]
+                  (rejected, clamped), (*floats_env, grounded), tuple(floats_sea)]
         if self.n_contacts:
             groups += [tuple(contact_forces), tuple(contact_points)]
         return self.t.pack(*groups)

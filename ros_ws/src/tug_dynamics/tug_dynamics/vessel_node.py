@@ -45,6 +45,7 @@ from sim_plumbing.scene import VesselScene
 from sea_environment.environment import Environment
 from tug_dynamics.environment_loads import EnvironmentStatus, VesselInEnvironment
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
+from tug_dynamics.seakeeping import SeaStatus, VesselInWaves, waves_refused
 from sim_plumbing.ros_common import ModelDiverged
 from sim_plumbing.stepping import REJECTED_ORDER, SteppedNode, StepInput
 from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, ThrusterOrder, Vessel, VesselState,
@@ -54,7 +55,9 @@ from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, Thrus
 _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
 _STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
 _STATUS_FLOATS_ENV = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_ENV)
+_STATUS_FLOATS_SEA = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_SEA)
 _STILL_DEEP = EnvironmentStatus()   # what status reports without an environment
+_CALM = SeaStatus()
 
 
 class VesselNode(SteppedNode):
@@ -104,7 +107,10 @@ class VesselNode(SteppedNode):
         if np.any(current):   # 0, 0 keeps the ship file's own current
             self.model.set_current(current)
         # attached to the model: from here on its steps feel the environment
-        self.surroundings = self._environment(self.get_parameter("environment").value, current)
+        env = self._environment(self.get_parameter("environment").value, current)
+        self.surroundings = None if env is None else VesselInEnvironment(self.model, env[0], rho_water=env[1])
+        # the sea (wave-frequency motion superposed, drift force on the manoeuvring model)
+        self.sea = self._sea(env[0] if env else None, path)
         self._was_grounded = False
 
         self.rejected = 0
@@ -151,16 +157,25 @@ class VesselNode(SteppedNode):
             f"attachments {sorted(self.model.attachments)}, {1e9 / self.period_ns:g} Hz, "
             f"{'lockstep' if self.lockstep else 'free-running'}")
 
-    def _environment(self, text: str, current: np.ndarray) -> Optional[VesselInEnvironment]:
-        """The environment coupling, or None when the parameter is empty (the uniform current of
-        current_east / current_north or the ship file then applies, as before)."""
+    def _environment(self, text: str, current: np.ndarray):
+        """(Environment, water density), or None when the parameter is empty (the uniform current
+        of current_east / current_north or the ship file then applies, as before)."""
         if not text:
             return None
         if np.any(current):
             raise ValueError("parameters current_east / current_north and environment both give a current: "
                              "use environment.current")
-        env, rho = Environment.from_parameter(text)
-        return VesselInEnvironment(self.model, env, rho_water=rho)
+        return Environment.from_parameter(text)
+
+    def _sea(self, env: Optional[Environment], ship_path: str) -> Optional[VesselInWaves]:
+        """The vessel's response to the run's waves, or None on a calm sea."""
+        if env is None or env.waves is None:
+            return None
+        base = self.model.base if isinstance(self.model, PrescribedMotion) else self.model
+        refused = waves_refused(base, ship_path)
+        if refused:
+            raise ValueError(refused)
+        return VesselInWaves.for_ship(ship_path, env.waves)
 
     # -- inputs --------------------------------------------------------------------------
     def accept_input(self, spec: StepInput, msg) -> bool:
@@ -340,11 +355,13 @@ class VesselNode(SteppedNode):
                 continue
             point = np.asarray(self.model.attachments[msg.attachment], float)
             force = np.array(msg.force)
+            ref_p, ref_v = np.array(msg.reference_position), np.array(msg.reference_velocity)
+            if self.sea is not None:   # the rope saw the point's total motion; the model steps its low-frequency one
+                ref_p, ref_v = self.sea.low_frequency_reference(self.model.state, self.sea.last, point, ref_p, ref_v)
             wrenches.append(ExternalWrench(force_world=force, point_body=point,
                                            stiffness=np.array(msg.stiffness).reshape(3, 3),
                                            damping=np.array(msg.damping).reshape(3, 3),
-                                           reference_position=np.array(msg.reference_position),
-                                           reference_velocity=np.array(msg.reference_velocity)))
+                                           reference_position=ref_p, reference_velocity=ref_v))
             self._rope_forces[topic] = (point, rot.T @ force)
         for topic in self.contact_topics:
             msg = inputs.get(topic)
@@ -355,6 +372,8 @@ class VesselNode(SteppedNode):
                             else (-on_hull, np.array(msg.fender_point_body)))
             self._contacts[topic] = (force, point)
             wrenches.append(ExternalWrench(force_world=force, point_body=point))
+        if self.sea is not None and not isinstance(self.model, PrescribedMotion):
+            wrenches.append(self.sea.drift_wrench(self.model.state, self.sea.last))
         self.model.step(self.dt, wrenches)
         self._check_finite()
 
@@ -397,6 +416,11 @@ class VesselNode(SteppedNode):
     def publish_outputs(self) -> None:
         stamp_ns = self.stamp_ns()
         s = self.model.state
+        sea = _CALM
+        if self.sea is not None:   # what leaves the vessel moves with the waves too
+            low = s
+            s = self.sea.total(low, self.sea.sample(low, stamp_ns * 1e-9))
+            sea = self.sea.status(low, self.sea.last, stamp_ns * 1e-9)
         q = quaternion_from_rpy(*s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
         position = s.position.tolist()
@@ -421,7 +445,7 @@ class VesselNode(SteppedNode):
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
             st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded,
-            *self._contact_status()), stamp_ns)
+            *self._contact_status(), floats_sea=_STATUS_FLOATS_SEA(sea)), stamp_ns)
         if self.thrusters_pub is not None:
             units = st.thrusters
             self.thrusters_pub.publish(self._thrusters_cdr.encode(stamp_ns, self.step_index, [
