@@ -229,6 +229,8 @@ class WaveField:
         self.phase = rows[:, C_PHASE]
         self.spectrum = spectrum          # target S(w) (callable) of an irregular sea, else None
         self.mean_direction = float(mean_direction)
+        # the spectral peak (rad/s): an irregular sea's 2 pi / Tp, else its largest component's
+        self.peak_omega = float(self.omega[np.argmax(self.amplitude)]) if self.amplitude.size else 0.0
 
     @property
     def rows(self) -> np.ndarray:
@@ -268,7 +270,9 @@ class WaveField:
         phase = rng.uniform(0.0, 2.0 * math.pi, n)
         strata = (rng.permutation(n) + rng.uniform(size=n)) / n
         psi = direction + (_sample_cos2s(strata, spreading_s) if spreading_s else np.zeros(n))
-        return WaveField(np.sqrt(2.0 * energy), omega, psi, phase, depth, ramp_time, g, spectrum, direction)
+        field = WaveField(np.sqrt(2.0 * energy), omega, psi, phase, depth, ramp_time, g, spectrum, direction)
+        field.peak_omega = wp
+        return field
 
     def ramp(self, t):
         """(r(t), r'(t)) of the half-cosine start-up ramp."""

@@ -13,7 +13,7 @@ waves.
   heading-fixed (seakeeping) frame, rotations add to roll, pitch and yaw.
 - A rope end's coupling (docs/step-protocol.md) refers to the attachment's published (total)
   state; the manoeuvring integration follows the low-frequency point, so the reference is moved
-  by the wave-frequency part of the point's motion at the step's start (`low_frequency_reference`):
+  by the wave-frequency part of the point's motion at the step's start (`point_offsets`):
   the coupling spring then acts on the line's stretch, not on the wave motion it already saw.
 
 Which data: ships/hydro/<ship file stem>.npz next to the ship file (scripts/hydro_data.py makes
@@ -27,6 +27,7 @@ import math
 import os
 
 import numpy as np
+from sea_environment.waves import wavenumber
 from sim_math.rotations import matrix_from_rpy
 
 from .planing import PlaningHull
@@ -54,15 +55,15 @@ class SeaStatus:
 
 class VesselInWaves:
     """One vessel's wave response; `sample(state, t)` once per published state, then `total`,
-    `drift_wrench`, `status` and `low_frequency_reference` of that sample."""
+    `drift_wrench`, `status` and `point_offsets` of that sample."""
 
     def __init__(self, hydro: HydroData, wave_field):
         self.response = WaveResponse(hydro, wave_field)
         self.waves = wave_field
         self.hs = 4.0 * math.sqrt(wave_field.m0)
-        # the spectral peak: the component of most energy (a regular wave: its one component)
-        peak = int(np.argmax(wave_field.amplitude))
-        self._peak_omega, self._peak_k = float(wave_field.omega[peak]), float(wave_field.k[peak])
+        # the spectral peak (2 pi / Tp) and its wavenumber in the sea's depth
+        self._peak_omega = float(wave_field.peak_omega)
+        self._peak_k = float(wavenumber(self._peak_omega, wave_field.depth, wave_field.g))
         self.mean_direction = float(wave_field.mean_direction)
         self.last: WaveSample | None = None
         self._state: VesselState | None = None
@@ -97,25 +98,24 @@ class VesselInWaves:
 
     @staticmethod
     def point_motion(state: VesselState, points_body: np.ndarray):
-        """World positions and velocities of body points (n, 3) of a state."""
-        rot = matrix_from_rpy(*map(float, state.rpy))
-        positions = state.position + points_body @ rot.T
-        velocities = (state.linear_velocity_body + np.cross(state.angular_velocity_body, points_body)) @ rot.T
-        return positions, velocities
+        """World positions and velocities (n, 3) of body points (n, 3) of a state:
+        p = x + R r, v = R (v_b + w x r)."""
+        rot = matrix_from_rpy(float(state.rpy[0]), float(state.rpy[1]), float(state.rpy[2]))
+        (p, q, r), (x, y, z) = state.angular_velocity_body, points_body.T
+        # w x r written out: np.cross costs several times the rest of this function
+        relative = np.column_stack((q * z - r * y, r * x - p * z, p * y - q * x))
+        return state.position + points_body @ rot.T, (state.linear_velocity_body + relative) @ rot.T
 
-    def low_frequency_reference(self, state: VesselState, sample: WaveSample, point_body, reference_position,
-                                reference_velocity):
-        """A coupling's reference (the attachment's total state) moved to the low-frequency
-        point: minus the wave-frequency part of the point's position and velocity."""
-        pts = np.asarray(point_body, float).reshape(1, 3)
-        p_lf, v_lf = self.point_motion(state, pts)
-        p_tot, v_tot = self.point_motion(self.total(state, sample), pts)
-        return (np.asarray(reference_position, float) - (p_tot[0] - p_lf[0]),
-                np.asarray(reference_velocity, float) - (v_tot[0] - v_lf[0]))
+    def point_offsets(self, low: VesselState, total: VesselState, points_body: np.ndarray):
+        """The wave-frequency part (n, 3) of body points' world positions and velocities: total
+        minus low-frequency. A rope end's coupling reference (the attachment's published, total,
+        state) minus it is the low-frequency point the manoeuvring integration follows."""
+        p_tot, v_tot = self.point_motion(total, points_body)
+        p_lf, v_lf = self.point_motion(low, points_body)
+        return p_tot - p_lf, v_tot - v_lf
 
-    def status(self, state: VesselState, sample: WaveSample, t: float) -> SeaStatus:
-        x, y, _ = state.position
-        eta = float(self.waves.elevation(float(x), float(y), float(t)))
+    def status(self, state: VesselState, sample: WaveSample) -> SeaStatus:
+        eta = sample.elevation
         psi = float(state.rpy[2])
         u = float(state.linear_velocity_body[0])
         # the sea travels towards mean_direction: it comes from the opposite, relative to the bow

@@ -357,7 +357,8 @@ class VesselNode(SteppedNode):
             force = np.array(msg.force)
             ref_p, ref_v = np.array(msg.reference_position), np.array(msg.reference_velocity)
             if self.sea is not None:   # the rope saw the point's total motion; the model steps its low-frequency one
-                ref_p, ref_v = self.sea.low_frequency_reference(self.model.state, self.sea.last, point, ref_p, ref_v)
+                i = self._names.index(msg.attachment)
+                ref_p, ref_v = ref_p - self._wave_offsets[0][i], ref_v - self._wave_offsets[1][i]
             wrenches.append(ExternalWrench(force_world=force, point_body=point,
                                            stiffness=np.array(msg.stiffness).reshape(3, 3),
                                            damping=np.array(msg.damping).reshape(3, 3),
@@ -420,7 +421,8 @@ class VesselNode(SteppedNode):
         if self.sea is not None:   # what leaves the vessel moves with the waves too
             low = s
             s = self.sea.total(low, self.sea.sample(low, stamp_ns * 1e-9))
-            sea = self.sea.status(low, self.sea.last, stamp_ns * 1e-9)
+            sea = self.sea.status(low, self.sea.last)
+            self._wave_offsets = self.sea.point_offsets(low, s, self._points_body)
         q = quaternion_from_rpy(*s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
         position = s.position.tolist()

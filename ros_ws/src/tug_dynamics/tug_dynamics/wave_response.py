@@ -62,6 +62,7 @@ import os
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 FORMAT_VERSION = 1
 DOFS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
@@ -178,6 +179,44 @@ class WaveSample(NamedTuple):
     displacement: np.ndarray    # (6,) m, m, m, rad, rad, rad (body axes)
     velocity: np.ndarray        # (6,) m/s, rad/s
     drift: np.ndarray           # (3,) N, N, N m (body axes)
+    elevation: float = 0.0      # m, the sea surface at (x, y) (the ramp included)
+
+
+@njit(cache=True)
+def _evaluate(table, a, kx, ky, omega, k, phase, psi_w, x, y, psi, u, t, r, rdot, out):
+    """The compiled `WaveResponse.evaluate` (the numpy `_interp` / `_motion` are its oracle in
+    tests/physics/test_wave_response.py): out[0:6] displacement, [6:12] velocity, [12:15] drift,
+    [15] elevation. One pass over the components, no temporaries (the vessel node calls it every
+    step: 150 components cost about a tenth of the numpy version)."""
+    nb = table.shape[1]
+    two_pi = 2.0 * math.pi
+    out[:] = 0.0
+    eta = 0.0
+    for i in range(a.size):
+        beta = (psi_w[i] - psi) % two_pi
+        pos = beta * (nb / two_pi)
+        j = int(pos)
+        f = pos - j
+        j %= nb
+        j1 = (j + 1) % nb
+        theta = kx[i] * x + ky[i] * y - omega[i] * t + phase[i]
+        c, s = math.cos(theta), math.sin(theta)
+        we = omega[i] - k[i] * u * math.cos(beta)
+        eta += a[i] * c
+        for d in range(6):
+            re = table[i, j, d] + f * (table[i, j1, d] - table[i, j, d])
+            im = table[i, j, 6 + d] + f * (table[i, j1, 6 + d] - table[i, j, 6 + d])
+            disp = c * re - s * im
+            out[d] += disp
+            out[6 + d] += we * (s * re + c * im)
+        for d in range(3):
+            out[12 + d] += table[i, j, 12 + d] + f * (table[i, j1, 12 + d] - table[i, j, 12 + d])
+    for d in range(6):
+        out[6 + d] = r * out[6 + d] + rdot * out[d]
+        out[d] *= r
+    for d in range(3):
+        out[12 + d] *= r * r
+    out[15] = r * eta
 
 
 class WaveResponse:
@@ -203,6 +242,7 @@ class WaveResponse:
         self._nb = self._table.shape[1]
         self._rows = np.arange(len(self.a))
         self._ramp_time = float(getattr(wave_field, "ramp_time", math.inf))
+        self._out = np.zeros(16)
 
     def _ramp(self, t: float):
         if t >= self._ramp_time:          # r = 1, r' = 0 after the ramp (waves.py)
@@ -244,9 +284,18 @@ class WaveResponse:
         return (r * r) * self._interp(self.relative_heading(psi))[:, 12:].sum(axis=0)
 
     def evaluate(self, x: float, y: float, psi: float, u: float, t: float) -> WaveSample:
-        """Displacement, velocity and drift at once (one interpolation)."""
+        """Displacement, velocity, drift and the elevation at (x, y) at once (compiled)."""
+        r, rdot = self._ramp(t)
+        out = self._out
+        _evaluate(self._table, self.a, self.kx, self.ky, self.omega, self.k, self.phase, self.psi_w, float(x),
+                  float(y), float(psi), float(u), float(t), r, rdot, out)
+        return WaveSample(out[0:6].copy(), out[6:12].copy(), out[12:15].copy(), float(out[15]))
+
+    def evaluate_numpy(self, x: float, y: float, psi: float, u: float, t: float) -> WaveSample:
+        """`evaluate` in numpy: the oracle of the compiled one."""
         r, rdot = self._ramp(t)
         beta = self.relative_heading(psi)
         T = self._interp(beta)
         disp, vel = self._motion(T, beta, x, y, u, t, r, rdot)
-        return WaveSample(disp, vel, (r * r) * T[:, 12:].sum(axis=0))
+        theta = self.kx * x + self.ky * y - self.omega * t + self.phase
+        return WaveSample(disp, vel, (r * r) * T[:, 12:].sum(axis=0), r * float(np.cos(theta) @ self.a))
