@@ -103,8 +103,10 @@ def _rope_file(name):
 
 
 # ------------------------------------------------------------------ the checks
-def check_vessel(name, spec, odom, rate):
-    """Every step, finite, starting as the scenario says, on its prescribed track if it has one."""
+def check_vessel(name, spec, odom, rate, hs=0.0):
+    """Every step, finite, starting as the scenario says, on its prescribed track if it has one
+    (in a sea of significant height hs, within the wave-frequency motion superposed on it: the
+    RAOs of translation and yaw stay near or below 1 and the wave slope, so within hs and 0.2 rad)."""
     assert len(odom["t"]) == round(DURATION * rate) + 1, f"{name}: steps 0..N"
     np.testing.assert_allclose(np.diff(odom["t"]), 1.0 / rate, rtol=0, atol=1e-6, err_msg=f"{name}: sim time")
     for k, a in odom.items():
@@ -124,11 +126,12 @@ def check_vessel(name, spec, odom, rate):
         t = odom["t"] - odom["t"][0]
         x, y, heading = prescribed_track(spec["motion"], t)
         c, s = math.cos(psi0), math.sin(psi0)
-        np.testing.assert_allclose(odom["x"], x0 + c * x - s * y, rtol=0, atol=1e-6, err_msg=f"{name}: track x")
-        np.testing.assert_allclose(odom["y"], y0 + s * x + c * y, rtol=0, atol=1e-6, err_msg=f"{name}: track y")
+        along = 1e-6 + hs
+        np.testing.assert_allclose(odom["x"], x0 + c * x - s * y, rtol=0, atol=along, err_msg=f"{name}: track x")
+        np.testing.assert_allclose(odom["y"], y0 + s * x + c * y, rtol=0, atol=along, err_msg=f"{name}: track y")
         if spec["motion"].get("heading", "track") == "track":
             err = np.remainder(odom["yaw"] - psi0 - heading + math.pi, 2 * math.pi) - math.pi
-            assert np.abs(err).max() < 1e-6, f"{name}: heading along the track"
+            assert np.abs(err).max() < 1e-6 + (0.2 if hs else 0.0), f"{name}: heading along the track"
 
 
 def check_rope(name, spec, states, rate, scenario):
@@ -153,7 +156,10 @@ def check_rope(name, spec, states, rate, scenario):
         current = np.array(scenario.get("environment", {}).get("current", [0.0, 0.0]), dtype=float)
         relative = np.linalg.norm(vessel["motion"]["speed"] * np.array([math.cos(psi), math.sin(psi)]) - current)
         truth = critical_angle_top_tension(rope, relative)
-        np.testing.assert_allclose(np.linalg.norm(f_a, axis=1), truth, rtol=1e-3,   # measured -7e-5
+        # measured -7e-5 in calm water; in a sea its first seconds (the ramp at a few % of the
+        # waves) move the towing point and the tension by under 1 %
+        in_waves = ((scenario.get("environment") or {}).get("waves") or {}).get("hs", 0.0) > 0.0
+        np.testing.assert_allclose(np.linalg.norm(f_a, axis=1), truth, rtol=0.02 if in_waves else 1e-3,
                                    err_msg=f"{name}: top tension")
     if spec.get("end_a") == "fixed" and spec.get("end_b") == "fixed":
         # released straight between fixed ends: gravity takes the rope down, nothing rises
@@ -208,8 +214,9 @@ def test_scenario_runs_and_its_recording_holds_physics(path, ros_domain, tmp_pat
         proc = record_scenario(path, out, "--duration", DURATION, timeout=240)
         assert "simulated" in proc.stdout
         msgs = _decoded(out, topics)
+    hs = ((scenario.get("environment") or {}).get("waves") or {}).get("hs", 0.0)
     for v in vessels:
-        check_vessel(v["name"], v, _odometry(msgs[f"/{v['name']}/odom"]), rate)
+        check_vessel(v["name"], v, _odometry(msgs[f"/{v['name']}/odom"]), rate, hs)
     for r in ropes:
         check_rope(r["name"], r, msgs[f"/{r['name']}/state"], rate, scenario)
 
