@@ -105,3 +105,5 @@ def test_analysis_reports_the_towline_statistics_in_waves(runs, tmp_path, capsys
     assert end["peak_over_mean"] == pytest.approx(end["tension_max"] / end["tension_mean"], rel=1e-9)
     assert isinstance(end["slack_events"], int)
     assert summary["sea"]["window_start"] == pytest.approx(30.0)   # after the scenario's ramp
+    # the sea state came with the recording (its particulars), not from a scenario file found later
+    assert summary["sea"]["waves"]["hs"] == 2.0 and summary["sea"]["waves"]["scenario"] == "tow_head_seas.yaml"

@@ -192,12 +192,19 @@ def read_recording(args, say) -> Recording:
 def sea_state(args, rec: Recording):
     """(waves, note): the sea state of the run as a dict (hs, tp, from_deg, spectrum, ramp_time:
     the start-up ramp, s; with "scenario": the file read) from --scenario, else from the
-    scenario the recording's particulars name (beside the recording, else in the scenario
-    library: the recording carries its name, not its environment); None without waves (or
-    none found). The note says why none was read; ValueError for a --scenario that does not load."""
+    recording's particulars (its "waves"), else (recordings made before the particulars carried
+    the sea) from the scenario they name (beside the recording, else in the scenario library);
+    None without waves (or none found). The note says why none was read; ValueError for a --scenario that does not load."""
     from scenario_format.scenario import ScenarioError, load_scenario
     from sim_math.data_files import resolve as resolve_data_file
     path = args.scenario
+    recorded = rec.particulars.get("waves")
+    if path is None and isinstance(recorded, dict):   # the recording carries its sea (since issue 31)
+        try:
+            w = {k: float(recorded[k]) for k in ("hs", "tp", "from_deg", "ramp_time")}
+        except (KeyError, TypeError, ValueError):
+            return None, "the recording's particulars carry an unreadable sea state ('waves'): none read"
+        return {**w, "spectrum": str(recorded.get("spectrum", "jonswap")), "scenario": rec.particulars.get("scenario")}, None
     if path is None:
         name = rec.particulars.get("scenario")
         if not name:

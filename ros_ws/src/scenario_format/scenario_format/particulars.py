@@ -36,7 +36,8 @@ def scenario_path(name: str) -> str:
 def particulars(path: str, sc: Scenario) -> dict:
     """The particulars of the scenario `sc` read from `path` (its files were checked by
     load_scenario): {"scenario", "vessels": {name: {ship_file, length}}, "ropes": {name:
-    {rope_file, end_a, end_b, breaking_load}}}."""
+    {rope_file, end_a, end_b, breaking_load}}, and with a sea "waves": environment.waves with its
+    ramp time resolved (s)}."""
     vessels = {}
     for v in sc.vessels:
         ship = resolve("tug_dynamics", "ships", v.ship_file, path)
@@ -48,7 +49,11 @@ def particulars(path: str, sc: Scenario) -> dict:
         load = getattr(load_params(rope), "breaking_load", None)
         ropes[r.name] = {"rope_file": os.path.basename(rope), "end_a": r.end_a, "end_b": r.end_b,
                          "breaking_load": None if load is None or not math.isfinite(load) else float(load)}
-    return {"scenario": os.path.basename(path), "vessels": vessels, "ropes": ropes}
+    out = {"scenario": os.path.basename(path), "vessels": vessels, "ropes": ropes}
+    w = sc.environment.waves
+    if w is not None and w.hs > 0.0:   # the sea the run was in: analyze's sea statistics need it
+        out["waves"] = {**w.model_dump(), "ramp_time": 3.0 * w.tp if w.ramp_time is None else w.ramp_time}
+    return out
 
 
 def recording_metadata(path: str, sc: Scenario) -> Dict[str, Dict[str, str]]:
