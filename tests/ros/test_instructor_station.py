@@ -314,6 +314,7 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     readings = []
     try:
         _wait_http(url, live)
+        assert _get(url + "api/sea") == {"waves": None}  # the recording's scenario (beside it): calm
         # at twice the recorded pace (the page follows the replay's /clock, whatever its rate)
         replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "2"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -378,6 +379,44 @@ def test_sea_api_is_the_physics_sea():
     assert sea_description("") == {"waves": None}
     assert sea_description('{"waves": {"hs": 0.0, "tp": 8.0, "from_deg": 0.0}}') == {"waves": None}
     assert sea_description('{"current": [0.1, 0.0]}') == {"waves": None}
+
+
+def test_the_live_view_gets_the_runs_environment(tmp_path, monkeypatch):
+    """run_scenario --live hands its live view the environment its vessel nodes get; stand-alone,
+    the live view finds it from `particulars`: a scenario, or a recording's scenario (beside it,
+    else in the library); a recording whose scenario is nowhere gives none, and says why."""
+    from mcap.writer import Writer
+    from types import SimpleNamespace
+    import live_view.live_view_node as lvn
+    from scenario_format.particulars import PARTICULARS_METADATA, environment_of, scenario_path
+    from scenario_format.scenario import environment_parameter, load_scenario
+    from scenario_runner import run_scenario
+    path = scenario_path("tow_head_seas")
+    sc = load_scenario(path)
+    made = {}
+    monkeypatch.setattr(lvn, "LiveViewNode", lambda **kw: made.update(kw) or SimpleNamespace())
+    run_scenario.start_live_view(sc, path, SimpleNamespace(live_port=0, live_host="127.0.0.1", live_rate=20.0), None)
+    given = {p.name: p.value for p in made["parameter_overrides"]}
+    assert given["environment"] == environment_parameter(sc, path) == _head_seas_environment()
+
+    def recording(name, scenario):
+        with open(tmp_path / name, "wb") as f:
+            w = Writer(f)
+            w.start()
+            w.add_metadata(PARTICULARS_METADATA, {"particulars": json.dumps({"scenario": scenario})})
+            w.finish()
+        return str(tmp_path / name)
+    assert environment_of(recording("lib.mcap", "tow_head_seas.yaml")) == (_head_seas_environment(), None)
+    shutil.copy(path, tmp_path / "mine.yaml")
+    with open(tmp_path / "mine.yaml") as f:
+        mine = yaml.safe_load(f)
+    mine["environment"]["waves"]["seed"] = 5
+    with open(tmp_path / "mine.yaml", "w") as f:
+        yaml.safe_dump(mine, f)
+    text, note = environment_of(recording("beside.mcap", "mine.yaml"))
+    assert note is None and json.loads(text)["waves"]["seed"] == 5
+    text, note = environment_of(recording("lost.mcap", "nowhere_at_all.yaml"))
+    assert text == "" and "nowhere_at_all.yaml is not beside it nor in the scenario library" in note
 
 
 class _StandInStation:
