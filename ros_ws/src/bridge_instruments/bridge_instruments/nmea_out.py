@@ -6,8 +6,9 @@
 For every own vessel (`outputs`: "vessel@host:port") it sends, over UDP to that destination, one
 sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one XDR per rope
 with an end on the vessel (its tension), an XDR of its pitch and roll (attitude(): the REP-103
-angles of /<vessel>/status converted to the bus's bow-up / starboard-down convention), and for every other vessel of the run an AIS VDM
-position report (type 1) and, the first time and every `static_every`-th time, its static data
+angles of /<vessel>/status converted to the bus's bow-up / starboard-down convention), and for
+every other vessel of the run an AIS VDM position report (type 1) and, the first time and every
+`static_every`-th time, its static data
 (type 5, length and beam from its ship file, with the `ship_overrides` of the scenario named by
 the parameter `scenario` merged over it: scenario_format/particulars.py). Sentence
 formats: bridge_instruments/sentences.py.

@@ -16,9 +16,10 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
                      thread whatever the number of clients: sim time, per vessel pose, speed (kn),
                      heading (deg true = (90 - yaw) mod 360), engine order and rpm, rudder/bucket
                      angle, heel, girting ratio, roll and pitch (heel + roll, trim + pitch, deg,
-                     REP-103), heave, the encountered sea (Hs, encounter period, angle); per rope the polyline of its connections with their
-                     tensions, peak tension, breaking load, deployed length, winch order; the
-                     tension history of the last HISTORY_SECONDS of simulated time
+                     REP-103), heave, the encountered sea (Hs, encounter period, angle); per
+                     rope the polyline of its connections with their tensions, peak tension,
+                     breaking load, deployed length, winch order; the tension history of the last
+                     HISTORY_SECONDS of simulated time
   GET  /api/scene    per vessel the hull, deck and attachment points (body frame) of its markers
   GET  /api/sea      the run's sea (sea_description): {"waves": null} on a calm sea, else the
                      components of the very WaveField the vessel nodes sample (built here from the

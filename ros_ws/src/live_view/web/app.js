@@ -157,7 +157,8 @@ function updateSea(t, px, py) {
 app.seaVertex = (ix, iy) => {
   if (!sea.mesh) return null;
   const n = SEA_CELLS + 1, k = iy * n + ix, p = sea.mesh.geometry.attributes.position.array;
-  return { x: sea.ox + p[3 * k], y: sea.oy + p[3 * k + 1], z: p[3 * k + 2], t: sea.t, cells: SEA_CELLS, size: SEA_SIZE };
+  return { x: sea.ox + p[3 * k], y: sea.oy + p[3 * k + 1], z: p[3 * k + 2], t: sea.t, cells: SEA_CELLS,
+    size: SEA_SIZE };
 };
 async function askSea() {
   try {
