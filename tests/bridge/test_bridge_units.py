@@ -46,6 +46,11 @@ def test_sentences_parse_with_pynmea2():
     assert rmc.latitude == pytest.approx(-33.5, abs=1e-9) and gga.longitude == pytest.approx(-70.25, abs=1e-9)
     assert str(rmc.timestamp).startswith("23:59:59.98")
     assert [m.sentence_type for m in msgs] == ["RMC", "GGA", "VTG", "HDT", "ROT", "RSA", "RPM", "RPM", "XDR"]
+    # with an attitude: one more XDR at the end, the others unchanged
+    with_att = S.own_ship_sentences(own._replace(pitch_deg=-0.04, roll_deg=12.35), u)
+    assert with_att[:-1] == lines
+    att = pynmea2.parse(with_att[-1], check=True)
+    assert [tuple(att.get_transducer(i)) for i in range(2)] == [("A", "0.0", "D", "PTCH"), ("A", "12.3", "D", "ROLL")]
 
 
 def test_ais_target_round_trip():

@@ -173,3 +173,30 @@ def test_console_drives_the_tug_into_a_girting_warning(tmp_path, ros_domain, cap
     assert t(mine[2]) < t0 <= t(mine[2]) + 0.1 + 1e-9, (t0, t(mine[2]))
     orders_t, orders = late.steering_orders("tug")
     assert [round(math.degrees(o), 6) for o in orders[orders_t >= t0 - 1e-9][:2]] == [-5.0, -10.0]
+
+
+def test_console_shows_roll_pitch_and_the_sea():
+    """The console's screen text (readout) of a status message with a sea, in process: roll and
+    pitch are the totals (heel + roll, trim + pitch) in words (REP-103: roll + starboard down,
+    pitch + bow down), the sea's Hs, encounter period and where it comes from; a calm status says
+    so."""
+    from types import SimpleNamespace
+    from nav_msgs.msg import Odometry
+    from tug_msgs.msg import VesselStatus
+    from bridge_instruments import console, controls
+    st = VesselStatus(heel=math.radians(1.5), roll=math.radians(2.0), trim=math.radians(0.25),
+                      pitch=math.radians(-1.75), heave=0.42, wave_significant_height=2.5,
+                      wave_encounter_period=6.25, wave_encounter_angle=math.radians(-40.0), wave_elevation=-0.8,
+                      girting_threshold=0.5)
+    od = Odometry()
+    od.pose.pose.orientation.w = 1.0
+    node = SimpleNamespace(vessel="tug", sent=0, clock=SimpleNamespace(source="simulation time"), odom=od, status=st,
+                           tension={})
+    text, _ = console.readout(node, controls.Orders(35.0, 0.5), {})
+    lines = text.splitlines()
+    assert "roll  3.5 deg stbd (heel  +1.5)   pitch  1.5 deg bow up   (trim  +0.2)   heave +0.42 m" in lines, text
+    assert "sea Hs  2.5 m   encounter period   6.2 s   from  40 deg stbd (on the bow)   surface -0.80 m" in lines, text
+    calm = VesselStatus(heel=math.radians(-3.0), trim=math.radians(0.5), girting_threshold=0.5)
+    text, _ = console.readout(SimpleNamespace(**{**vars(node), "status": calm}), controls.Orders(35.0, 0.5), {})
+    assert "roll  3.0 deg port (heel  -3.0)   pitch  0.5 deg bow down (trim  +0.5)   heave +0.00 m" in text, text
+    assert "sea calm" in text.splitlines(), text

@@ -314,6 +314,7 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     readings = []
     try:
         _wait_http(url, live)
+        assert _get(url + "api/sea") == {"waves": None}  # the recording's scenario (beside it): calm
         # at twice the recorded pace (the page follows the replay's /clock, whatever its rate)
         replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "2"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -341,3 +342,176 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     assert len({r["speed"]["t"] for r in readings}) >= 4  # it moves
     _check_gauges_against(decoded(str(out), GAUGE_TOPICS), readings)
     assert readings[0]["model"].startswith("element_chain, breaking load 157 kN"), readings[0]["model"]
+
+
+# ---------------------------------------------------------------- the sea (in process)
+
+SEA_T = 41.3  # s: the stand-in snapshot's simulation time (after tow_head_seas' 30 s ramp)
+SEA_POINTS = [(0.0, 0.0, 0.0), (12.5, -7.25, 3.0), (-140.0, 230.0, 17.5), (31.0, 5.0, SEA_T), (400.0, -380.0, 95.0)]
+
+
+def _head_seas_environment():
+    from scenario_format.particulars import environment_of
+    text, note = environment_of("tow_head_seas")
+    assert note is None and '"waves"' in text, (text, note)
+    return text
+
+
+def test_sea_api_is_the_physics_sea():
+    """/api/sea's description (sea_description of the run's environment, as the runner passes it
+    and as environment_of finds it from a scenario or a recording) summed as the page sums it
+    equals sea_environment's elevation (the vessel nodes' Environment.from_parameter) at points
+    and times, the ramp included; a calm sea is {"waves": null}."""
+    import numpy as np
+    from live_view.instructor import sea_description
+    from sea_environment.environment import Environment
+    text = _head_seas_environment()
+    d = json.loads(json.dumps(sea_description(text)))  # as the page receives it
+    w = d["waves"]
+    assert (w["hs"], w["tp"], w["from_deg"], w["ramp_time"], w["depth"]) == (2.0, 7.0, 90.0, 30.0, None), w
+    env, _ = Environment.from_parameter(text)
+    a, om, kx, ky, ph = (np.array(w[k]) for k in ("amplitude", "omega", "kx", "ky", "phase"))
+    assert len(a) == 150
+    for x, y, t in SEA_POINTS:
+        r = 1.0 if t >= w["ramp_time"] else 0.5 * (1.0 - math.cos(math.pi * t / w["ramp_time"]))
+        page = r * float(np.sum(a * np.cos(kx * x + ky * y - om * t + ph)))
+        assert page == pytest.approx(float(env.wave_elevation(t, x, y)), abs=1e-9), (x, y, t)
+    assert sea_description("") == {"waves": None}
+    assert sea_description('{"waves": {"hs": 0.0, "tp": 8.0, "from_deg": 0.0}}') == {"waves": None}
+    assert sea_description('{"current": [0.1, 0.0]}') == {"waves": None}
+
+
+def test_the_live_view_gets_the_runs_environment(tmp_path, monkeypatch):
+    """run_scenario --live hands its live view the environment its vessel nodes get; stand-alone,
+    the live view finds it from `particulars`: a scenario, or a recording's scenario (beside it,
+    else in the library); a recording whose scenario is nowhere gives none, and says why."""
+    from mcap.writer import Writer
+    from types import SimpleNamespace
+    import live_view.live_view_node as lvn
+    from scenario_format.particulars import PARTICULARS_METADATA, environment_of, scenario_path
+    from scenario_format.scenario import environment_parameter, load_scenario
+    from scenario_runner import run_scenario
+    path = scenario_path("tow_head_seas")
+    sc = load_scenario(path)
+    made = {}
+    monkeypatch.setattr(lvn, "LiveViewNode", lambda **kw: made.update(kw) or SimpleNamespace())
+    run_scenario.start_live_view(sc, path, SimpleNamespace(live_port=0, live_host="127.0.0.1", live_rate=20.0), None)
+    given = {p.name: p.value for p in made["parameter_overrides"]}
+    assert given["environment"] == environment_parameter(sc, path) == _head_seas_environment()
+
+    def recording(name, scenario):
+        with open(tmp_path / name, "wb") as f:
+            w = Writer(f)
+            w.start()
+            w.add_metadata(PARTICULARS_METADATA, {"particulars": json.dumps({"scenario": scenario})})
+            w.finish()
+        return str(tmp_path / name)
+    assert environment_of(recording("lib.mcap", "tow_head_seas.yaml")) == (_head_seas_environment(), None)
+    shutil.copy(path, tmp_path / "mine.yaml")
+    with open(tmp_path / "mine.yaml") as f:
+        mine = yaml.safe_load(f)
+    mine["environment"]["waves"]["seed"] = 5
+    with open(tmp_path / "mine.yaml", "w") as f:
+        yaml.safe_dump(mine, f)
+    text, note = environment_of(recording("beside.mcap", "mine.yaml"))
+    assert note is None and json.loads(text)["waves"]["seed"] == 5
+    text, note = environment_of(recording("lost.mcap", "nowhere_at_all.yaml"))
+    assert text == "" and "nowhere_at_all.yaml is not beside it nor in the scenario library" in note
+
+
+class _StandInStation:
+    """What instructor._Handler asks of its station, without ROS: a fixed snapshot of one tug in
+    tow_head_seas' sea, no scene (the page draws its placeholder box), the sea of the library
+    scenario, the installed page."""
+
+    def __init__(self, sea: dict, snapshot: dict):
+        from ament_index_python.packages import get_package_share_directory
+        from live_view import trust
+        self.web_root = os.path.join(get_package_share_directory("live_view"), "web")
+        self._sea, self._state = json.dumps(sea).encode(), json.dumps(snapshot).encode()
+        self.port = 0
+        self.refused = []
+        station = self
+
+        class Node:
+            web_policy = None
+
+            @staticmethod
+            def refuse_connection(kind, why):
+                station.refused.append((kind, why))
+        self.node = Node
+        self.trust = trust
+
+    def state_json(self):
+        return self._state
+
+    def scene_json(self):
+        return b'{"vessels": {}}'
+
+    def sea_json(self):
+        return self._sea
+
+
+def test_sea_surface_in_the_page(browser, artifacts):
+    """The page against a stand-in of the station (instructor's own HTTP server and handler, a
+    fixed snapshot, /api/sea of tow_head_seas): it draws the surface, whose vertex heights (and
+    its height function) are sea_environment's elevation at the snapshot's time, and shows the
+    roll, pitch and sea gauges. Screenshots are kept (sea_surface.png, sea_surface_birdseye.png)."""
+    import threading
+    import numpy as np
+    from live_view import instructor
+    from live_view.instructor import sea_description
+    from sea_environment.environment import Environment
+    text = _head_seas_environment()
+    env, _ = Environment.from_parameter(text)
+    tug = {"t": SEA_T, "x": 30.0, "y": -20.0, "z": 0.0, "q": [0.0, 0.0, 0.7071068, 0.7071068], "speed_kn": 3.5,
+           "heading_deg": 0.0, "heel_deg": 1.5, "trim_deg": 0.25, "has_command": False, "step": 2065,
+           "engine_order": 0.5, "rpm": 120.0, "steering_deg": 0.0, "steering_ordered_deg": 0.0, "stw_kn": 3.4,
+           "thrust": 1e5, "girting_ratio": 0.1, "girting_threshold": 0.5, "girting_warning": False,
+           "anchor": "stowed", "roll_deg": 3.5, "pitch_deg": -1.5, "heave": 0.4,
+           "wave_elevation": float(env.wave_elevation(SEA_T, 30.0, -20.0)), "wave_hs": 2.0,
+           "wave_encounter_period": 6.25, "wave_encounter_angle_deg": -40.0}
+    station = _StandInStation(sea_description(text), {"t": SEA_T, "sample": 1, "period": 0.1,
+                                                      "vessels": {"tug": tug}, "ropes": {}, "history": {},
+                                                      "input_topics": []})
+
+    class Handler(instructor._Handler):
+        pass
+    Handler.station = station
+    server = instructor._Server(("127.0.0.1", 0), Handler)
+    station.port = server.server_address[1]
+    station.node.web_policy = station.trust.WebPolicy("127.0.0.1", [station.port])
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    thread.start()
+    url = f"http://127.0.0.1:{station.port}/"
+    try:
+        assert _get(url + "api/sea")["waves"]["hs"] == 2.0
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "window.instructor && instructor.sea.evaluations > 0 && instructor.frames > 1", 30)
+        # the height function and the drawn vertices (inside the taper) against the physics' sea
+        heights = page.evaluate("(pts) => pts.map(([x, y, t]) => instructor.seaHeight(x, y, t))", SEA_POINTS)
+        for (x, y, t), z in zip(SEA_POINTS, heights):
+            assert z == pytest.approx(float(env.wave_elevation(t, x, y)), abs=1e-9), (x, y, t, z)
+        verts = page.evaluate("() => [[40, 40], [33, 49], [47, 31], [40, 14], [64, 44]].map("
+                              "([i, j]) => instructor.seaVertex(i, j))")
+        assert all(v["t"] == SEA_T and v["cells"] == 80 and v["size"] == 800 for v in verts), verts
+        assert (verts[0]["x"], verts[0]["y"]) == (30.0, -20.0), verts[0]  # centred on the tug, whole 10 m cells
+        truth = env.wave_elevation(SEA_T, np.array([v["x"] for v in verts]), np.array([v["y"] for v in verts]))
+        assert np.allclose([v["z"] for v in verts], truth, atol=1e-5), (verts, truth)  # float32 positions
+        assert np.ptp(truth) > 0.3, truth  # not a flat sea by chance
+        gauges = page.evaluate("() => Object.fromEntries(['roll', 'pitch', 'hs', 'te', 'seafrom'].map(k => [k, "
+                               "document.querySelector(`#g-tug-${k} .value`).textContent]))")
+        assert gauges == {"roll": "3.5 stbd", "pitch": "1.5 bow up", "hs": "2.0", "te": "6.3", "seafrom": "40 stbd"}, \
+            gauges
+        ms = page.evaluate("instructor.sea.ms")
+        page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+        artifacts("sea_surface.png", page.screenshot())
+        page.click("#camera-bar button[data-camera=birdseye]")
+        page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+        artifacts("sea_surface_birdseye.png", page.screenshot())
+        assert not errors, errors
+        page.close()
+    finally:
+        server.shutdown()
+        server.server_close()
+    print(f"sea surface: {ms:.1f} ms a snapshot in the page")

@@ -124,7 +124,8 @@ def _truth(rec, vessel, step, period_ns):
     return {"x": od.pose.pose.position.x, "y": od.pose.pose.position.y, "sog": math.hypot(ve, vn) * 3600 / 1852,
             "cog": math.degrees(math.atan2(ve, vn)) % 360, "hdg": (90 - math.degrees(yaw)) % 360,
             "rot": -math.degrees(w_world[2]) * 60, "rudder": -math.degrees(st.steering_angle),
-            "rpm": st.shaft_speed * 60 / (2 * math.pi)}
+            "rpm": st.shaft_speed * 60 / (2 * math.pi), "roll": math.degrees(st.heel + st.roll),
+            "pitch": math.degrees(st.trim + st.pitch)}
 
 
 def _angle_diff(a, b):
@@ -163,8 +164,8 @@ def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
     steps_seen = []
     for rmc, rest, ais in reports:
         kinds = [m.sentence_type for m in rest]
-        assert kinds[:7] == ["GGA", "VTG", "HDT", "ROT", "RSA", "RPM", "RPM"] and kinds[7:] == ["XDR"], kinds
-        gga, vtg, hdt, rot, rsa, rpm_e, rpm_s, xdr = rest
+        assert kinds[:7] == ["GGA", "VTG", "HDT", "ROT", "RSA", "RPM", "RPM"] and kinds[7:] == ["XDR", "XDR"], kinds
+        gga, vtg, hdt, rot, rsa, rpm_e, rpm_s, xdr, att = rest
         when = dt.datetime.combine(rmc.datestamp, rmc.timestamp)
         t = (when - start).total_seconds()
         step = round(t * 50)
@@ -189,6 +190,11 @@ def test_nmea_and_ais_out_of_a_paced_run(tmp_path, ros_domain):
         assert abs(float(rpm_s.speed) - truth["rpm"]) <= 0.06
         f = rope_state[step].end_a_force
         tension = math.sqrt(f.x ** 2 + f.y ** 2 + f.z ** 2)
+        # the attitude: pitch bow up +, roll starboard down + (REP-103 pitch is bow down +)
+        assert [att.get_transducer(i)[::2] for i in range(2)] == [("A", "D"), ("A", "D")], att
+        assert [att.get_transducer(i).id for i in range(2)] == ["PTCH", "ROLL"], att
+        assert abs(float(att.get_transducer(0).value) + truth["pitch"]) <= 0.051, (step, att, truth)
+        assert abs(float(att.get_transducer(1).value) - truth["roll"]) <= 0.051, (step, att, truth)
         assert xdr.type == "N" and xdr.units == "N" and xdr.id == "towline"
         assert abs(float(xdr.value) - tension) <= 0.06 + 1e-6 * tension, (step, xdr, tension)
         checked["tension"] += tension > 100.0
@@ -240,3 +246,28 @@ def test_a_run_whose_instrument_dies_stops_naming_it(tmp_path, ros_domain):
             run.kill()
     assert run.returncode == 3, stderr
     assert "instrument /bridge/nmea_out died (exit code -9)" in stderr and str(log) in stderr, stderr
+
+
+def test_attitude_sentence_of_a_status_message():
+    """$IIXDR pitch / roll from a tug_msgs/VesselStatus, in process: the totals (heel + roll,
+    trim + pitch), REP-103 pitch (bow down +) turned into the bus's bow up +, roll (starboard
+    down +) kept; the checksum and fields as pynmea2 parses them."""
+    import pynmea2
+    from tug_msgs.msg import VesselStatus
+    from bridge_instruments.nmea_out import attitude
+    from bridge_instruments import sentences as S
+    st = VesselStatus(heel=math.radians(2.0), roll=math.radians(1.25), trim=math.radians(0.5),
+                      pitch=math.radians(-3.0))
+    pitch, roll = attitude(st)
+    assert pitch == pytest.approx(2.5) and roll == pytest.approx(3.25)  # bow up 2.5 deg, starboard down 3.25
+    line = S.attitude_xdr(pitch, roll)
+    assert line == "$IIXDR,A,2.5,D,PTCH,A,3.2,D,ROLL*" + line.rsplit("*", 1)[1], line  # 3.25 -> 3.2 (half-even)
+    msg = pynmea2.parse(line, check=True)
+    assert msg.talker == "II" and msg.sentence_type == "XDR" and msg.num_transducers == 2
+    assert tuple(msg.get_transducer(0)) == ("A", "2.5", "D", "PTCH")
+    assert tuple(msg.get_transducer(1)) == ("A", "3.2", "D", "ROLL")
+    # a calm, level vessel heeled to port and trimmed by the head
+    st = VesselStatus(heel=math.radians(-4.0), trim=math.radians(1.0))
+    assert S.attitude_xdr(*attitude(st)).startswith("$IIXDR,A,-1.0,D,PTCH,A,-4.0,D,ROLL*")
+    with pytest.raises(pynmea2.ChecksumError):
+        pynmea2.parse(line[:-2] + ("00" if line[-2:] != "00" else "01"), check=True)

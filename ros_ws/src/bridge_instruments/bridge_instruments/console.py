@@ -5,8 +5,11 @@
 Keys (controls.HELP): engine order in steps of 0.1, helm in steps of 5 deg, winch pay out /
 heave in / hold, anchor let go / heave up; a joystick (SDL through pygame) when one is present.
 It shows speed over ground (kn), heading (deg true), rate of turn (deg/min), engine order and
-shaft rpm, helm ordered and actual, each towline's tension against its breaking load, the
-girting ratio against its threshold, and a warning when either comes near its limit (80 %).
+shaft rpm, helm ordered and actual, roll and pitch (the totals the odometry carries: heel + the
+wave-frequency roll, trim + pitch; degrees, roll to starboard or port, pitch bow up or down), the
+encountered sea (significant height, encounter period, where it comes from relative to the bow;
+"calm" without waves), each towline's tension against its breaking load, the girting ratio against
+its threshold, and a warning when either comes near its limit (80 %).
 
 It is an ordinary outside controller: tug_msgs/VesselCommand on /<vessel>/command and
 tug_msgs/WinchCommand on /<rope>/winch, stamped with simulation time whenever /clock is
@@ -104,7 +107,9 @@ def readout(node: ConsoleNode, orders: controls.Orders, breaking: Dict[str, Opti
                  f"{geo.compass_deg(yaw):6.1f} deg true   rate of turn {geo.rate_of_turn(tw.angular.z):+7.1f} deg/min")
     lines.append(f"engine {st.engine_order:+.2f} ({st.shaft_speed * 60 / (2 * math.pi):+6.1f} rpm)   rudder "
                  f"{-math.degrees(st.steering_angle):+5.1f} deg (ordered {-math.degrees(st.steering_angle_ordered):+5.1f}"
-                 f"; + starboard)   heel {math.degrees(st.heel):+5.1f} deg")
+                 f"; + starboard)")
+    lines.append(attitude_line(st))
+    lines.append(sea_line(st))
     lines.append(f"girting ratio {st.girting_ratio:.2f} of limit {st.girting_threshold:.2f}")
     warn += controls.warnings(st.girting_ratio, st.girting_threshold, 0.0, None)
     if st.girting_warning and not any(w.startswith("GIRTING") for w in warn):
@@ -115,6 +120,32 @@ def readout(node: ConsoleNode, orders: controls.Orders, breaking: Dict[str, Opti
                      (f" of breaking load {bl / 1e3:.1f} kN ({100 * tension / bl:.0f} %)" if bl else ""))
         warn += controls.warnings(0.0, 0.0, tension, bl)
     return "\n".join(lines), warn
+
+
+def attitude_line(st) -> str:
+    """Roll and pitch of a tug_msgs/VesselStatus in words: the totals (heel + roll, trim + pitch,
+    REP-103: roll + starboard side down, pitch + bow down), and the heave."""
+    roll, pitch = math.degrees(st.heel + st.roll), math.degrees(st.trim + st.pitch)
+    side = "stbd" if roll > 0.05 else "port" if roll < -0.05 else "    "
+    bow = "bow down" if pitch > 0.05 else "bow up  " if pitch < -0.05 else "level   "
+    return (f"roll {abs(roll):4.1f} deg {side} (heel {math.degrees(st.heel):+5.1f})   pitch {abs(pitch):4.1f} deg "
+            f"{bow} (trim {math.degrees(st.trim):+5.1f})   heave {st.heave:+5.2f} m")
+
+
+def sea_line(st) -> str:
+    """The sea the vessel meets (status' sea block): Hs, encounter period, the angle it comes
+    from relative to the bow (0 head seas, + from port), the surface at the vessel."""
+    hs = st.wave_significant_height
+    if not hs > 0.0:
+        return "sea calm"
+    te = st.wave_encounter_period
+    angle = math.degrees(st.wave_encounter_angle)
+    a = abs(angle)
+    side = "" if a < 0.5 or a > 179.5 else " port" if angle > 0 else " stbd"
+    kind = ("head seas" if a <= 30 else "on the bow" if a < 60 else "beam seas" if a <= 120 else
+            "on the quarter" if a < 150 else "following seas")
+    return (f"sea Hs {hs:4.1f} m   encounter period {f'{te:5.1f} s' if math.isfinite(te) else '  inf'}   from "
+            f"{a:3.0f} deg{side} ({kind})   surface {st.wave_elevation:+5.2f} m")
 
 
 class Joystick:

@@ -5,8 +5,10 @@
 
 For every own vessel (`outputs`: "vessel@host:port") it sends, over UDP to that destination, one
 sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one XDR per rope
-with an end on the vessel (its tension), and for every other vessel of the run an AIS VDM
-position report (type 1) and, the first time and every `static_every`-th time, its static data
+with an end on the vessel (its tension), an XDR of its pitch and roll (attitude(): the REP-103
+angles of /<vessel>/status converted to the bus's bow-up / starboard-down convention), and for
+every other vessel of the run an AIS VDM position report (type 1) and, the first time and every
+`static_every`-th time, its static data
 (type 5, length and beam from its ship file, with the `ship_overrides` of the scenario named by
 the parameter `scenario` merged over it: scenario_format/particulars.py). Sentence
 formats: bridge_instruments/sentences.py.
@@ -87,6 +89,14 @@ def _pairs(items: List[str], what: str) -> Dict[str, str]:
             raise ValueError(f"{what} {item!r}: expected 'name=value'")
         out[key] = value
     return out
+
+
+def attitude(status) -> Tuple[float, float]:
+    """(pitch, roll) in degrees as the XDR attitude sentence carries them (sentences.attitude_xdr:
+    pitch + bow up, roll + starboard side down) from a tug_msgs/VesselStatus: the totals, trim +
+    pitch and heel + roll (manoeuvring plus wave-frequency). REP-103 has pitch + bow DOWN, so it
+    changes sign here, at the edge, and nowhere else; roll + starboard down is the same in both."""
+    return -math.degrees(status.trim + status.pitch), math.degrees(status.heel + status.roll)
 
 
 class Destination:
@@ -268,7 +278,7 @@ class NmeaOut(Node):
                 tensions.append((rope, math.sqrt(sum(c * c for c in w.force))))
             lines = S.own_ship_sentences(S.OwnShip(
                 t, k["lat"], k["lon"], k["sog"], k["cog"], k["hdg"], k["rot"], -math.degrees(st.steering_angle),
-                shaft_rpm, shaft_rpm * self.gear.get(own, 1.0), tuple(tensions)), self.utc_start)
+                shaft_rpm, shaft_rpm * self.gear.get(own, 1.0), tuple(tensions), *attitude(st)), self.utc_start)
             for other in self.vessels:
                 if other == own:
                     continue

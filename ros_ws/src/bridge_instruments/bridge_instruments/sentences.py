@@ -17,6 +17,13 @@ simulation time of the state they report, UTC = utc_start + t):
   $ERRPM  E (engine) 1 and S (shaft) 1, rpm (negative: turning astern), pitch empty (fixed
           pitch), A
   $IIXDR  N (force), tension N, N (newton), the rope's name: one per rope with an end on the vessel
+  $IIXDR  A, pitch, D, PTCH, A, roll, D, ROLL: the vessel's attitude (angular displacement, degrees,
+          to 0.1 deg) in the convention of motion sensors on the bus (Airmar PB200 / LB150 manuals,
+          XDR "B" sentence: pitch positive when the bow moves up, roll positive to starboard, i.e.
+          starboard side down; OpenCPN's dashboard reads PTCH / ROLL as they come). The simulation's
+          REP-103 angles (pitch positive bow DOWN, roll positive starboard down) are converted at
+          this edge only (nmea_out.attitude): pitch changes sign, roll keeps it. The angles are the
+          totals the odometry carries: manoeuvring heel / trim plus the wave-frequency roll / pitch.
 other vessels:
   !AIVDM  type 1 position report (every time) and type 5 static and voyage data (every
           `static_every`-th time and the first), channel A.
@@ -24,7 +31,7 @@ other vessels:
 from __future__ import annotations
 
 import datetime as _dt
-from typing import List, NamedTuple, Sequence, Tuple
+from typing import List, NamedTuple, Optional, Sequence, Tuple
 
 import pyais
 import pynmea2
@@ -46,6 +53,8 @@ class OwnShip(NamedTuple):
     shaft_rpm: float  # - astern
     engine_rpm: float
     tensions: Tuple[Tuple[str, float], ...] = ()  # (rope name, N)
+    pitch_deg: Optional[float] = None  # + bow up (NMEA XDR PTCH); None: no attitude sentence
+    roll_deg: Optional[float] = None  # + starboard side down (NMEA XDR ROLL)
 
 
 class Target(NamedTuple):
@@ -123,7 +132,15 @@ def own_ship_sentences(s: OwnShip, utc_start: _dt.datetime) -> List[str]:
         _render("ER", "RPM", ("S", "1", _num(s.shaft_rpm, 1), "", "A")),
     ]
     out += [_render("II", "XDR", ("N", _num(tension, 1), "N", name)) for name, tension in s.tensions]
+    if s.pitch_deg is not None and s.roll_deg is not None:
+        out.append(attitude_xdr(s.pitch_deg, s.roll_deg))
     return out
+
+
+def attitude_xdr(pitch_deg: float, roll_deg: float) -> str:
+    """$IIXDR,A,<pitch>,D,PTCH,A,<roll>,D,ROLL*hh: pitch + bow up, roll + starboard side down,
+    degrees to 0.1 (the module docstring names the convention)."""
+    return _render("II", "XDR", ("A", _num(pitch_deg, 1), "D", "PTCH", "A", _num(roll_deg, 1), "D", "ROLL"))
 
 
 def _clip(v: float, lo: float, hi: float) -> float:

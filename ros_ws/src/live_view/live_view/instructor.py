@@ -15,10 +15,23 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
   GET  /api/state    the newest snapshot (JSON), sampled at ``http_rate`` (default 10 Hz) by one
                      thread whatever the number of clients: sim time, per vessel pose, speed (kn),
                      heading (deg true = (90 - yaw) mod 360), engine order and rpm, rudder/bucket
-                     angle, heel, girting ratio; per rope the polyline of its connections with their
-                     tensions, peak tension, breaking load, deployed length, winch order; the
-                     tension history of the last HISTORY_SECONDS of simulated time
+                     angle, heel, girting ratio, roll and pitch (heel + roll, trim + pitch, deg,
+                     REP-103), heave, the encountered sea (Hs, encounter period, angle); per
+                     rope the polyline of its connections with their tensions, peak tension,
+                     breaking load, deployed length, winch order; the tension history of the last
+                     HISTORY_SECONDS of simulated time
   GET  /api/scene    per vessel the hull, deck and attachment points (body frame) of its markers
+  GET  /api/sea      the run's sea (sea_description): {"waves": null} on a calm sea, else the
+                     components of the very WaveField the vessel nodes sample (built here from the
+                     same environment text: spectrum, seed and all), amplitude, omega, kx, ky,
+                     phase, and the start-up ramp time, which the page sums at each snapshot's
+                     simulation time over a grid around the followed vessel (eta = r(t) sum a_i
+                     cos(kx_i x + ky_i y - omega_i t + phase_i)). Components rather than a height
+                     grid: a few kB once instead of a grid every sample, no sampler CPU in the
+                     runner's process, and the page can draw the sea wherever its camera goes.
+                     The environment comes from the parameter ``environment`` (run_scenario --live
+                     passes the run's, as to its vessel nodes), else from the scenario
+                     ``particulars`` names (a recording: its scenario, beside it or in the library)
   POST /api/publish?topic=/<vessel>/command | /<rope>/winch   JSON body as the WebSocket clients
                      send it ({"engine_order": .., "steering_angle": .., "anchor": ..},
                      {"payout_rate": ..}); handed to LiveViewNode.take_input(): client_input.py's
@@ -120,6 +133,28 @@ def rope_polyline(state) -> Tuple[List[List[float]], List[float]]:
 
 
 
+def sea_description(environment: str) -> dict:
+    """What GET /api/sea answers for a run's environment (the nodes' `environment` parameter
+    text): {"waves": null} on a calm sea (no waves, hs 0, or no environment), else {"waves": {hs,
+    tp, from_deg, spectrum, depth (m, null = deep), ramp_time (s), amplitude, omega, kx, ky, phase
+    (per component: m, rad/s, rad/m, rad/m, rad)}}: the components of the WaveField
+    sea_environment builds from it, as the vessel nodes do (Environment.from_parameter), so the
+    page's surface is the physics' sea. ValueError for an environment that does not load."""
+    from sea_environment.environment import Environment
+    from sea_environment.waves import C_KX, C_KY
+    if not environment:
+        return {"waves": None}
+    env, _ = Environment.from_parameter(environment)
+    w = env.waves
+    if w is None:
+        return {"waves": None}
+    spec, rows = env.spec.waves, w.rows
+    return {"waves": {"hs": spec.hs, "tp": spec.tp, "from_deg": spec.from_deg, "spectrum": spec.spectrum,
+                      "depth": w.depth if math.isfinite(w.depth) else None, "ramp_time": w.ramp_time,
+                      "amplitude": w.amplitude.tolist(), "omega": w.omega.tolist(), "kx": rows[:, C_KX].tolist(),
+                      "ky": rows[:, C_KY].tolist(), "phase": w.phase.tolist()}}
+
+
 class InstructorStation:
     """The HTTP server of the page and its sampler thread (see the module docstring). Lives as long
     as the live view node: started by it, stopped with its servers."""
@@ -149,6 +184,7 @@ class InstructorStation:
                 self.breaking.update(breaking_loads_from(particulars))
             except Exception as exc:  # noqa: BLE001 - a bad file only costs the breaking loads
                 self.log.warning(f"instructor station: no breaking loads from {particulars!r}: {exc}")
+        self._sea_json = json.dumps(self._sea(particulars)).encode()
         self._asked: Dict[str, float] = {}
         self._spent_clients: List[object] = []
         self._history: Dict[str, Deque[Tuple[float, float]]] = {}
@@ -178,6 +214,32 @@ class InstructorStation:
         from rclpy.clock import Clock, ClockType
         self._ask_timer = node.create_timer(2.0, self._ask_rope_nodes, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.log.info(f"instructor station on {self.url} (display period {1000 * self.period:.0f} ms)")
+
+    def _sea(self, particulars: str) -> dict:
+        """sea_description of the parameter `environment`, else of the scenario `particulars`
+        names; calm (with a note in the log and the answer) when neither gives one."""
+        from scenario_format.particulars import environment_of
+        text, note = self.node.get_parameter("environment").value, None
+        if not text and particulars:
+            try:
+                text, note = environment_of(particulars)
+            except Exception as exc:  # noqa: BLE001 - a bad file only costs the waves
+                note = f"no environment from {particulars!r}: {exc}"
+        try:
+            sea = sea_description(text)
+        except Exception as exc:  # noqa: BLE001 - the page shows flat water
+            sea, note = {"waves": None}, f"the environment does not load: {exc}"
+        if note:
+            self.log.warning(f"instructor station: calm sea drawn: {note}")
+            sea["note"] = note
+        elif sea["waves"] is not None:
+            w = sea["waves"]
+            self.log.info(f"instructor station: the run's sea, Hs {w['hs']:g} m, Tp {w['tp']:g} s, from "
+                          f"{w['from_deg']:g} deg ({len(w['amplitude'])} components)")
+        return _clean(sea)
+
+    def sea_json(self) -> bytes:
+        return self._sea_json
 
     def stop(self) -> None:
         self._stop.set()
@@ -295,7 +357,12 @@ class InstructorStation:
                          girting_ratio=_finite_or_none(status.girting_ratio),
                          girting_threshold=_finite_or_none(status.girting_threshold),
                          girting_warning=bool(status.girting_warning),
-                         anchor=ANCHOR_STATES.get(status.anchor_state, str(status.anchor_state)))
+                         anchor=ANCHOR_STATES.get(status.anchor_state, str(status.anchor_state)),
+                         roll_deg=math.degrees(status.heel + status.roll),
+                         pitch_deg=math.degrees(status.trim + status.pitch), heave=status.heave,
+                         wave_elevation=status.wave_elevation, wave_hs=status.wave_significant_height,
+                         wave_encounter_period=_finite_or_none(status.wave_encounter_period),
+                         wave_encounter_angle_deg=math.degrees(status.wave_encounter_angle))
             vessels[v] = d
         for r in self._names("/state"):
             state = self._decode(T.rope_topic(r, T.STATE), "state")
@@ -458,6 +525,8 @@ class _Handler(http.server.BaseHTTPRequestHandler):
             self._send(200, self.station.state_json())
         elif path == "/api/scene":
             self._send(200, self.station.scene_json())
+        elif path == "/api/sea":
+            self._send(200, self.station.sea_json())
         elif path in FILES:
             name, ctype = FILES[path]
             try:

@@ -1,7 +1,8 @@
 // tugsim instructor station: 3D view, gauges, tension plot and orders for a running simulation or
 // a replay. Talks only to the live view node that served it: GET /api/state (a snapshot sampled at
-// the node's http_rate), GET /api/scene (hull shapes), POST /api/publish?topic=... (orders, checked
-// by the node like any client's). World frame: ENU (x east, y north, z up), as the simulation's.
+// the node's http_rate), GET /api/scene (hull shapes), GET /api/sea (the run's wave components),
+// POST /api/publish?topic=... (orders, checked by the node like any client's). World frame: ENU
+// (x east, y north, z up), as the simulation's.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/OrbitControls.js';
 
@@ -44,6 +45,141 @@ grid.position.z = 0.02;
 grid.material.transparent = true;
 grid.material.opacity = 0.45;
 scene3.add(grid);
+
+// ---------------------------------------------------------------- the sea
+// GET /api/sea gives the components of the run's WaveField (sea_environment, the same seed the
+// vessel nodes use): eta(x, y, t) = r(t) sum a_i cos(kx_i x + ky_i y - omega_i t + phase_i), r the
+// half-cosine start-up ramp. The surface is a SEA_CELLS x SEA_CELLS grid of SEA_SIZE metres around
+// the followed vessel (snapped to whole cells so it does not swim), its vertex heights the sea at
+// the snapshot's simulation time (every component; drawn between the vertices as flat triangles);
+// its outer SEA_TAPER fraction eases down to the flat water beyond. A calm sea (no waves, hs 0):
+// the flat water as before. The sum costs (cells + 1)^2 x components multiply-adds a snapshot (the
+// cosines are taken per grid line: cos(A + B) = cos A cos B - sin A sin B).
+const SEA_SIZE = 800, SEA_CELLS = 80, SEA_TAPER = 0.2;
+const sea = { waves: null, mesh: null, frame: null, t: null, evaluations: 0, ms: 0 };
+app.sea = sea;
+function seaRamp(t) {
+  const T = sea.waves.ramp_time;
+  if (!(T > 0)) return 1;
+  if (t <= 0) return 0;
+  return t >= T ? 1 : 0.5 * (1 - Math.cos(Math.PI * t / T));
+}
+// the sea's elevation (m) at one point and time, every component: for tests and the curious
+app.seaHeight = (x, y, t) => {
+  const w = sea.waves;
+  if (!w) return 0;
+  let eta = 0;
+  for (let i = 0; i < w.amplitude.length; i++) {
+    eta += w.amplitude[i] * Math.cos(w.kx[i] * x + w.ky[i] * y - w.omega[i] * t + w.phase[i]);
+  }
+  return seaRamp(t) * eta;
+};
+function buildSea(w) {
+  sea.waves = w;
+  const n = SEA_CELLS + 1, d = SEA_SIZE / SEA_CELLS;
+  const pos = new Float32Array(3 * n * n), col = new Float32Array(3 * n * n), idx = [];
+  for (let iy = 0; iy < n; iy++) {
+    for (let ix = 0; ix < n; ix++) {
+      const k = iy * n + ix;
+      pos[3 * k] = -SEA_SIZE / 2 + ix * d; pos[3 * k + 1] = -SEA_SIZE / 2 + iy * d;
+      if (ix < SEA_CELLS && iy < SEA_CELLS) idx.push(k, k + 1, k + n + 1, k, k + n + 1, k + n);
+    }
+  }
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+  g.setAttribute('color', new THREE.BufferAttribute(col, 3));
+  g.setIndex(idx);
+  sea.mesh = new THREE.Mesh(g, new THREE.MeshPhongMaterial({ vertexColors: true, shininess: 40, specular: 0x2a4455,
+    transparent: true, opacity: 0.93, side: THREE.DoubleSide }));
+  sea.mesh.frustumCulled = false;
+  scene3.add(sea.mesh);
+  // the flat water beyond the surface: a frame with the surface's square cut out
+  const outer = new THREE.Shape();
+  outer.moveTo(-20000, -20000); outer.lineTo(20000, -20000); outer.lineTo(20000, 20000); outer.lineTo(-20000, 20000);
+  const hole = new THREE.Path(), h = SEA_SIZE / 2 - 0.5 * d;
+  hole.moveTo(-h, -h); hole.lineTo(-h, h); hole.lineTo(h, h); hole.lineTo(h, -h);
+  outer.holes.push(hole);
+  sea.frame = new THREE.Mesh(new THREE.ShapeGeometry(outer), water.material);
+  scene3.add(sea.frame);
+  water.visible = false;
+  grid.visible = false;
+  const m = w.amplitude.length;
+  sea.cx = new Float64Array(n * m); sea.sx = new Float64Array(n * m);
+  sea.cy = new Float64Array(n * m); sea.sy = new Float64Array(n * m);
+  sea.lastKey = null;
+}
+const deepColor = new THREE.Color(0x08304a), crestColor = new THREE.Color(0x5f9ab8), tmpColor = new THREE.Color();
+function updateSea(t, px, py) {
+  const w = sea.waves;
+  if (!w || t === null || t === undefined) return;
+  const n = SEA_CELLS + 1, d = SEA_SIZE / SEA_CELLS, m = w.amplitude.length;
+  const ox = Math.round(px / d) * d, oy = Math.round(py / d) * d;  // the surface's centre, whole cells
+  const key = `${t}|${ox}|${oy}`;
+  if (key === sea.lastKey) return;
+  sea.lastKey = key;
+  const t0 = performance.now();
+  const r = seaRamp(t);
+  const { cx, sx, cy, sy } = sea;
+  for (let i = 0; i < n; i++) {
+    const x = ox - SEA_SIZE / 2 + i * d, y = oy - SEA_SIZE / 2 + i * d;
+    for (let j = 0; j < m; j++) {
+      const a = w.kx[j] * x, b = w.ky[j] * y - w.omega[j] * t + w.phase[j];
+      cx[i * m + j] = Math.cos(a); sx[i * m + j] = Math.sin(a);
+      cy[i * m + j] = w.amplitude[j] * Math.cos(b); sy[i * m + j] = w.amplitude[j] * Math.sin(b);
+    }
+  }
+  const pos = sea.mesh.geometry.attributes.position.array, col = sea.mesh.geometry.attributes.color.array;
+  const half = SEA_SIZE / 2, inner = (1 - SEA_TAPER) * half, hs = Math.max(0.1, w.hs);
+  for (let iy = 0; iy < n; iy++) {
+    const yo = iy * m, ly = Math.abs(-half + iy * d);
+    for (let ix = 0; ix < n; ix++) {
+      const xo = ix * m;
+      let eta = 0;
+      for (let j = 0; j < m; j++) eta += cx[xo + j] * cy[yo + j] - sx[xo + j] * sy[yo + j];  // a cos(A + B)
+      const edge = Math.max(Math.abs(-half + ix * d), ly);
+      const z = r * eta * (edge <= inner ? 1 : Math.max(0, (half - edge) / (half - inner)));
+      const k = iy * n + ix;
+      pos[3 * k + 2] = z;
+      tmpColor.lerpColors(deepColor, crestColor, Math.max(0, Math.min(1, 0.5 + z / hs)));
+      col[3 * k] = tmpColor.r; col[3 * k + 1] = tmpColor.g; col[3 * k + 2] = tmpColor.b;
+    }
+  }
+  sea.mesh.position.set(ox, oy, 0);
+  sea.frame.position.set(ox, oy, 0);
+  sea.mesh.geometry.attributes.position.needsUpdate = true;
+  sea.mesh.geometry.attributes.color.needsUpdate = true;
+  sea.mesh.geometry.computeVertexNormals();
+  sea.t = t; sea.ox = ox; sea.oy = oy;
+  sea.evaluations += 1;
+  sea.ms = performance.now() - t0;
+}
+// the surface as drawn at grid vertex (ix, iy): its world x, y, height and time; for tests
+app.seaVertex = (ix, iy) => {
+  if (!sea.mesh) return null;
+  const n = SEA_CELLS + 1, k = iy * n + ix, p = sea.mesh.geometry.attributes.position.array;
+  return { x: sea.ox + p[3 * k], y: sea.oy + p[3 * k + 1], z: p[3 * k + 2], t: sea.t, cells: SEA_CELLS,
+    size: SEA_SIZE };
+};
+async function askSea() {
+  try {
+    const d = await (await fetch('/api/sea', { cache: 'no-store' })).json();
+    sea.note = d.note || null;
+    if (d.waves && d.waves.amplitude && d.waves.amplitude.length) {
+      buildSea(d.waves);
+      if (app.snap) seaFollow(app.snap);
+      dirty = true;
+    }
+    sea.asked = true;
+  } catch (e) {
+    setTimeout(askSea, 2000);  // asked again
+  }
+}
+function seaFollow(s) {
+  if (!sea.waves || s.t === null) return;
+  const names = Object.keys(s.vessels).sort();
+  const v = (app.selected && s.vessels[app.selected]) || (names.length ? s.vessels[names[0]] : null);
+  updateSea(s.t, v ? v.x : 0, v ? v.y : 0);
+}
 
 const vessels3 = new Map();  // name -> {group, length, hasGeometry, label}
 const ropes3 = new Map();    // name -> {group, meshes: []}
@@ -280,7 +416,9 @@ function buildGauges(s) {
       gauge(`g-${n}-speed`, 'speed kn') + gauge(`g-${n}-heading`, 'heading deg T') +
       gauge(`g-${n}-engine`, 'engine order') + gauge(`g-${n}-rpm`, 'shaft rpm') +
       gauge(`g-${n}-rudder`, 'rudder / bucket deg') + gauge(`g-${n}-heel`, 'heel deg') +
-      gauge(`g-${n}-girting`, 'girting ratio');
+      gauge(`g-${n}-girting`, 'girting ratio') + gauge(`g-${n}-roll`, 'roll deg') +
+      gauge(`g-${n}-pitch`, 'pitch deg') + gauge(`g-${n}-hs`, 'sea Hs m') + gauge(`g-${n}-te`, 'encounter s') +
+      gauge(`g-${n}-seafrom`, 'sea from deg');
   }).join('');
   $('rope-gauges').innerHTML = rs.map((r) => {
     const n = safe(r);
@@ -318,6 +456,23 @@ function updateGauges(s) {
     const gr = v.girting_ratio, thr = v.girting_threshold || 1;
     setGauge(`g-${n}-girting`, gr === null || gr === undefined ? '--' : `${fmt(gr, 2)} / ${fmt(thr, 2)}`, gr, v.t,
       (gr || 0) / thr, v.girting_warning ? 'alarm' : (gr || 0) > 0.7 * thr ? 'warn' : '');
+    // roll and pitch: the totals (heel + roll, trim + pitch; REP-103: roll + starboard side down,
+    // pitch + bow down), shown with the side down / the way the bow points
+    const roll = v.roll_deg, pitch = v.pitch_deg;
+    setGauge(`g-${n}-roll`, roll === undefined ? '--' :
+      `${fmt(Math.abs(roll), 1)} ${roll > 0.05 ? 'stbd' : roll < -0.05 ? 'port' : ''}`,
+    roll, v.t, Math.abs(roll || 0) / 20, Math.abs(roll || 0) > 10 ? 'warn' : '');
+    setGauge(`g-${n}-pitch`, pitch === undefined ? '--' :
+      `${fmt(Math.abs(pitch), 1)} ${pitch > 0.05 ? 'bow dn' : pitch < -0.05 ? 'bow up' : ''}`,
+    pitch, v.t, Math.abs(pitch || 0) / 10, Math.abs(pitch || 0) > 5 ? 'warn' : '');
+    // the encountered sea: Hs, encounter period, where it comes from off the bow (+ port)
+    const calm = !(v.wave_hs > 0), ang = v.wave_encounter_angle_deg;
+    setGauge(`g-${n}-hs`, v.wave_hs === undefined ? '--' : calm ? 'calm' : fmt(v.wave_hs, 1), v.wave_hs, v.t,
+      (v.wave_hs || 0) / 6);
+    setGauge(`g-${n}-te`, calm ? '--' : fmt(v.wave_encounter_period, 1), calm ? null : v.wave_encounter_period, v.t, 0);
+    setGauge(`g-${n}-seafrom`, calm || ang === undefined ? '--' : `${fmt(Math.abs(ang), 0)} ` +
+      `${Math.abs(ang) < 0.5 ? 'ahead' : Math.abs(ang) > 179.5 ? 'astern' : ang > 0 ? 'port' : 'stbd'}`,
+    calm ? null : ang, v.t, Math.abs(ang || 0) / 180);
     const an = $(`g-${n}-anchor`);
     if (an) an.textContent = `anchor ${v.anchor || '-'}; through water ${fmt(v.stw_kn, 2)} kn`;
   }
@@ -485,6 +640,7 @@ function apply(s) {
     o.group.position.set(v.x, v.y, v.z);
     o.group.quaternion.set(v.q[0], v.q[1], v.q[2], v.q[3]);
   }
+  seaFollow(s);
   for (const r of Object.values(s.ropes)) app.peakSeen = Math.max(app.peakSeen, r.tension);
   for (const [name, r] of Object.entries(s.ropes)) updateRope(name, r);
   updateGauges(s);
@@ -520,5 +676,6 @@ async function poll() {
 
 setCamera(app.camera);
 showSliders();
+askSea();
 poll();
 requestAnimationFrame(render);

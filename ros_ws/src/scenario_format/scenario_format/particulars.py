@@ -103,6 +103,31 @@ def breaking_loads_from(path: str) -> Dict[str, Optional[float]]:
     return breaking_loads(particulars(path, sc))
 
 
+def environment_of(path: str) -> Tuple[str, Optional[str]]:
+    """(the run's environment as the nodes' `environment` parameter text, note) from a scenario (a
+    path or a library name) or a recording (.mcap: the scenario its particulars name, beside it
+    or in the scenario library, as the analysis finds it: a recording carries its scenario's
+    name, not its environment). ("", why) when there is none to read; ValueError naming the file
+    for a scenario that does not load."""
+    from scenario_format.scenario import environment_parameter
+    if path.endswith(".mcap"):
+        name = particulars_of_recording(path).get("scenario")
+        if not name:
+            return "", f"{path}: no particulars naming its scenario (an older or a rosbag2 recording)"
+        found = resolve_data_file("scenario_runner", "scenarios", os.path.basename(str(name)),
+                                  relative_to=os.path.abspath(path))
+        if not os.path.isfile(found):
+            return "", f"the recording's scenario {name} is not beside it nor in the scenario library"
+        path = found
+    else:
+        path = scenario_path(path)
+    try:
+        sc = load_scenario(path, check_files=False)
+    except ScenarioError as exc:
+        raise ValueError(str(exc)) from None
+    return environment_parameter(sc, path), None
+
+
 def hull_dimensions(ship_file: str, overrides: Optional[dict] = None) -> HullDimensions:
     """Length, beam, draft and kind of the hull a ship file (a path, or a name in the installed
     ships directory) describes, with `overrides` (a scenario's ship_overrides) merged over it.

@@ -262,16 +262,19 @@ def _add_tap(recorder: McapRecorder, topic: str, callback: Callable[[bytes], Non
     return recorder.tap(topic, both)
 
 
-def start_live_view(sc: Scenario, args, recorder: Optional[McapRecorder]):
+def start_live_view(sc: Scenario, path: str, args, recorder: Optional[McapRecorder]):
     """The live view node in this process: it takes every recorded topic from the recorder as
-    written (no second DDS delivery) and subscribes the rest."""
+    written (no second DDS delivery) and subscribes the rest; it gets the run's environment as
+    the vessel nodes do (the instructor station draws the same sea)."""
     from live_view.live_view_node import LiveViewNode
     from rclpy.parameter import Parameter
+    from scenario_format.scenario import environment_parameter
     topics = live_topics(sc)
     offered = [t[0] for t in topics if recorder is not None and t[0] in recorder.channels]
     node = LiveViewNode(topics=topics, offered_topics=offered, parameter_overrides=[
         Parameter("port", value=int(args.live_port)), Parameter("host", value=str(args.live_host)),
-        Parameter("rate", value=float(args.live_rate)), Parameter("discover", value=False)])
+        Parameter("rate", value=float(args.live_rate)), Parameter("discover", value=False),
+        Parameter("environment", value=environment_parameter(sc, path))])
     for t in offered:
         _add_tap(recorder, t, lambda data, t=t: node.offer(t, data))
     return node
@@ -337,7 +340,7 @@ def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim], starting: 
     live = None
     if args.live and starting.signum is None:
         try:
-            live = start_live_view(plan.sc, args, recorder)
+            live = start_live_view(plan.sc, plan.path, args, recorder)
         except Exception as exc:  # noqa: BLE001 - e.g. the port is taken: said before anything starts
             sys.stderr.write(f"run_scenario: --live: cannot start the live view on {args.live_host}:"
                              f"{args.live_port}: {exc}\n")

@@ -241,6 +241,10 @@ LIVE_VIEW = ParamTable(
     P("particulars", "", "Where the instructor station finds the ropes' breaking loads when no rope node "
                          "answers (a replay): a scenario file (path or library name) or a recording (.mcap, its "
                          "particulars)"),
+    P("environment", "", "The run's environment as YAML, as the vessel nodes take it (run_scenario --live passes "
+                         "it): the instructor station draws its waves (the same sea, seed and all); '' = taken "
+                         "from the scenario `particulars` names (a recording: the scenario it names, beside it or "
+                         "in the library), else calm"),
     P("web_root", "", "Folder of the instructor station's page (default: share/live_view/web)"),
 )
 
