@@ -275,8 +275,10 @@ def test_every_model_states_every_status_field_the_message_carries(path):
     """The node fills tug_msgs/VesselStatus from status(): each model's record must hold every
     physical field of the message (the float fields the encoder writes, the anchor state and the
     girting warning) with a real value, never a default filled in by the node."""
-    from sim_plumbing.cdr import VESSEL_STATUS_FLOATS_A, VESSEL_STATUS_FLOATS_B, VESSEL_STATUS_FLOATS_ENV
+    from sim_plumbing.cdr import (VESSEL_STATUS_FLOATS_A, VESSEL_STATUS_FLOATS_B, VESSEL_STATUS_FLOATS_ENV,
+                                  VESSEL_STATUS_FLOATS_SEA)
     from tug_dynamics.environment_loads import EnvironmentStatus
+    from tug_dynamics.seakeeping import SeaStatus
     ship = load_ship(path)
     ship.set_command(Command(0.5, math.radians(10.0)))
     run(ship, 5.0, 0.05)
@@ -287,6 +289,10 @@ def test_every_model_states_every_status_field_the_message_carries(path):
     environment = {f.name for f in dataclasses.fields(EnvironmentStatus)}
     assert environment == set(VESSEL_STATUS_FLOATS_ENV) | {"grounded"}
     node_filled |= environment
+    # and the sea block from its response to the waves (tug_dynamics.seakeeping)
+    sea = {f.name for f in dataclasses.fields(SeaStatus)}
+    assert sea == set(VESSEL_STATUS_FLOATS_SEA)
+    node_filled |= sea
     for name, kind in _vessel_status_fields():
         if name in node_filled:
             continue
@@ -297,7 +303,7 @@ def test_every_model_states_every_status_field_the_message_carries(path):
             assert isinstance(value, bool), (name, value)
         else:
             assert isinstance(value, AnchorState), (name, value)
-    assert set(VESSEL_STATUS_FLOATS_A + VESSEL_STATUS_FLOATS_B + VESSEL_STATUS_FLOATS_ENV) == \
+    assert set(VESSEL_STATUS_FLOATS_A + VESSEL_STATUS_FLOATS_B + VESSEL_STATUS_FLOATS_ENV + VESSEL_STATUS_FLOATS_SEA) == \
         {n for n, kind in _vessel_status_fields() if kind == "float64"}
     with pytest.raises(TypeError):
         st["heel"]  # a record, read by attribute: no lookup by a string that could be misspelt
