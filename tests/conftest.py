@@ -62,6 +62,7 @@ def repo_root():
 _SPREAD = {"test_scenarios.py", "test_startup_loads.py", "test_environment_runs.py"}
 
 
+@pytest.hookimpl(tryfirst=True)   # before pytest-xdist's own, which turns the marker into the group
 def pytest_collection_modifyitems(config, items):
     """With pytest-xdist (--dist loadgroup), a test file's tests go to one worker together (its
     module fixtures, e.g. a recording several tests read, are made once), except the files of
@@ -72,3 +73,16 @@ def pytest_collection_modifyitems(config, items):
     # the long runs first, the quick physics last: the workers end together instead of one of them
     # finishing a long library run alone (a stable sort: each file keeps its order)
     items.sort(key=lambda item: 0 if item.path.name in _SPREAD else 1 if _ROS_TESTS in str(item.path) else 2)
+
+
+def pytest_collection_finish(session):
+    """pytest-xdist's loadgroup keeps a group on one worker by a suffix it writes into each test's
+    node id; if the pytest in use ignores it (pytest 9.2 with xdist 3.8) every file's module
+    fixtures would be made on both workers, silently: refuse to run instead."""
+    if not session.config.getvalue("loadgroup"):
+        return
+    lost = [item.nodeid for item in session.items
+            if item.get_closest_marker("xdist_group") and "@" not in item.nodeid.rsplit("]", 1)[-1]]
+    if lost:
+        raise pytest.UsageError(f"pytest-xdist's --dist loadgroup did not group {len(lost)} tests (e.g. {lost[0]}): "
+                                "this pytest and pytest-xdist do not work together (requirements.in pins them)")
