@@ -79,7 +79,7 @@ def pytest_collection_finish(session):
     """pytest-xdist's loadgroup keeps a group on one worker by a suffix it writes into each test's
     node id; if the pytest in use ignores it (pytest 9.2 with xdist 3.8) every file's module
     fixtures would be made on both workers, silently: refuse to run instead."""
-    if not session.config.getvalue("loadgroup"):
+    if not getattr(session.config.option, "loadgroup", False):   # no xdist (e.g. -p no:xdist), or no groups
         return
     lost = [item.nodeid for item in session.items
             if item.get_closest_marker("xdist_group") and "@" not in item.nodeid.rsplit("]", 1)[-1]]
