@@ -10,7 +10,7 @@ import pytest
 from sea_environment.waves import G, WaveField
 from tug_dynamics.seakeeping import VesselInWaves, hydro_data_path
 from tug_dynamics.ship_file import load_ship, ships_dir
-from tug_dynamics.vessel import VesselState
+from tug_dynamics.vessel import BodyPoints, VesselState
 
 RHO = 1025.0
 
@@ -45,7 +45,7 @@ def test_attachment_points_move_with_heave_roll_and_pitch():
     for t in np.linspace(0.0, 14.0, 15):
         sample = sea.sample(low, t)
         d = sample.displacement
-        dp, _ = sea.point_offsets(low, sea.total(low, sample), points)
+        dp, _ = sea.point_offsets(low, sea.total(low, sample), BodyPoints(points))
         c, s = math.cos(low.rpy[2]), math.sin(low.rpy[2])
         for (x, y, z), off in zip(points, dp):
             # body-frame small-angle offset: translation + rotation x r

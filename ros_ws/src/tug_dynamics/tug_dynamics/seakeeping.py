@@ -28,10 +28,9 @@ import os
 
 import numpy as np
 from sea_environment.waves import wavenumber
-from sim_math.rotations import matrix_from_rpy
 
 from .planing import PlaningHull
-from .vessel import ExternalWrench, VesselState
+from .vessel import BodyPoints, ExternalWrench, VesselState
 from .wave_response import HydroData, WaveResponse, WaveSample
 
 
@@ -97,21 +96,12 @@ class VesselInWaves:
                               moment_world=np.array([0.0, 0.0, N]))
 
     @staticmethod
-    def point_motion(state: VesselState, points_body: np.ndarray):
-        """World positions and velocities (n, 3) of body points (n, 3) of a state:
-        p = x + R r, v = R (v_b + w x r)."""
-        rot = matrix_from_rpy(float(state.rpy[0]), float(state.rpy[1]), float(state.rpy[2]))
-        (p, q, r), (x, y, z) = state.angular_velocity_body, points_body.T
-        # w x r written out: np.cross costs several times the rest of this function
-        relative = np.column_stack((q * z - r * y, r * x - p * z, p * y - q * x))
-        return state.position + points_body @ rot.T, (state.linear_velocity_body + relative) @ rot.T
-
-    def point_offsets(self, low: VesselState, total: VesselState, points_body: np.ndarray):
+    def point_offsets(low: VesselState, total: VesselState, points: BodyPoints):
         """The wave-frequency part (n, 3) of body points' world positions and velocities: total
         minus low-frequency. A rope end's coupling reference (the attachment's published, total,
         state) minus it is the low-frequency point the manoeuvring integration follows."""
-        p_tot, v_tot = self.point_motion(total, points_body)
-        p_lf, v_lf = self.point_motion(low, points_body)
+        p_tot, v_tot = points.world(total)
+        p_lf, v_lf = points.world(low)
         return p_tot - p_lf, v_tot - v_lf
 
     def status(self, state: VesselState, sample: WaveSample) -> SeaStatus:

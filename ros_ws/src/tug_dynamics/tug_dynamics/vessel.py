@@ -143,6 +143,24 @@ def rotation_body_to_world(rpy: Sequence[float]) -> np.ndarray:
     return matrix_from_rpy(float(rpy[0]), float(rpy[1]), float(rpy[2]))
 
 
+class BodyPoints:
+    """Points fixed in the body (n, 3): their world positions and velocities in a state,
+    p = x + R r, v = R (v_b + w x r), all at once (`world`)."""
+
+    def __init__(self, points_body):
+        self.body = np.asarray(points_body, float).reshape(-1, 3)
+        # w x r of every point as one product (cross @ w): a tenth of np.cross's cost
+        self._cross = np.array([[[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]] for x, y, z in self.body],
+                               float).reshape(-1, 3)
+
+    def world(self, state: "VesselState"):
+        """(positions, velocities), world, (n, 3) each."""
+        rot = rotation_body_to_world(state.rpy)
+        relative = (self._cross @ state.angular_velocity_body).reshape(-1, 3)
+        return (state.position + self.body @ rot.T,
+                (state.linear_velocity_body + relative) @ rot.T)
+
+
 def check_command(cmd: Command) -> None:
     """Reject commands that cannot be applied; raise CommandRejected naming the field."""
     for field in ("engine_order", "steering_angle"):

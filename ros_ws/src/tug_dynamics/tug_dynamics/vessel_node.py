@@ -48,8 +48,8 @@ from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
 from tug_dynamics.seakeeping import SeaStatus, VesselInWaves, waves_refused
 from sim_plumbing.ros_common import ModelDiverged
 from sim_plumbing.stepping import REJECTED_ORDER, SteppedNode, StepInput
-from tug_dynamics.vessel import (Command, CommandRejected, ExternalWrench, ThrusterOrder, Vessel, VesselState,
-                                 check_command, rotation_body_to_world)
+from tug_dynamics.vessel import (BodyPoints, Command, CommandRejected, ExternalWrench, ThrusterOrder, Vessel,
+                                 VesselState, check_command, rotation_body_to_world)
 
 # the status record's float fields in message order (every model's StatusRecord has them all)
 _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
@@ -393,10 +393,8 @@ class VesselNode(SteppedNode):
         """Output messages as CDR templates, laid out once (building message objects every
         step cost more than the physics, see sim_plumbing/cdr.py)."""
         self._names = sorted(self.model.attachments)
-        self._points_body = np.array([self.model.attachments[n] for n in self._names], float).reshape(-1, 3)
-        # w x r of every point as one product (_cross_r @ w): a tenth of np.cross's cost
-        self._cross_r = np.array([[[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]] for x, y, z in self._points_body],
-                                 float).reshape(-1, 3)
+        self._points = BodyPoints([self.model.attachments[n] for n in self._names])
+        self._points_body = self._points.body
         self._odom_cdr = cdr.OdometryEncoder(rc.WORLD_FRAME, self.body_frame)
         self._attach_cdr = cdr.AttachmentArrayEncoder(rc.WORLD_FRAME, self.vessel_name, self._names)
         self._status_cdr = cdr.VesselStatusEncoder(self.body_frame, self.vessel_name,
@@ -422,18 +420,16 @@ class VesselNode(SteppedNode):
             low = s
             s = self.sea.total(low, self.sea.sample(low, stamp_ns * 1e-9))
             sea = self.sea.status(low, self.sea.last)
-            self._wave_offsets = self.sea.point_offsets(low, s, self._points_body)
         q = quaternion_from_rpy(*s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
         position = s.position.tolist()
         self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, position, q, v.tolist(), w.tolist()), stamp_ns)
         self.tf_pub.publish(self._tf_cdr.encode(stamp_ns, [(position, q)]), stamp_ns)  # the odometry's pose
 
-        # All attachment points at once: p = x + R r, v = R (v_b + w x r).
-        rot = rotation_body_to_world(s.rpy)
-        r = self._points_body
-        positions = s.position + r @ rot.T
-        velocities = (v + (self._cross_r @ w).reshape(-1, 3)) @ rot.T
+        positions, velocities = self._points.world(s)   # every attachment point at once
+        if self.sea is not None:   # their wave-frequency part: a rope end's coupling reference moves by it
+            low_positions, low_velocities = self._points.world(low)
+            self._wave_offsets = (positions - low_positions, velocities - low_velocities)
         self.attach_pub.publish(self._attach_cdr.encode(stamp_ns, self.step_index, positions, velocities, q),
                                 stamp_ns)
 
