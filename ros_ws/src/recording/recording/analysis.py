@@ -195,8 +195,8 @@ def sea_state(args, rec: Recording):
     recording's particulars (its "waves"), else (recordings made before the particulars carried
     the sea) from the scenario they name (beside the recording, else in the scenario library);
     None without waves (or none found). The note says why none was read; ValueError for a --scenario that does not load."""
+    from scenario_format.particulars import scenario_of_recording
     from scenario_format.scenario import ScenarioError, load_scenario
-    from sim_math.data_files import resolve as resolve_data_file
     path = args.scenario
     recorded = rec.particulars.get("waves")
     if path is None and isinstance(recorded, dict):   # the recording carries its sea (since issue 31)
@@ -209,11 +209,10 @@ def sea_state(args, rec: Recording):
         name = rec.particulars.get("scenario")
         if not name:
             return None, None
-        path = resolve_data_file("scenario_runner", "scenarios", os.path.basename(str(name)),
-                                 relative_to=os.path.abspath(args.recording))
-        if not os.path.isfile(path):
-            return None, (f"the recording's scenario {name} is not beside it nor in the scenario library: no sea "
-                          f"state (give --scenario FILE, or --waves for the sea statistics over the whole run)")
+        path, why = scenario_of_recording(args.recording, name)
+        if path is None:
+            return None, (f"{why}: no sea state (give --scenario FILE, or --waves for the sea statistics over the "
+                          "whole run)")
     try:
         sc = load_scenario(path, check_files=False)
     except ScenarioError as exc:

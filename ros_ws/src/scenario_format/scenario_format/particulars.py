@@ -103,6 +103,16 @@ def breaking_loads_from(path: str) -> Dict[str, Optional[float]]:
     return breaking_loads(particulars(path, sc))
 
 
+def scenario_of_recording(mcap_path: str, name) -> Tuple[Optional[str], Optional[str]]:
+    """(path, None) of the scenario a recording's particulars name (`name`), beside the recording,
+    else in the scenario library; (None, why) when it is not found."""
+    found = resolve_data_file("scenario_runner", "scenarios", os.path.basename(str(name)),
+                              relative_to=os.path.abspath(mcap_path))
+    if not os.path.isfile(found):
+        return None, f"the recording's scenario {name} is not beside it nor in the scenario library"
+    return found, None
+
+
 def environment_of(path: str) -> Tuple[str, Optional[str]]:
     """(the run's environment as the nodes' `environment` parameter text, note) from a scenario (a
     path or a library name) or a recording (.mcap: the scenario its particulars name, beside it
@@ -114,10 +124,9 @@ def environment_of(path: str) -> Tuple[str, Optional[str]]:
         name = particulars_of_recording(path).get("scenario")
         if not name:
             return "", f"{path}: no particulars naming its scenario (an older or a rosbag2 recording)"
-        found = resolve_data_file("scenario_runner", "scenarios", os.path.basename(str(name)),
-                                  relative_to=os.path.abspath(path))
-        if not os.path.isfile(found):
-            return "", f"the recording's scenario {name} is not beside it nor in the scenario library"
+        found, why = scenario_of_recording(path, name)
+        if found is None:
+            return "", why
         path = found
     else:
         path = scenario_path(path)
