@@ -34,6 +34,38 @@ def test_compiled_response_equals_its_numpy_oracle(t):
         assert fast.elevation == pytest.approx(float(field.elevation(x, y, t)), rel=1e-11, abs=1e-12)
 
 
+def test_one_compiled_step_equals_its_numpy_steps():
+    """VesselInWaves.step (the vessel node's per-step path, one compiled call) against sample,
+    total, point_offsets, drift_wrench and status in numpy, and BodyPoints.world of the total
+    state: 1e-12 relative, in a moving, heeled, turning state inside and after the ramp."""
+    field = WaveField.irregular(2.0, 7.0, 0.4, spreading_s=8.0, components=150, seed=3, ramp_time=20.0)
+    sea = _sea("harbour_tug", field)
+    points = BodyPoints([[-10.0, 0.0, 2.0], [12.0, 3.0, 1.5], [0.0, -4.0, 0.5]])
+    low = VesselState(np.array([35.0, -12.0, 0.1]), np.array([0.03, -0.02, 2.2]), np.array([2.5, 0.3, 0.01]),
+                      np.array([0.01, -0.02, 0.03]))
+    for t in (7.5, 95.0):
+        fast = sea.step(low, t, points)
+        sample = sea.sample(low, t)
+        total = sea.total(low, sample)
+        for a, b in zip((fast.total.position, fast.total.rpy, fast.total.linear_velocity_body,
+                         fast.total.angular_velocity_body),
+                        (total.position, total.rpy, total.linear_velocity_body, total.angular_velocity_body)):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+        p, v = points.world(total)
+        np.testing.assert_allclose(fast.positions, p, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(fast.velocities, v, rtol=1e-12, atol=1e-12)
+        dp, dv = sea.point_offsets(low, total, points)
+        np.testing.assert_allclose(fast.offsets[0], dp, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(fast.offsets[1], dv, rtol=1e-9, atol=1e-12)
+        drift = sea.drift_wrench(low, sample)
+        np.testing.assert_allclose(fast.drift.force_world, drift.force_world, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(fast.drift.moment_world, drift.moment_world, rtol=1e-12, atol=1e-9)
+        status = sea.status(low, sample)
+        np.testing.assert_allclose(fast.sea_floats, [status.wave_elevation, status.wave_significant_height,
+                                                     status.wave_encounter_period, status.wave_encounter_angle,
+                                                     status.heave, status.roll, status.pitch], rtol=1e-12, atol=1e-12)
+
+
 def test_attachment_points_move_with_heave_roll_and_pitch():
     """Small angles: a point (x, y, z) of the body rises by heave + y roll - x pitch (REP-103: roll
     positive starboard down, pitch positive bow down) and moves along by surge - z pitch...; the

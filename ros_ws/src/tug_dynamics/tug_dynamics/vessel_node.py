@@ -45,7 +45,7 @@ from sim_plumbing.scene import VesselScene
 from sea_environment.environment import Environment
 from tug_dynamics.environment_loads import EnvironmentStatus, VesselInEnvironment
 from tug_dynamics.prescribed import MotionLaw, PrescribedMotion
-from tug_dynamics.seakeeping import SeaStatus, VesselInWaves, waves_refused
+from tug_dynamics.seakeeping import VesselInWaves, waves_refused
 from sim_plumbing.ros_common import ModelDiverged
 from sim_plumbing.stepping import REJECTED_ORDER, SteppedNode, StepInput
 from tug_dynamics.vessel import (BodyPoints, Command, CommandRejected, ExternalWrench, ThrusterOrder, Vessel,
@@ -55,9 +55,7 @@ from tug_dynamics.vessel import (BodyPoints, Command, CommandRejected, ExternalW
 _STATUS_FLOATS_A = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_A)
 _STATUS_FLOATS_B = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_B)
 _STATUS_FLOATS_ENV = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_ENV)
-_STATUS_FLOATS_SEA = operator.attrgetter(*cdr.VESSEL_STATUS_FLOATS_SEA)
 _STILL_DEEP = EnvironmentStatus()   # what status reports without an environment
-_CALM = SeaStatus()
 
 
 class VesselNode(SteppedNode):
@@ -111,6 +109,7 @@ class VesselNode(SteppedNode):
         self.surroundings = None if env is None else VesselInEnvironment(self.model, env[0], rho_water=env[1])
         # the sea (wave-frequency motion superposed, drift force on the manoeuvring model)
         self.sea = self._sea(env[0] if env else None, path)
+        self._wave = None   # the sea's part of the last published state (seakeeping.WaveStep)
         self._was_grounded = False
 
         self.rejected = 0
@@ -356,9 +355,9 @@ class VesselNode(SteppedNode):
             point = np.asarray(self.model.attachments[msg.attachment], float)
             force = np.array(msg.force)
             ref_p, ref_v = np.array(msg.reference_position), np.array(msg.reference_velocity)
-            if self.sea is not None:   # the rope saw the point's total motion; the model steps its low-frequency one
+            if self._wave is not None:   # the rope saw the point's total motion; the model steps its low-frequency one
                 i = self._names.index(msg.attachment)
-                ref_p, ref_v = ref_p - self._wave_offsets[0][i], ref_v - self._wave_offsets[1][i]
+                ref_p, ref_v = ref_p - self._wave.offsets[0][i], ref_v - self._wave.offsets[1][i]
             wrenches.append(ExternalWrench(force_world=force, point_body=point,
                                            stiffness=np.array(msg.stiffness).reshape(3, 3),
                                            damping=np.array(msg.damping).reshape(3, 3),
@@ -373,8 +372,8 @@ class VesselNode(SteppedNode):
                             else (-on_hull, np.array(msg.fender_point_body)))
             self._contacts[topic] = (force, point)
             wrenches.append(ExternalWrench(force_world=force, point_body=point))
-        if self.sea is not None and not isinstance(self.model, PrescribedMotion):
-            wrenches.append(self.sea.drift_wrench(self.model.state, self.sea.last))
+        if self._wave is not None and not isinstance(self.model, PrescribedMotion):
+            wrenches.append(self._wave.drift)
         self.model.step(self.dt, wrenches)
         self._check_finite()
 
@@ -415,21 +414,20 @@ class VesselNode(SteppedNode):
     def publish_outputs(self) -> None:
         stamp_ns = self.stamp_ns()
         s = self.model.state
-        sea = _CALM
+        sea = cdr.CALM_SEA
         if self.sea is not None:   # what leaves the vessel moves with the waves too
-            low = s
-            s = self.sea.total(low, self.sea.sample(low, stamp_ns * 1e-9))
-            sea = self.sea.status(low, self.sea.last)
+            self._wave = self.sea.step(s, stamp_ns * 1e-9, self._points)
+            s, sea = self._wave.total, self._wave.sea_floats
         q = quaternion_from_rpy(*s.rpy)
         v, w = s.linear_velocity_body, s.angular_velocity_body
         position = s.position.tolist()
         self.odom_pub.publish(self._odom_cdr.encode(stamp_ns, position, q, v.tolist(), w.tolist()), stamp_ns)
         self.tf_pub.publish(self._tf_cdr.encode(stamp_ns, [(position, q)]), stamp_ns)  # the odometry's pose
 
-        positions, velocities = self._points.world(s)   # every attachment point at once
-        if self.sea is not None:   # their wave-frequency part: a rope end's coupling reference moves by it
-            low_positions, low_velocities = self._points.world(low)
-            self._wave_offsets = (positions - low_positions, velocities - low_velocities)
+        if self._wave is not None:   # with their wave-frequency part (a rope end's coupling reference moves by it)
+            positions, velocities = self._wave.positions, self._wave.velocities
+        else:
+            positions, velocities = self._points.world(s)   # every attachment point at once
         self.attach_pub.publish(self._attach_cdr.encode(stamp_ns, self.step_index, positions, velocities, q),
                                 stamp_ns)
 
@@ -443,7 +441,7 @@ class VesselNode(SteppedNode):
         self.status_pub.publish(self._status_cdr.encode(
             stamp_ns, self.step_index, _STATUS_FLOATS_A(st), int(st.anchor_state), _STATUS_FLOATS_B(st),
             st.girting_warning, self.rejected, self.clamped, _STATUS_FLOATS_ENV(env), env.grounded,
-            *self._contact_status(), floats_sea=_STATUS_FLOATS_SEA(sea)), stamp_ns)
+            *self._contact_status(), floats_sea=sea), stamp_ns)
         if self.thrusters_pub is not None:
             units = st.thrusters
             self.thrusters_pub.publish(self._thrusters_cdr.encode(stamp_ns, self.step_index, [

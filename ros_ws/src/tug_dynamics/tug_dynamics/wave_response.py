@@ -183,11 +183,14 @@ class WaveSample(NamedTuple):
 
 
 @njit(cache=True)
-def _evaluate(table, a, kx, ky, omega, k, phase, psi_w, x, y, psi, u, t, r, rdot, out):
+def _evaluate(table, comp, x, y, psi, u, t, r, rdot, out):
     """The compiled `WaveResponse.evaluate` (the numpy `_interp` / `_motion` are its oracle in
     tests/physics/test_wave_response.py): out[0:6] displacement, [6:12] velocity, [12:15] drift,
     [15] elevation. One pass over the components, no temporaries (the vessel node calls it every
-    step: 150 components cost about a tenth of the numpy version)."""
+    step: 150 components cost about a tenth of the numpy version). comp (7, N): the components'
+    a, kx, ky, omega, k, phase and direction (WaveResponse.comp: one argument, not seven, as
+    numba's call costs per argument)."""
+    a, kx, ky, omega, k, phase, psi_w = comp[0], comp[1], comp[2], comp[3], comp[4], comp[5], comp[6]
     nb = table.shape[1]
     two_pi = 2.0 * math.pi
     out[:] = 0.0
@@ -238,11 +241,17 @@ class WaveResponse:
         # columns 0-5 Re(a X), 6-11 Im(a X), 12-14 a^2 D (one gather serves motion and drift)
         rao = self.a[:, None, None] * hydro._freq_table(hydro.rao, self.omega)             # (N, nb, 6)
         drift = (self.a ** 2)[:, None, None] * hydro._freq_table(hydro.drift, self.omega)  # (N, nb, 3)
-        self._table = np.ascontiguousarray(np.concatenate([rao.real, rao.imag, drift], axis=2))
-        self._nb = self._table.shape[1]
+        self.table = np.ascontiguousarray(np.concatenate([rao.real, rao.imag, drift], axis=2))
+        self._nb = self.table.shape[1]
         self._rows = np.arange(len(self.a))
         self._ramp_time = float(getattr(wave_field, "ramp_time", math.inf))
+        self.comp = np.ascontiguousarray(np.stack([self.a, self.kx, self.ky, self.omega, self.k, self.phase,
+                                                   self.psi_w]))
         self._out = np.zeros(16)
+
+    def ramp(self, t: float):
+        """(r, r'): the sea's start-up ramp and its rate at t."""
+        return self._ramp(t)
 
     def _ramp(self, t: float):
         if t >= self._ramp_time:          # r = 1, r' = 0 after the ramp (waves.py)
@@ -256,8 +265,8 @@ class WaveResponse:
         j = pos.astype(np.intp)                      # beta in [0, 2 pi): floor
         f = (pos - j)[:, None]
         j %= self._nb
-        lo = self._table[self._rows, j]
-        return lo + f * (self._table[self._rows, (j + 1) % self._nb] - lo)
+        lo = self.table[self._rows, j]
+        return lo + f * (self.table[self._rows, (j + 1) % self._nb] - lo)
 
     def relative_heading(self, psi: float) -> np.ndarray:
         """beta_i = psi_i - psi in [0, 2 pi): 180 deg head seas (module docstring)."""
@@ -287,8 +296,7 @@ class WaveResponse:
         """Displacement, velocity, drift and the elevation at (x, y) at once (compiled)."""
         r, rdot = self._ramp(t)
         out = self._out
-        _evaluate(self._table, self.a, self.kx, self.ky, self.omega, self.k, self.phase, self.psi_w, float(x),
-                  float(y), float(psi), float(u), float(t), r, rdot, out)
+        _evaluate(self.table, self.comp, float(x), float(y), float(psi), float(u), float(t), r, rdot, out)
         return WaveSample(out[0:6].copy(), out[6:12].copy(), out[12:15].copy(), float(out[15]))
 
     def evaluate_numpy(self, x: float, y: float, psi: float, u: float, t: float) -> WaveSample:
