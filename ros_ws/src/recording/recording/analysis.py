@@ -234,7 +234,7 @@ def report(say, recording: str, f: McapFile, summary: dict) -> None:
         + (" (DAMAGED FILE: readable part only)" if f.problems else ""))
     for name, v in summary["vessels"].items():
         say(f"  vessel {name}: {v['samples']} states, {v['t_start']:.1f} .. {v['t_end']:.1f} s, distance "
-            f"{v['distance_run']:.1f} m, max speed {v['speed_max']:.2f} m/s")
+            f"{v['distance_run']:.1f} m, max speed over ground {v['speed_max'] / KN:.2f} kn")
         t = v.get("turn")
         if t:
             fmt = lambda k, scale=1.0: "-" if t.get(k) is None else f"{t[k] * scale:.1f}"  # noqa: E731
