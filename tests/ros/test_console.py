@@ -310,14 +310,16 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
     publishes (odometry, status, the end wrench at 46.8 kN, 20 Hz): the towline's tension is on
     the screen; then a rope_parted ScenarioEvent (as rope_node sends it) and the screen reads
     PARTED, with the time and load of the parting, by its next refresh: within one display period
-    (0.1 s) and the time it takes to draw and read the screen (allowed 0.1 s more)."""
+    (0.1 s) and the time it takes to draw and read the screen (allowed 0.1 s more). Then the state
+    stops (NO DATA on the screen) and the run ends (scenario_finished: RUN FINISHED): keys pressed
+    meanwhile send no order and the screen says why."""
     import threading
     import pexpect
     import rclpy
     from geometry_msgs.msg import WrenchStamped
     from nav_msgs.msg import Odometry
     from rclpy.executors import SingleThreadedExecutor
-    from tug_msgs.msg import ScenarioEvent, VesselStatus
+    from tug_msgs.msg import ScenarioEvent, VesselCommand, VesselStatus
     from bridge_instruments import console
     from sim_contract import topics as T
     from sim_plumbing import ros_common as rc
@@ -348,7 +350,9 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
         status_pub.publish(st)
         wrench_pub.publish(w)
 
-    node.create_timer(0.05, publish_state)
+    timer = node.create_timer(0.05, publish_state)
+    commands = []
+    node.create_subscription(VesselCommand, T.vessel_topic("tug", T.COMMAND), commands.append, rc.COMMAND_QOS)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
     spinning = threading.Event()
@@ -375,6 +379,27 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
         shown = time.monotonic() - sent
         con.expect(r"TOWLINE PARTED at t 125\.45 s", timeout=10)
         con.expect(r"rope_parted towline: rope 'towline' parted at element 3", timeout=10)
+        # a key while the vessel is heard sends an order (the screen says sent 1) ...
+        con.send("w")
+        con.expect(r"\(sent 1, ", timeout=10)
+        deadline = time.monotonic() + 10.0
+        while not commands and time.monotonic() < deadline:
+            con.expect([pexpect.TIMEOUT, r"\S"], timeout=0.05)
+        assert len(commands) == 1 and commands[0].engine_order == 0.9, commands
+        # ... but not once the vessel falls silent (its state stops): the screen says so
+        timer.cancel()
+        con.expect(r"NO DATA from tug for [12] s", timeout=10)
+        con.send("w")
+        con.expect(r"order not sent: no data from tug for \d+ s", timeout=10)
+        # the run ends: the screen says so, and keys still send nothing
+        end = ScenarioEvent(step=2600, source="/scenario_runner", kind="scenario_finished",
+                            detail="2600 steps in 130.0 s wall", value=math.nan)
+        end.header.stamp = rc.step_time(2600, 50_000_000)
+        event_pub.publish(end)
+        con.expect(r"RUN FINISHED at t 130\.00 s: orders are no longer obeyed", timeout=10)
+        con.send("a")
+        con.expect(r"order not sent: the run finished at t 130\.00 s", timeout=10)
+        time.sleep(0.3)
         con.send("q")
         con.expect(pexpect.EOF, timeout=20)
     finally:
@@ -386,3 +411,4 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
         node.destroy_node()
     print(f"\nPARTED on the screen {1e3 * shown:.0f} ms after the rope_parted event")
     assert shown <= console.DISPLAY_PERIOD + 0.1, shown
+    assert len(commands) == 1, commands  # the keys pressed once the vessel was silent sent nothing
