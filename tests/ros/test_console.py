@@ -298,11 +298,80 @@ def test_console_shows_what_happens():
         ("t   130.00 s  manual_handed_back tug: tug's engine handed back to the script", "bold yellow"),
         ("t   131.00 s  order tug: engine +0.50, steering +0.0 deg", "")]
     _, warn = console.readout(node, orders, {}, now=100.0 + console.STALE_AFTER + 2.2)
-    assert f"NO DATA from tug for 3 s: its node stopped, or the run or replay ended (keys send nothing)" in warn
+    assert "NO DATA from tug for 3 s: its node stopped, or the run or replay ended (keys send nothing)" in warn
     console.note_event(node, console.Event(400.0, "scenario_finished", "", "20000 steps in 80.0 s wall", math.nan))
     _, warn = console.readout(node, orders, {}, now=100.0 + console.STALE_AFTER + 2.2)
     assert "RUN FINISHED at t 400.00 s: orders are no longer obeyed (keys send nothing)" in warn, warn
     assert not any(w.startswith("NO DATA") for w in warn), warn
+
+
+PARTING_SCENARIO = {
+    "name": "parting", "duration": 60.0, "exchange_rate": 20.0, "mode": "realtime",
+    "vessels": [{"name": "tug", "ship_file": "harbour_tug.yaml",
+                 "initial": {"x": 0.0, "y": 0.0, "heading_true_deg": 90.0, "speed_kn": 5.0}}],
+    "ropes": [{"name": "towline", "rope_file": "table1.yaml", "end_a": "tug/towing_hook", "end_b": "fixed",
+               "end_b_position": [-100.0, 0.0, 0.0], "layout": "straight", "allow_slack": True}]}
+
+
+class _TugOnALine:
+    """An in-test node in the place of a run: the tug's odometry and status (engine 0.8) and its
+    towline end's wrench (46.8 kN) at 20 Hz, stamped on a 50 ms grid; events published on
+    request; the orders sent to the tug kept (`commands`)."""
+
+    def __init__(self, context):
+        import threading
+        import rclpy
+        from geometry_msgs.msg import WrenchStamped
+        from nav_msgs.msg import Odometry
+        from rclpy.executors import SingleThreadedExecutor
+        from tug_msgs.msg import ScenarioEvent, VesselCommand, VesselStatus
+        from sim_contract import topics as T
+        from sim_plumbing import ros_common as rc
+        self.Odometry, self.VesselStatus, self.WrenchStamped = Odometry, VesselStatus, WrenchStamped
+        self.node = rclpy.create_node("parting_source", context=context)
+        self.odom_pub = self.node.create_publisher(Odometry, T.vessel_topic("tug", T.ODOM), rc.STATE_QOS)
+        self.status_pub = self.node.create_publisher(VesselStatus, T.vessel_topic("tug", T.STATUS), rc.STATE_QOS)
+        self.wrench_pub = self.node.create_publisher(WrenchStamped, T.end_wrench_topic("towline", "a"), rc.STATE_QOS)
+        self.event_pub = self.node.create_publisher(ScenarioEvent, T.EVENTS, rc.EVENTS_QOS)
+        self.commands = []
+        self.node.create_subscription(VesselCommand, T.vessel_topic("tug", T.COMMAND), self.commands.append,
+                                      rc.COMMAND_QOS)
+        self.step = 0
+        self.timer = self.node.create_timer(0.05, self.publish_state)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.running = threading.Event()
+        self.running.set()
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self):
+        while self.running.is_set():
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def publish_state(self):
+        from sim_plumbing import ros_common as rc
+        self.step += 1
+        od, st, w = self.Odometry(), self.VesselStatus(girting_threshold=0.5, engine_order=0.8), self.WrenchStamped()
+        od.pose.pose.orientation.w = 1.0
+        for m in (od, st, w):
+            m.header.stamp = rc.step_time(self.step, 50_000_000)
+        w.wrench.force.x = 46_800.0
+        self.odom_pub.publish(od)
+        self.status_pub.publish(st)
+        self.wrench_pub.publish(w)
+
+    def event(self, step, kind, target, detail, value=math.nan):
+        from tug_msgs.msg import ScenarioEvent
+        from sim_plumbing import ros_common as rc
+        ev = ScenarioEvent(step=step, source="/test", kind=kind, target=target, detail=detail, value=value)
+        ev.header.stamp = rc.step_time(step, 50_000_000)
+        self.event_pub.publish(ev)
+
+    def close(self):
+        self.running.clear()
+        self.thread.join(2.0)
+        self.node.destroy_node()
 
 
 def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context):
@@ -313,53 +382,12 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
     (0.1 s) and the time it takes to draw and read the screen (allowed 0.1 s more). Then the state
     stops (NO DATA on the screen) and the run ends (scenario_finished: RUN FINISHED): keys pressed
     meanwhile send no order and the screen says why."""
-    import threading
     import pexpect
-    import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from nav_msgs.msg import Odometry
-    from rclpy.executors import SingleThreadedExecutor
-    from tug_msgs.msg import ScenarioEvent, VesselCommand, VesselStatus
     from bridge_instruments import console
-    from sim_contract import topics as T
-    from sim_plumbing import ros_common as rc
-    sc = {"name": "parting", "duration": 60.0, "exchange_rate": 20.0, "mode": "realtime",
-          "vessels": [{"name": "tug", "ship_file": "harbour_tug.yaml",
-                       "initial": {"x": 0.0, "y": 0.0, "heading_true_deg": 90.0, "speed_kn": 5.0}}],
-          "ropes": [{"name": "towline", "rope_file": "table1.yaml", "end_a": "tug/towing_hook", "end_b": "fixed",
-                     "end_b_position": [-100.0, 0.0, 0.0], "layout": "straight",
-                     "allow_slack": True}]}
     path = tmp_path / "parting.yaml"
-    path.write_text(yaml.safe_dump(sc))
-    node = rclpy.create_node("parting_source", context=rclpy_context)
-    odom_pub = node.create_publisher(Odometry, T.vessel_topic("tug", T.ODOM), rc.STATE_QOS)
-    status_pub = node.create_publisher(VesselStatus, T.vessel_topic("tug", T.STATUS), rc.STATE_QOS)
-    wrench_pub = node.create_publisher(WrenchStamped, T.end_wrench_topic("towline", "a"), rc.STATE_QOS)
-    event_pub = node.create_publisher(ScenarioEvent, T.EVENTS, rc.EVENTS_QOS)
-    step = [0]
-
-    def publish_state():
-        step[0] += 1
-        stamp = rc.step_time(step[0], 50_000_000)
-        od, st, w = Odometry(), VesselStatus(girting_threshold=0.5, engine_order=0.8), WrenchStamped()
-        od.pose.pose.orientation.w = 1.0
-        for m in (od, st, w):
-            m.header.stamp = stamp
-        w.wrench.force.x = 46_800.0
-        odom_pub.publish(od)
-        status_pub.publish(st)
-        wrench_pub.publish(w)
-
-    timer = node.create_timer(0.05, publish_state)
-    commands = []
-    node.create_subscription(VesselCommand, T.vessel_topic("tug", T.COMMAND), commands.append, rc.COMMAND_QOS)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    executor.add_node(node)
-    spinning = threading.Event()
-    spinning.set()
-    thread = threading.Thread(target=lambda: [executor.spin_once(timeout_sec=0.05) for _ in iter(spinning.is_set, False)],
-                              daemon=True)
-    thread.start()
+    path.write_text(yaml.safe_dump(PARTING_SCENARIO))
+    tug = _TugOnALine(rclpy_context)
+    commands = tug.commands
     env = dict(os.environ, TERM="xterm-256color", PYTHONUNBUFFERED="1")
     con = pexpect.spawn(executable_path("bridge_instruments", "console"), ["tug", "--scenario", str(path)],
                         env=env, dimensions=(30, 160), encoding="utf-8", codec_errors="replace", timeout=90)
@@ -367,14 +395,11 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
     try:
         con.expect(r"towline: tension +46\.8 kN of breaking load 156\.9 kN \(30 %\)", timeout=120)
         deadline = time.monotonic() + 20.0
-        while event_pub.get_subscription_count() < 1 and time.monotonic() < deadline:
+        while tug.event_pub.get_subscription_count() < 1 and time.monotonic() < deadline:
             con.expect([pexpect.TIMEOUT, r"\S"], timeout=0.05)
-        assert event_pub.get_subscription_count() >= 1, "the console never subscribed to /scenario/events"
-        ev = ScenarioEvent(step=2509, source="/towline/rope", kind="rope_parted", target="towline",
-                           detail="rope 'towline' parted at element 3 (157.1 kN)", value=157_100.0)
-        ev.header.stamp = rc.step_time(2509, 50_000_000)
+        assert tug.event_pub.get_subscription_count() >= 1, "the console never subscribed to /scenario/events"
         sent = time.monotonic()
-        event_pub.publish(ev)
+        tug.event(2509, "rope_parted", "towline", "rope 'towline' parted at element 3 (157.1 kN)", 157_100.0)
         con.expect(r"towline: PARTED at t 125\.45 s \(157\.1 kN\)", timeout=10)
         shown = time.monotonic() - sent
         con.expect(r"TOWLINE PARTED at t 125\.45 s", timeout=10)
@@ -387,15 +412,12 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
             con.expect([pexpect.TIMEOUT, r"\S"], timeout=0.05)
         assert len(commands) == 1 and commands[0].engine_order == 0.9, commands
         # ... but not once the vessel falls silent (its state stops): the screen says so
-        timer.cancel()
+        tug.timer.cancel()
         con.expect(r"NO DATA from tug for [12] s", timeout=10)
         con.send("w")
         con.expect(r"order not sent: no data from tug for \d+ s", timeout=10)
         # the run ends: the screen says so, and keys still send nothing
-        end = ScenarioEvent(step=2600, source="/scenario_runner", kind="scenario_finished",
-                            detail="2600 steps in 130.0 s wall", value=math.nan)
-        end.header.stamp = rc.step_time(2600, 50_000_000)
-        event_pub.publish(end)
+        tug.event(2600, "scenario_finished", "", "2600 steps in 130.0 s wall")
         con.expect(r"RUN FINISHED at t 130\.00 s: orders are no longer obeyed", timeout=10)
         con.send("a")
         con.expect(r"order not sent: the run finished at t 130\.00 s", timeout=10)
@@ -406,9 +428,7 @@ def test_console_shows_parted_within_one_display_period(tmp_path, rclpy_context)
         if con.isalive():
             con.terminate(force=True)
         con.logfile_read.close()
-        spinning.clear()
-        thread.join(2.0)
-        node.destroy_node()
+        tug.close()
     print(f"\nPARTED on the screen {1e3 * shown:.0f} ms after the rope_parted event")
     assert shown <= console.DISPLAY_PERIOD + 0.1, shown
     assert len(commands) == 1, commands  # the keys pressed once the vessel was silent sent nothing
