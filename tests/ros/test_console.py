@@ -260,6 +260,9 @@ def test_console_barge_has_no_engine_or_helm_gauges():
     assert kits == {"box_barge_000.yaml": none, "barge_002_full.yaml": none, "harbour_tug.yaml": powered,
                     "s175_003.yaml": controls.Equipment(True, True, True), "asd_tug.yaml": powered,
                     "planing_40ft.yaml": powered}
+    # what `console barge --scenario default_demo.yaml` finds: the barge's end of the towline, no winch
+    assert console._scenario_setup("barge", "default_demo.yaml") == ([("towline", "b", False)],
+                                                                    {"towline": 156_906.4}, none)
     node = _screen_node(VesselStatus(girting_threshold=0.0), vessel="barge")  # no roll model: 0
     text, _ = console.readout(node, controls.Orders(35.0, 0.5), {}, kits["box_barge_000.yaml"])
     assert not any(w in line for line in text.splitlines()[1:] for w in ("engine", "rpm", "rudder", "helm", "girting")), \
