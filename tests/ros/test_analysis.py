@@ -42,7 +42,7 @@ events:
 """
 DT = 0.05  # 1 / exchange_rate
 EXPECTED_FIGURES = ["tracks.png", "yaw.png", "speed_yaw_rate.png", "motions.png", "towline_tension.png",
-                    "rope_heights.png", "rope_pitch.png", "orders_tug.png", "orders_barge.png"]
+                    "rope_heights.png", "rope_pitch.png", "orders_tug.png"]  # the barge has no engine: no orders
 KN = 1852.0 / 3600.0
 
 
@@ -108,6 +108,40 @@ def check_png(path):
     return img
 
 
+def test_figures_speak_knots_and_deg_true(demo_recording, tmp_path, monkeypatch):
+    """The figures are for people: speed over ground in knots, heading as compass deg true, rate
+    of turn in deg/min; no title or label says a word twice in a row ("towline towline"); no orders figure
+    for the unpowered barge. The plotted data checked against the recording itself (the demo
+    starts heading east, heading_deg 0 in ENU: 090 true)."""
+    import re
+    from recording import figures
+    from recording.recorded_run import Recording
+    drawn = {}
+
+    def keep(self, fig, name):
+        drawn[name] = [(a.get_title(), a.get_ylabel(), [ln.get_ydata() for ln in a.get_lines()]) for a in fig.axes]
+        self.plt.close(fig)
+    monkeypatch.setattr(figures._Figures, "save", keep)
+    rec = Recording(str(demo_recording))
+    figures.make_figures(rec, str(tmp_path))
+    assert "orders_barge.png" not in drawn and "orders_tug.png" in drawn
+    words = [w for axes in drawn.values() for title, label, _ in axes for w in (title, label) if w]
+    assert not [w for w in words if re.search(r"\b(\w+) \1\b", w, re.IGNORECASE)], words
+    (title, label, lines), = drawn["yaw.png"]
+    assert (title, label) == ("Headings", "heading (deg true)")
+    heading = (90.0 - np.degrees(rec.vessels["tug"]["yaw"])) % 360.0
+    plotted = np.asarray(lines[0], float)
+    ok = np.isfinite(plotted)
+    assert ok.sum() >= 0.9 * ok.size and np.allclose(plotted[ok], heading[ok], atol=1e-9)
+    assert abs(heading[0] - 90.0) < 0.5  # heading_deg 0 (ENU: east) is 090 true
+    speed, rot = drawn["speed_yaw_rate.png"]
+    assert speed[1] == "speed over ground (kn)" and rot[1] == "rate of turn (deg/min, + to port)"
+    assert np.allclose(speed[2][0], rec.vessels["tug"]["speed"] / KN)
+    assert np.allclose(rot[2][0], np.degrees(rec.vessels["tug"]["r"]) * 60.0)
+    assert drawn["motions.png"][0][1] == "speed over ground (kn)"
+    assert drawn["towline_tension.png"][0][0] == "towline: tension at both ends"
+
+
 def test_turning_diameter_matches_the_vessel_library(turn_recording, library_turn, tmp_path):
     out = analyze(turn_recording, "-o", tmp_path / "an")
     assert out.returncode == 0, out.stdout + out.stderr
@@ -163,6 +197,7 @@ def test_figures_render_for_a_towing_recording(demo_recording, tmp_path):
     for name in EXPECTED_FIGURES:
         assert name in names
         check_png(str(tmp_path / "an" / name))
+    assert "orders_barge.png" not in names, names  # unpowered (barge_002_full.yaml): all-zero orders
     rope = summary["ropes"]["towline"]
     assert rope["tension_a_max"] > 0 and rope["tension_b_max"] > 0 and rope["elements_start"] > 1
     import yaml

@@ -1,10 +1,12 @@
 """The console's order state (ROS-free): keys and joystick axes -> engine order, helm, winch and
 anchor orders, always within range whatever comes in (unknown keys do nothing; NaN, infinite or
-out-of-range joystick values are ignored or clamped)."""
+out-of-range joystick values are ignored or clamped); what a vessel has to be ordered (its ship
+file: engine, helm, anchor) and the words the screen puts on orders and angles (port / stbd:
+one sign convention, + to port as REP-103, never a bare sign a reader must decode)."""
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import NamedTuple, Optional
 
 ENGINE_STEP = 0.1  # per key press, of full ahead
 HELM_STEP_DEG = 5.0  # per key press
@@ -19,6 +21,59 @@ KEYS = {
 }
 HELP = ("engine: up/w ahead, down/s astern, x stop | helm: left/a port, right/d starboard, c midships | "
         "winch: o pay out, i heave in, h hold | anchor: l let go, u heave up | q quit")
+
+
+# ship file sections that drive the vessel (tug_dynamics/ships): propellers with an engine,
+# azimuth thrusters, a waterjet. Each also steers it (rudders behind the propellers, the
+# thrusters' azimuth, the waterjet's nozzle); rudders or steering gear alone steer too.
+PROPULSION_KEYS = ("engine", "propellers", "thrusters", "waterjet")
+HELM_KEYS = PROPULSION_KEYS + ("rudders", "steering")
+
+
+class Equipment(NamedTuple):
+    """What a vessel has to be ordered and shown: gauges and keys only for these."""
+    engine: bool = True  # engine order and shaft speed
+    helm: bool = True  # helm order and rudder (or nozzle, azimuth) angle
+    anchor: bool = True  # let go / heave up
+
+
+def equipment(ship: Optional[dict]) -> Equipment:
+    """The Equipment of a ship file's mapping (scenario ship_overrides merged in); everything
+    for None (no ship file known: nothing is hidden)."""
+    if ship is None:
+        return Equipment()
+    return Equipment(engine=any(ship.get(k) for k in PROPULSION_KEYS),
+                     helm=any(ship.get(k) for k in HELM_KEYS), anchor=bool(ship.get("anchor")))
+
+
+def lacks(key: str, kit: Equipment) -> Optional[str]:
+    """What a key orders that the vessel does not have ("engine", "helm", "anchor"), or None."""
+    action = KEYS.get(key) or ""
+    need = ("engine" if action.startswith("engine") else "helm" if action in ("port", "starboard", "midships")
+            else "anchor" if action in ("let_go", "heave_up") else None)
+    return need if need is not None and not getattr(kit, need) else None
+
+
+def engine_words(order: float) -> str:
+    """An engine order (-1 .. 1) with two decimals and in percent ahead / astern: "+0.05 (5 % ahead)"."""
+    if order == 0.0:
+        return "stop"
+    return f"{order:+.2f} ({100.0 * abs(order):.0f} % {'ahead' if order > 0 else 'astern'})"
+
+
+def side_words(angle_deg: float, digits: int = 1, zero: str = "midships") -> str:
+    """An angle that is + to port (REP-103) in words: "5.0 deg port", "12.5 deg stbd", or `zero`
+    when it rounds to 0 at `digits` decimals."""
+    if round(abs(angle_deg), digits) == 0.0 or not math.isfinite(angle_deg):
+        return zero if math.isfinite(angle_deg) else "n/a"
+    return f"{abs(angle_deg):.{digits}f} deg {'port' if angle_deg > 0 else 'stbd'}"
+
+
+def turn_words(yaw_rate_deg_min: float) -> str:
+    """A rate of turn (deg/min, + to port as a REP-103 yaw rate) in words: "12.3 deg/min to port"."""
+    if round(abs(yaw_rate_deg_min), 1) == 0.0:
+        return "steady"
+    return f"{abs(yaw_rate_deg_min):.1f} deg/min to {'port' if yaw_rate_deg_min > 0 else 'stbd'}"
 
 
 def _clamp(v: float, lo: float, hi: float) -> float:
@@ -38,11 +93,11 @@ class Orders:
         self.last_key = -1e9  # time.monotonic() of the last key that meant something
 
     def sync(self, engine: float, helm_deg: float) -> None:
-        """Start from the orders the vessel holds (rounded to the key steps, within range)."""
+        """Start from the orders the vessel holds, as the screen shows them (engine to 0.01, helm
+        to 0.1 deg; within range): a held 0.05 stays 0.05, and a key steps from it."""
         if math.isfinite(engine) and math.isfinite(helm_deg):
-            self.engine = round(_clamp(engine, -1.0, 1.0), 1)
-            self.helm_deg = _clamp(round(helm_deg / HELM_STEP_DEG) * HELM_STEP_DEG, -self.max_helm_deg,
-                                   self.max_helm_deg)
+            self.engine = round(_clamp(engine, -1.0, 1.0), 2)
+            self.helm_deg = round(_clamp(helm_deg, -self.max_helm_deg, self.max_helm_deg), 1)
 
     def key(self, key: str) -> Optional[str]:
         """Apply one key; returns what changed ("vessel", "winch") or None for a key that

@@ -14,11 +14,12 @@ corrupt file is reported (path, byte offset, what is wrong) and its readable par
 Writes to the output directory (default: <recording without .mcap>_analysis/):
   tracks.png           XY tracks (map frame, x east, y north) of every vessel and rope element
                        (snapshots of each rope and the paths of selected elements)
-  yaw.png              yaw (heading) angle of every vessel, unwrapped, deg
-  speed_yaw_rate.png   speed over ground and yaw rate of every vessel
+  yaw.png              heading of every vessel, deg true
+  speed_yaw_rate.png   speed over ground (kn) and rate of turn (deg/min) of every vessel
   motions.png          speed, roll and pitch histories of every vessel (the planing-hull figure;
                        roll / pitch panels only where they are more than round-off)
-  orders_<vessel>.png  helm ordered / actual, engine order and rpm, thrust, girting ratio
+  orders_<vessel>.png  helm ordered / actual, engine order and rpm, thrust, girting ratio (not for
+                       a vessel whose orders are all zero: an unpowered barge)
   towline_tension.png  tension at end a and end b of every rope, kN, with the breaking load,
                        and the towline angle at the ends made fast on a vessel
   rope_heights.png     heights z of selected rope elements (and the lowest element) over time
@@ -233,7 +234,7 @@ def report(say, recording: str, f: McapFile, summary: dict) -> None:
         + (" (DAMAGED FILE: readable part only)" if f.problems else ""))
     for name, v in summary["vessels"].items():
         say(f"  vessel {name}: {v['samples']} states, {v['t_start']:.1f} .. {v['t_end']:.1f} s, distance "
-            f"{v['distance_run']:.1f} m, max speed {v['speed_max']:.2f} m/s")
+            f"{v['distance_run']:.1f} m, max speed over ground {v['speed_max'] / KN:.2f} kn")
         t = v.get("turn")
         if t:
             fmt = lambda k, scale=1.0: "-" if t.get(k) is None else f"{t[k] * scale:.1f}"  # noqa: E731

@@ -1,6 +1,8 @@
 """The figures of a recording (PNG, matplotlib with the Agg backend): the only module of
 `analyze` that needs matplotlib. Which files it writes and what they show: analysis.py's
-docstring and docs/tools.md.
+docstring and docs/tools.md. These are figures for people: speeds in knots, headings as compass
+degrees true, rates of turn in deg/min (+ to port, as every signed angle here: REP-103); the
+summary files keep SI.
 """
 from __future__ import annotations
 
@@ -10,8 +12,12 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from recording.measures import towline_angle
+from recording.measures import KN, towline_angle
 from recording.recorded_run import Recording, status_column
+from sim_math.trials import compass_deg
+
+# status fields that are all zero on a vessel that was given no order and did nothing with one
+ORDER_FIELDS = ("engine_order", "steering_angle_ordered", "steering_angle", "shaft_speed", "thrust")
 
 
 def _rope_element_series(rope: dict, k: int, key: str):
@@ -58,7 +64,7 @@ def make_figures(rec: Recording, out_dir: str, elements: int = 5, snapshots: int
         _speed_yaw_rate_figure(out, rec)
         _motions_figure(out, rec)
     for name, v in rec.vessels.items():
-        if "status" in v and len(v["status"]["t"]):
+        if "status" in v and len(v["status"]["t"]) and not never_ordered(v["status"]):
             _orders_figure(out, name, v)
     ropes = {n: r for n, r in rec.ropes.items() if "t" in r or "wrench_a" in r or "wrench_b" in r}
     if ropes:
@@ -109,13 +115,35 @@ def _tracks_figure(out: _Figures, rec: Recording, snapshots: int) -> None:
     out.save(fig, "tracks.png")
 
 
+def never_ordered(status: dict) -> bool:
+    """Whether a vessel's status shows no order and no response throughout (engine order, helm
+    ordered and actual, shaft speed, thrust all zero): an unpowered barge, or a vessel left
+    stopped. It gets no orders figure (an all-zero figure says nothing)."""
+    return all(not np.any(status_column(status, f)) for f in ORDER_FIELDS)
+
+
+def heading_deg_true(yaw: np.ndarray) -> np.ndarray:
+    """Compass headings (deg true, [0, 360)) of REP-103 yaws, NaN where they cross north (no
+    vertical line across the 0 / 360 seam)."""
+    deg = np.array([compass_deg(float(y)) for y in yaw])
+    deg[1:][np.abs(np.diff(deg)) > 180.0] = np.nan
+    return deg
+
+
 def _yaw_figure(out: _Figures, rec: Recording) -> None:
+    """Heading of every vessel as a compass reads it (yaw.png: the file keeps its name)."""
     fig, ax = out.plt.subplots(figsize=(8, 4))
+    spans = []
     for name, v in rec.vessels.items():
-        ax.plot(v["t"], np.degrees(v["yaw_unwrapped"]), label=name)
+        deg = heading_deg_true(v["yaw"])
+        ax.plot(v["t"], deg, label=name)
+        spans += [np.nanmin(deg), np.nanmax(deg)] if np.any(np.isfinite(deg)) else []
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("yaw (deg, unwrapped, + to port)")
-    ax.set_title("Yaw angles")
+    ax.set_ylabel("heading (deg true)")
+    if spans and max(spans) - min(spans) > 90.0:  # the whole compass; a small change keeps its scale
+        ax.set_ylim(-5, 365)
+        ax.set_yticks([0, 90, 180, 270, 360])
+    ax.set_title("Headings")
     ax.grid(alpha=0.3)
     ax.legend()
     out.save(fig, "yaw.png")
@@ -124,15 +152,15 @@ def _yaw_figure(out: _Figures, rec: Recording) -> None:
 def _speed_yaw_rate_figure(out: _Figures, rec: Recording) -> None:
     fig, axs = out.plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for name, v in rec.vessels.items():
-        axs[0].plot(v["t"], v["speed"], label=name)
-        axs[1].plot(v["t"], np.degrees(v["r"]), label=name)
-    axs[0].set_ylabel("speed over ground (m/s)")
-    axs[1].set_ylabel("yaw rate (deg/s)")
+        axs[0].plot(v["t"], v["speed"] / KN, label=name)
+        axs[1].plot(v["t"], np.degrees(v["r"]) * 60.0, label=name)
+    axs[0].set_ylabel("speed over ground (kn)")
+    axs[1].set_ylabel("rate of turn (deg/min, + to port)")
     axs[1].set_xlabel("time (s)")
     for a in axs:
         a.grid(alpha=0.3)
         a.legend()
-    axs[0].set_title("Speed and yaw rate")
+    axs[0].set_title("Speed and rate of turn")
     out.save(fig, "speed_yaw_rate.png")
 
 
@@ -142,7 +170,7 @@ NOISE_DEG = 0.01  # a roll or pitch history that never spans this much is a 3-DO
 def _motions_figure(out: _Figures, rec: Recording) -> None:
     """Speed, and roll, pitch and rise where some vessel has them (a 3-DOF model's pitch is
     round-off and gets no panel; the rise is reported by planing hulls)."""
-    panels = [("speed", "speed (m/s)", {n: (v["t"], v["speed"]) for n, v in rec.vessels.items()})]
+    panels = [("speed", "speed over ground (kn)", {n: (v["t"], v["speed"] / KN) for n, v in rec.vessels.items()})]
     for key, label in (("roll", "roll (deg, + stbd down)"), ("pitch", "pitch (deg, + bow down)")):
         series = {n: (v["t"], np.degrees(v[key])) for n, v in rec.vessels.items()}
         if any(np.ptp(y) > NOISE_DEG for _, y in series.values() if y.size):
@@ -220,7 +248,7 @@ def _tension_figure(out: _Figures, rec: Recording, ropes: Dict[str, dict], break
             a.axhline(breaking[name] / 1e3, color="r", ls=":", label=f"breaking load {breaking[name] / 1e3:.0f} kN")
         a.set_ylabel("tension (kN)")
         a.set_xlabel("time (s)")
-        a.set_title(f"Towline {name}: tension at both ends")
+        a.set_title(f"{name}: tension at both ends")
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
         if angles[name]:

@@ -24,7 +24,6 @@ import signal
 import sys
 from typing import Callable, Dict, List, Optional, Tuple
 
-import numpy as np
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
@@ -35,6 +34,7 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 from scenario_runner import conductor as cd
 from scenario_runner import run_nodes
 from scenario_runner.node_processes import LAYOUTS
+from scenario_runner.run_summary import summary, write_runner_notes
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
 from recording.recorder import McapRecorder, OutputClaim, RecordingInUse, readable_extent
 from scenario_format.particulars import recording_metadata, scenario_path
@@ -108,51 +108,6 @@ class Monitor(Node):
     def _event(self, msg: ScenarioEvent) -> None:
         if msg.kind == "rope_parted" and msg.target in self.broken:
             self.broken[msg.target] = True
-
-
-def summary(sc, stats: cd.RunStats, mon: Monitor) -> str:
-    sim_time = stats.steps_done / sc.exchange_rate
-    lines = [f"scenario '{sc.name}': {sim_time:.1f} s simulated in {stats.wall_time:.1f} s wall "
-             f"({sim_time / max(stats.wall_time, 1e-9):.1f}x real time, {stats.steps_done} steps at "
-             f"{sc.exchange_rate:g} Hz, {sc.mode})"]
-    if stats.round_trips:
-        lines.append(f"  step round trip: p50 {1e3 * cd.percentile(stats.round_trips, 50):.2f} ms, "
-                     f"p99 {1e3 * cd.percentile(stats.round_trips, 99):.2f} ms")
-    if stats.steps_done and math.isfinite(stats.cpu_time):
-        lines.append(f"  CPU per step, all processes: {1e3 * stats.cpu_time / stats.steps_done:.2f} ms"
-                     + (" (of this runner and the nodes it started; external nodes not counted)"
-                        if stats.external else ""))
-    if stats.compute_times:
-        lines.append("  compute per step: " + ", ".join(
-            f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
-    if stats.rescued:
-        lines.append(f"  runner: {stats.rescued} StepDone(s) the executor held back, taken directly "
-                     "(rclpy EventsExecutor; see sim_plumbing.ros_common.take_missed)")
-    if stats.refused or any(stats.node_refused.values()):
-        lines.append("  refused protocol messages (logged, not used): " + ", ".join(
-            [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +
-            [f"{node}: {n}" for node, n in sorted(stats.node_refused.items()) if n]))
-    if stats.strangers:
-        lines.append("  strangers on the step protocol's topics (their messages refused): " + "; ".join(
-            f"{who} from step {k}" for who, k in sorted(stats.strangers.items())))
-    if stats.outputs_checked:
-        lines.append(f"  step count checked: {stats.steps_done} steps, as recorded of every node "
-                     f"({stats.outputs_checked} per-step output topics)")
-    if stats.never_fired:
-        lines.append(f"  never triggered (their condition did not hold before the end): {', '.join(stats.never_fired)}")
-    if sc.mode == "realtime":
-        lines.append(f"  realtime: {stats.overruns} overrun step(s); lateness p99 "
-                     f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
-    for rope, values in mon.tension.items():
-        if values:
-            t = np.asarray(values)
-            lines.append(f"  rope {rope}: towline tension peak {t.max() / 1e3:.1f} kN, "
-                         f"mean {t.mean() / 1e3:.1f} kN{', PARTED' if mon.broken[rope] else ''}")
-    for vessel, od in sorted(mon.odom.items()):
-        p = od.pose.pose.position
-        u = od.twist.twist.linear.x
-        lines.append(f"  vessel {vessel}: final position x {p.x:.1f} m, y {p.y:.1f} m, surge speed {u:.2f} m/s")
-    return "\n".join(lines)
 
 
 def check_writable(path: str, what: str) -> Optional[str]:
@@ -359,6 +314,7 @@ def run_and_report(plan: RunPlan, args, claim: Optional[OutputClaim], starting: 
     if stats is None:
         return exit_code
     print(summary(plan.sc, stats, mon))
+    write_runner_notes(plan.log_dir, stats)
     if recorder:
         print(f"  recording: {os.path.abspath(plan.output)} ({sum(recorder.counts.values())} messages on "
               f"{len(recorder.counts)} topics)" + (f"; not recorded, undecodable: {recorder.refused}"
