@@ -261,8 +261,9 @@ class NmeaOut(Node):
         """What a node started without the run's scenario cannot send, said in its log."""
         out = []
         if not ships:
-            no_files = [v for v in self.vessels if not any(i.startswith(f"{v}=") for i in cfg["ship_files"])]
-            if no_files and len(self.vessels) > 1:
+            targets = [v for v in self.vessels if any(own != v for own in self.outputs or self.vessels)]
+            no_files = [v for v in targets if not any(i.startswith(f"{v}=") for i in cfg["ship_files"])]
+            if no_files:
                 out.append(f"no 'scenario' (the run's scenario file) and no 'ship_files' for {', '.join(no_files)}: "
                            "their AIS static data (type 5) carry no length, beam or draught (0 m); give "
                            "-p scenario:=<the run's scenario file>")
