@@ -114,3 +114,21 @@ def test_an_older_foxglove_client_subscribes_and_decodes_odometry(tmp_path, ros_
         assert m["angular"] == [tw.angular.x, tw.angular.y, tw.angular.z]
     # the tug was moving: the comparison was not of zeros
     assert all(m["stamp"]["sec"] >= AFTER_S and abs(m["linear"][0]) > 0.1 for m in got["messages"]), got["messages"]
+
+
+def test_subprotocol_negotiation_in_process():
+    """The front door's choice (live_view.front): the SDK's name when offered, else the older
+    name of the same protocol, else a refusal naming both; the header rewritten in a head, the
+    other lines byte for byte."""
+    from live_view.front import negotiate_subprotocol, offered_subprotocols, with_subprotocol
+    assert negotiate_subprotocol(["foxglove.websocket.v1", "foxglove.sdk.v1"]) == ("foxglove.sdk.v1", None)
+    assert negotiate_subprotocol(["foxglove.websocket.v1"]) == ("foxglove.websocket.v1", None)
+    for offered in ([], ["some.other.protocol"], ["foxglove.websocket.v2"]):
+        chosen, why = negotiate_subprotocol(offered)
+        assert chosen is None and "foxglove.sdk.v1 or foxglove.websocket.v1" in why, why
+    assert offered_subprotocols({"sec-websocket-protocol": " a , foxglove.websocket.v1,,"}) == \
+        ["a", "foxglove.websocket.v1"]
+    head = (b"HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nSec-WebSocket-Accept: s3pPLMBiTxaQ9kYGzzhZRbK+xOo="
+            b"\r\nsec-websocket-protocol: foxglove.sdk.v1\r\n\r\n")
+    assert with_subprotocol(head, "foxglove.websocket.v1") == head.replace(
+        b"sec-websocket-protocol: foxglove.sdk.v1", b"sec-websocket-protocol: foxglove.websocket.v1")
