@@ -101,7 +101,8 @@ def test_an_older_foxglove_client_subscribes_and_decodes_odometry(tmp_path, ros_
     assert got["channel"] == {"topic": "/tug/odom", "encoding": "cdr", "schemaName": "nav_msgs/msg/Odometry",
                               "schemaEncoding": "ros2msg"}, got["channel"]
     assert len(got["messages"]) == COUNT
-    recorded = {m.header.stamp.sec * 10**9 + m.header.stamp.nanosec: m for m in decoded(out, ["/tug/odom"])["/tug/odom"]}
+    odom = decoded(out, ["/tug/odom"])["/tug/odom"]
+    recorded = {m.header.stamp.sec * 10**9 + m.header.stamp.nanosec: m for m in odom}
     for m in got["messages"]:
         assert m["consumed"] == m["length"], m  # the whole message is an Odometry, field for field
         stamp = m["stamp"]["sec"] * 10**9 + m["stamp"]["nanosec"]
@@ -128,7 +129,7 @@ def test_subprotocol_negotiation_in_process():
         assert chosen is None and "foxglove.sdk.v1 or foxglove.websocket.v1" in why, why
     assert offered_subprotocols({"sec-websocket-protocol": " a , foxglove.websocket.v1,,"}) == \
         ["a", "foxglove.websocket.v1"]
-    head = (b"HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nSec-WebSocket-Accept: s3pPLMBiTxaQ9kYGzzhZRbK+xOo="
-            b"\r\nsec-websocket-protocol: foxglove.sdk.v1\r\n\r\n")
+    head = (b"HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\n"
+            b"Sec-WebSocket-Accept: s3pPLMBiTxaQ9kYGzzhZRbK+xOo=\r\nsec-websocket-protocol: foxglove.sdk.v1\r\n\r\n")
     assert with_subprotocol(head, "foxglove.websocket.v1") == head.replace(
         b"sec-websocket-protocol: foxglove.sdk.v1", b"sec-websocket-protocol: foxglove.websocket.v1")
