@@ -100,8 +100,9 @@ def _reports(datagrams):
                 parts = []
             continue
         msg = pynmea2.parse(line, check=True)
-        assert msg.talker == {"RMC": "GP", "GGA": "GP", "VTG": "GP", "HDT": "HE", "ROT": "HE", "RSA": "II",
-                              "RPM": "ER", "XDR": "II"}[msg.sentence_type], line
+        # heading and engine talkers: the defaults (II), which gpsd reads (test_nmea_gpsd.py)
+        assert msg.talker == {"RMC": "GP", "GGA": "GP", "VTG": "GP", "HDT": "II", "ROT": "II", "RSA": "II",
+                              "RPM": "II", "XDR": "II"}[msg.sentence_type], line
         if msg.sentence_type == "RMC":
             reports.append((msg, [], []))
         else:
@@ -271,3 +272,23 @@ def test_attitude_sentence_of_a_status_message():
     assert S.attitude_xdr(*attitude(st)).startswith("$IIXDR,A,-1.0,D,PTCH,A,-4.0,D,ROLL*")
     with pytest.raises(pynmea2.ChecksumError):
         pynmea2.parse(line[:-2] + ("00" if line[-2:] != "00" else "01"), check=True)
+
+
+def test_heading_and_engine_talkers_are_chosen_and_checked():
+    """The talkers of HDT / ROT and RPM: II by default (gpsd 3.22 drops HE and ER), any valid
+    two-character talker when chosen (a gyro's HE, the engine room's ER); a talker that is not
+    two upper-case letters or digits, or a proprietary P..., is refused naming it."""
+    import datetime as dt
+    import pynmea2
+    from bridge_instruments import sentences as S
+    ship = S.OwnShip(1.0, 51.98, 4.05, 5.0, 45.0, 44.0, 12.0, -3.0, 100.0, 520.0)
+    start = dt.datetime(2026, 3, 4, tzinfo=dt.timezone.utc)
+    talkers = {pynmea2.parse(line, check=True).sentence_type: line[1:3] for line in S.own_ship_sentences(ship, start)}
+    assert (talkers["HDT"], talkers["ROT"], talkers["RPM"]) == ("II", "II", "II")
+    chosen = [pynmea2.parse(line, check=True) for line in S.own_ship_sentences(ship, start, S.Talkers("HE", "ER"))]
+    assert [(m.talker, m.sentence_type) for m in chosen if m.sentence_type in ("HDT", "ROT", "RPM")] == \
+        [("HE", "HDT"), ("HE", "ROT"), ("ER", "RPM"), ("ER", "RPM")]
+    assert float(chosen[3].heading) == 44.0
+    assert S.check_talker("GP") is None and S.check_talker("I1") is None
+    for bad in ("", "H", "he", "HEX", "PG", "H-"):
+        assert S.check_talker(bad) and repr(bad) in S.check_talker(bad), bad

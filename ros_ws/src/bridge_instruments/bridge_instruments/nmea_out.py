@@ -1,7 +1,12 @@
 """NMEA 0183 and AIS out: a running simulation as an ECDIS sees it.
 
-    ros2 run bridge_instruments nmea_out --ros-args -p vessels:=[tug,barge] \
-        -p outputs:=[tug@127.0.0.1:10110] -p rate:=1.0
+    ros2 run bridge_instruments nmea_out --ros-args -p scenario:=default_demo.yaml \
+        -p "outputs:=['tug@127.0.0.1:10110']"
+
+(a string array parameter is written in YAML's flow style, quoted for the shell). Parameters left
+at their defaults take the values of the run's scenario file, `scenario`: its vessels, ropes,
+exchange rate, origin and `nmea` settings (_settings); without it, `vessels` must be given, and
+what the node then cannot send (AIS dimensions, tensions) is said in its log.
 
 For every own vessel (`outputs`: "vessel@host:port") it sends, over UDP to that destination, one
 sentence per datagram: RMC, GGA, VTG, HDT, ROT, RSA, RPM (engine and shaft), one XDR per rope
@@ -46,6 +51,7 @@ from sim_contract import topics as T
 from sim_contract.equipment import NMEA_UDP_PORT, check_mmsi, parse_utc
 from sim_contract.node_params import NMEA_OUT
 from scenario_format.particulars import hull_dimensions, scenario_path, scenario_ships
+from scenario_format.scenario import ScenarioError, load_scenario
 
 _HOST = re.compile(r"^(?=.{1,253}$)[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?(\.[A-Za-z0-9]([A-Za-z0-9-]{0,61}"
                    r"[A-Za-z0-9])?)*\.?$|^[0-9A-Fa-f:.]+$")
@@ -165,41 +171,45 @@ class NmeaOut(Node):
         super().__init__(name, **kwargs)
         rc.declare_table(self, NMEA_OUT)
         rc.refuse_fixed_parameters(self, NMEA_OUT)
-        gp = self.get_parameter
-        self.vessels = [v for v in gp("vessels").value if v]
-        if not self.vessels:
-            raise ValueError("parameter 'vessels': name the vessels of the run, e.g. [tug, barge]")
-        self.origin = geo.Origin(gp("origin_latitude").value, gp("origin_longitude").value, gp("origin_height").value)
-        self.utc_start = parse_utc(gp("utc_start").value)
-        self.tick_ns = max(1, round(1e9 / gp("rate").value))
-        self.period_ns = rc.period_ns(gp("exchange_rate").value)
-        self.static_every = int(gp("static_every").value)
         log = self.get_logger()
+        cfg, ships = self._settings()
+        self.vessels = [v for v in cfg["vessels"] if v]
+        if not self.vessels:
+            raise ValueError("parameter 'vessels': name the vessels of the run, e.g. [tug, barge] (or give "
+                             "'scenario', the run's scenario file, which names them)")
+        self.origin = geo.Origin(cfg["origin_latitude"], cfg["origin_longitude"], cfg["origin_height"])
+        self.utc_start = parse_utc(cfg["utc_start"])
+        self.tick_ns = max(1, round(1e9 / cfg["rate"]))
+        self.period_ns = rc.period_ns(cfg["exchange_rate"])
+        self.static_every = int(cfg["static_every"])
+        self.talkers = S.Talkers(cfg["heading_talker"], cfg["engine_talker"])
+        for key, talker in zip(("heading_talker", "engine_talker"), self.talkers):
+            if S.check_talker(talker):
+                raise ValueError(f"parameter '{key}': {S.check_talker(talker)}")
         self.outputs: Dict[str, List[Destination]] = collections.defaultdict(list)
-        for item in gp("outputs").value:
+        for item in cfg["outputs"]:
             if item:
                 vessel, host, port = parse_output(item)
                 if vessel not in self.vessels:
                     raise ValueError(f"parameter 'outputs': vessel {vessel!r} is not in 'vessels' {self.vessels}")
                 self.outputs[vessel].append(Destination(vessel, host, port, log))
-        mmsi = {k: int(v) for k, v in _pairs(gp("mmsi").value, "mmsi").items()}
+        mmsi = {k: int(v) for k, v in _pairs(cfg["mmsi"], "mmsi").items()}
         self.mmsi = {v: mmsi.get(v, S.default_mmsi(i)) for i, v in enumerate(self.vessels)}
         for v, m in self.mmsi.items():
             if check_mmsi(m):
                 raise ValueError(f"parameter 'mmsi': {v}: {check_mmsi(m)}")
-        self.gear = {k: float(v) for k, v in _pairs(gp("gear_ratios").value, "gear_ratios").items()}
+        self.gear = {k: float(v) for k, v in _pairs(cfg["gear_ratios"], "gear_ratios").items()}
         # rope ends on vessels: vessel -> [(rope, end)]
         self.rope_ends: Dict[str, List[Tuple[str, str]]] = collections.defaultdict(list)
         towing = set()
-        for rope, ends in _pairs(gp("ropes").value, "ropes").items():
+        for rope, ends in _pairs(cfg["ropes"], "ropes").items():
             for end, spec in zip("ab", ends.split(",")):
                 vessel = spec.split("/")[0] if "/" in spec else None
                 if vessel in self.vessels:
                     self.rope_ends[vessel].append((rope, end))
                     if end == "a":
                         towing.add(vessel)
-        self.particulars = self._particulars(_pairs(gp("ship_files").value, "ship_files"), gp("scenario").value,
-                                             towing)
+        self.particulars = self._particulars(_pairs(cfg["ship_files"], "ship_files"), ships, towing)
         # latest serialized messages of due steps: stamp -> {topic: bytes}
         self.pending: Dict[int, Dict[str, bytes]] = {}
         self.needed = [T.vessel_topic(v, T.ODOM) for v in self.vessels] + [T.vessel_topic(v, T.STATUS) for v in self.vessels]
@@ -210,17 +220,62 @@ class NmeaOut(Node):
             self.create_subscription(_TYPES[topic.rsplit("/", 1)[1]], topic,
                                      lambda data, topic=topic: self._on_message(topic, data), rc.STATE_QOS, raw=True)
         dests = ", ".join(f"{v} -> {d.name}" for v, ds in self.outputs.items() for d in ds)
-        log.info(f"NMEA 0183 / AIS out at {gp('rate').value:g} Hz of simulation time: {dests or 'no output'}; "
+        log.info(f"NMEA 0183 / AIS out at {cfg['rate']:g} Hz of simulation time: {dests or 'no output'}; "
                  f"origin {self.origin.latitude:.6f}, {self.origin.longitude:.6f}; MMSI {self.mmsi}")
+        for line in self._lacking(cfg, ships):
+            log.warning(line)
 
-    def _particulars(self, files: Dict[str, str], scenario: str, towing: set) -> Dict[str, S.Particulars]:
-        ships = {}
-        if scenario:
-            ships = scenario_ships(scenario_path(scenario))
-            strangers = sorted(set(self.vessels) - set(ships))
-            if strangers:
-                raise ValueError(f"parameter 'scenario': {scenario} has no vessel {', '.join(strangers)} "
-                                 f"(its vessels: {', '.join(ships)})")
+    def _settings(self) -> Tuple[dict, Dict[str, Tuple[str, dict]]]:
+        """(the parameters' values, with those left at their defaults taken from the scenario the
+        parameter `scenario` names; its vessels' (ship file, ship_overrides)). A run's runner
+        passes every value; a person who starts the node by hand names the scenario and the
+        outputs, and gets the run's vessels, ropes, exchange rate, origin and `nmea` settings."""
+        cfg = {p.name: self.get_parameter(p.name).value for p in NMEA_OUT}
+        if not cfg["scenario"]:
+            return cfg, {}
+        path = scenario_path(cfg["scenario"])
+        try:
+            sc = load_scenario(path, check_files=False)
+        except ScenarioError as exc:
+            raise ValueError(f"parameter 'scenario': {exc}") from None
+        ships = scenario_ships(path)
+        given = {"vessels": [v.name for v in sc.vessels], "exchange_rate": float(sc.exchange_rate),
+                 "ropes": [f"{r.name}={r.end_a},{r.end_b}" for r in sc.ropes],
+                 "origin_latitude": float(sc.origin.latitude), "origin_longitude": float(sc.origin.longitude),
+                 "origin_height": float(sc.origin.height)}
+        if sc.nmea is not None:
+            n = sc.nmea
+            given.update(rate=float(n.rate), utc_start=n.utc_start, static_every=int(n.static_every),
+                         mmsi=[f"{k}={m}" for k, m in n.mmsi.items()],
+                         gear_ratios=[f"{k}={g!r}" for k, g in n.gear_ratios.items()])
+        for key, value in given.items():
+            if cfg[key] == NMEA_OUT[key].default and value != []:
+                cfg[key] = value
+        strangers = sorted(set(v for v in cfg["vessels"] if v) - set(ships))
+        if strangers:
+            raise ValueError(f"parameter 'scenario': {cfg['scenario']} has no vessel {', '.join(strangers)} "
+                             f"(its vessels: {', '.join(ships)})")
+        return cfg, ships
+
+    def _lacking(self, cfg: dict, ships: dict) -> List[str]:
+        """What a node started without the run's scenario cannot send, said in its log."""
+        out = []
+        if not ships:
+            targets = [v for v in self.vessels if any(own != v for own in self.outputs or self.vessels)]
+            no_files = [v for v in targets if not any(i.startswith(f"{v}=") for i in cfg["ship_files"])]
+            if no_files:
+                out.append(f"no 'scenario' (the run's scenario file) and no 'ship_files' for {', '.join(no_files)}: "
+                           "their AIS static data (type 5) carry no length, beam or draught (0 m); give "
+                           "-p scenario:=<the run's scenario file>")
+            if not any(r for r in cfg["ropes"]):
+                out.append("no 'scenario' and no 'ropes': no tension sentences ($IIXDR,N); give "
+                           "-p scenario:=<the run's scenario file>")
+        if not self.outputs:
+            out.append("no 'outputs': nothing is sent; give e.g. -p \"outputs:=['tug@127.0.0.1:10110']\"")
+        return out
+
+    def _particulars(self, files: Dict[str, str], ships: Dict[str, Tuple[str, dict]],
+                     towing: set) -> Dict[str, S.Particulars]:
         out = {}
         for v in self.vessels:
             length = beam = draft = 0.0
@@ -278,7 +333,8 @@ class NmeaOut(Node):
                 tensions.append((rope, math.sqrt(sum(c * c for c in w.force))))
             lines = S.own_ship_sentences(S.OwnShip(
                 t, k["lat"], k["lon"], k["sog"], k["cog"], k["hdg"], k["rot"], -math.degrees(st.steering_angle),
-                shaft_rpm, shaft_rpm * self.gear.get(own, 1.0), tuple(tensions), *attitude(st)), self.utc_start)
+                shaft_rpm, shaft_rpm * self.gear.get(own, 1.0), tuple(tensions), *attitude(st)), self.utc_start,
+                self.talkers)
             for other in self.vessels:
                 if other == own:
                     continue

@@ -10,12 +10,12 @@ simulation time of the state they report, UTC = utc_start + t):
   $GPGGA  time, lat, lon, fix quality 1, 12 satellites, HDOP 0.8, 0.0 M, 0.0 M (antenna at the
           still-water surface over the map origin's height), no DGPS
   $GPVTG  COG deg true, T, (no magnetic), M, SOG kn, N, SOG km/h, K, mode A
-  $HEHDT  heading deg true, T (gyro)
-  $HEROT  rate of turn deg/min (negative: bow turns to port), A
+  $IIHDT  heading deg true, T (talker: `heading_talker`, default II)
+  $IIROT  rate of turn deg/min (negative: bow turns to port), A (talker: `heading_talker`)
   $IIRSA  rudder angle (negative: bow turns to port, i.e. REP-103 positive steering is negative
           here), A; no second rudder: empty, V
-  $ERRPM  E (engine) 1 and S (shaft) 1, rpm (negative: turning astern), pitch empty (fixed
-          pitch), A
+  $IIRPM  E (engine) 1 and S (shaft) 1, rpm (negative: turning astern), pitch empty (fixed
+          pitch), A (talker: `engine_talker`, default II)
   $IIXDR  N (force), tension N, N (newton), the rope's name: one per rope with an end on the vessel
   $IIXDR  A, pitch, D, PTCH, A, roll, D, ROLL: the vessel's attitude (angular displacement, degrees,
           to 0.1 deg) in the convention of motion sensors on the bus (Airmar PB200 / LB150 manuals,
@@ -27,10 +27,16 @@ simulation time of the state they report, UTC = utc_start + t):
 other vessels:
   !AIVDM  type 1 position report (every time) and type 5 static and voyage data (every
           `static_every`-th time and the first), channel A.
+
+The heading and engine talkers are choices (Talkers): a gyro's HE and the engine room's ER are
+the standard ones, but gpsd (3.22, Debian 12) drops every sentence of a talker its lexer does
+not know, HE and ER among them, and then reports no heading; it reads II (integrated
+instrumentation), as it reads GP, HC, IN and TI.
 """
 from __future__ import annotations
 
 import datetime as _dt
+import re
 from typing import List, NamedTuple, Optional, Sequence, Tuple
 
 import pyais
@@ -55,6 +61,22 @@ class OwnShip(NamedTuple):
     tensions: Tuple[Tuple[str, float], ...] = ()  # (rope name, N)
     pitch_deg: Optional[float] = None  # + bow up (NMEA XDR PTCH); None: no attitude sentence
     roll_deg: Optional[float] = None  # + starboard side down (NMEA XDR ROLL)
+
+
+class Talkers(NamedTuple):
+    """Talker IDs of the own-vessel sentences whose sender a bridge names differently."""
+    heading: str = "II"  # HDT, ROT (a gyro: HE)
+    engine: str = "II"  # RPM (the engine room: ER)
+
+
+def check_talker(talker: str) -> Optional[str]:
+    """Why `talker` cannot be an NMEA 0183 talker ID (None if it can): two upper-case letters or
+    digits, not starting with P (proprietary sentences)."""
+    if not re.fullmatch(r"[A-Z][A-Z0-9]", talker or ""):
+        return f"{talker!r} is not two upper-case letters or digits (e.g. II, HE, GP)"
+    if talker.startswith("P"):
+        return f"{talker!r} starts with P, which marks a proprietary sentence"
+    return None
 
 
 class Target(NamedTuple):
@@ -114,7 +136,7 @@ def _render(talker: str, kind: str, fields: Sequence[str]) -> str:
     return cls(talker, kind, tuple(fields)).render(checksum=True, dollar=True, newline=False)
 
 
-def own_ship_sentences(s: OwnShip, utc_start: _dt.datetime) -> List[str]:
+def own_ship_sentences(s: OwnShip, utc_start: _dt.datetime, talkers: Talkers = Talkers()) -> List[str]:
     """The sentences of one own vessel at one time, without line endings."""
     when = utc_at(utc_start, s.t)
     lat, ns = _angle(s.latitude, 2, "NS")
@@ -125,11 +147,11 @@ def own_ship_sentences(s: OwnShip, utc_start: _dt.datetime) -> List[str]:
                               "A", "S")),
         _render("GP", "GGA", (_time(when), lat, ns, lon, ew, "1", "12", "0.8", "0.0", "M", "0.0", "M", "", "")),
         _render("GP", "VTG", (cog, "T", "", "M", sog, "N", _num(s.sog_kn * 1.852, 2), "K", "A")),
-        _render("HE", "HDT", (_bearing(s.heading_deg, 2), "T")),
-        _render("HE", "ROT", (_num(s.rot_deg_min, 2), "A")),
+        _render(talkers.heading, "HDT", (_bearing(s.heading_deg, 2), "T")),
+        _render(talkers.heading, "ROT", (_num(s.rot_deg_min, 2), "A")),
         _render("II", "RSA", (_num(s.rudder_deg, 2), "A", "", "V")),
-        _render("ER", "RPM", ("E", "1", _num(s.engine_rpm, 1), "", "A")),
-        _render("ER", "RPM", ("S", "1", _num(s.shaft_rpm, 1), "", "A")),
+        _render(talkers.engine, "RPM", ("E", "1", _num(s.engine_rpm, 1), "", "A")),
+        _render(talkers.engine, "RPM", ("S", "1", _num(s.shaft_rpm, 1), "", "A")),
     ]
     out += [_render("II", "XDR", ("N", _num(tension, 1), "N", name)) for name, tension in s.tensions]
     if s.pitch_deg is not None and s.roll_deg is not None:

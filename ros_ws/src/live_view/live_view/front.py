@@ -6,8 +6,17 @@ a WebSocket to 127.0.0.1. So the node puts this small asyncio server, in its own
 served host and port: it reads the HTTP upgrade request (at most MAX_HEAD bytes, within
 HEAD_TIMEOUT), refuses with 403 a wrong Host (DNS rebinding) or Origin (a page of another site)
 and with 503 a connection beyond ``max_clients``, each with a text naming what is wrong, counted
-and logged by the node (on_refused); an accepted request goes unchanged to the SDK server and the
-bytes are piped both ways until either side closes.
+and logged by the node (on_refused); an accepted request goes to the SDK server and the bytes are
+piped both ways until either side closes.
+
+Subprotocols: the SDK server speaks ``foxglove.sdk.v1`` only, the name Foxglove gave in 2025 to
+the protocol that was ``foxglove.websocket.v1``: the same messages, opcodes and fields (Foxglove's
+stance, github.com/orgs/foxglove/discussions/1131: "currently identical"; Lichtblick PR 819 added
+the new name beside the old for that reason; tests/ros/test_foxglove_older_client.py subscribes
+and decodes with ``@foxglove/ws-protocol`` 0.8.0). So a client that offers only the older name (ws-protocol 0.8,
+Lichtblick releases before December 2025) is passed on as if it had offered the new one,
+and the server's answer names the protocol the client offered (negotiate_subprotocol). A request
+offering neither is refused with 400 naming the two it may offer.
 
 The SDK server itself listens on 127.0.0.1, on a port of the system's choosing, with TLS (a
 key and self-signed certificate made at start-up by ``openssl``, never stored): a browser page
@@ -29,6 +38,9 @@ from typing import Callable, Dict, Optional, Tuple
 MAX_HEAD = 16384  # bytes of an upgrade request's line and headers
 HEAD_TIMEOUT = 10.0  # s to send them
 PIPE_CHUNK = 65536
+SDK_SUBPROTOCOL = "foxglove.sdk.v1"  # what the SDK server speaks
+OLDER_SUBPROTOCOLS = ("foxglove.websocket.v1",)  # the same protocol under its earlier name
+_PROTOCOL_HEADER = b"sec-websocket-protocol:"
 
 
 def make_certificate() -> Tuple[bytes, bytes]:
@@ -58,6 +70,32 @@ def parse_head(head: bytes) -> Tuple[str, Dict[str, str]]:
         name = name.strip().lower()
         headers[name] = f"{headers[name]}, {value.strip()}" if name in headers else value.strip()
     return lines[0], headers
+
+
+def offered_subprotocols(headers: Dict[str, str]) -> list:
+    """The subprotocols a WebSocket upgrade request offers, in its order."""
+    return [p.strip() for p in headers.get("sec-websocket-protocol", "").split(",") if p.strip()]
+
+
+def negotiate_subprotocol(offered: list) -> Tuple[Optional[str], Optional[str]]:
+    """(the subprotocol to answer the client with, None if it is refused; why refused). The SDK's
+    name is preferred; an older name of the same protocol is answered with that name."""
+    if SDK_SUBPROTOCOL in offered:
+        return SDK_SUBPROTOCOL, None
+    for name in offered:
+        if name in OLDER_SUBPROTOCOLS:
+            return name, None
+    return None, (f"the WebSocket subprotocols offered ({', '.join(offered) or 'none'}) are not the Foxglove "
+                  f"protocol: offer {SDK_SUBPROTOCOL} or {', '.join(OLDER_SUBPROTOCOLS)}")
+
+
+def with_subprotocol(head: bytes, name: str) -> bytes:
+    """An HTTP head (request or answer) whose Sec-WebSocket-Protocol header says only `name`."""
+    lines = head.split(b"\r\n")
+    for i, line in enumerate(lines):
+        if line.lower().startswith(_PROTOCOL_HEADER):
+            lines[i] = line[:len(_PROTOCOL_HEADER)] + b" " + name.encode("latin-1")
+    return b"\r\n".join(lines)
 
 
 def _answer(code: int, reason: str, text: str) -> bytes:
@@ -111,6 +149,10 @@ class CheckedFront:
                 kind, why = refusal
                 await self._refuse(reader, writer, kind, 403, "Forbidden", why)
                 return
+            answer_as, why = negotiate_subprotocol(offered_subprotocols(headers))
+            if answer_as is None:
+                await self._refuse(reader, writer, "subprotocol", 400, "Bad Request", why)
+                return
             try:
                 b_reader, b_writer = await asyncio.open_connection(
                     "127.0.0.1", self.backend_port, ssl=self.backend_ssl,
@@ -120,7 +162,11 @@ class CheckedFront:
                                    f"the live view is not serving: {exc}")
                 return
             self.accepted += 1
-            b_writer.write(head)
+            if answer_as != SDK_SUBPROTOCOL:
+                if not await self._upgrade_as(head, answer_as, writer, b_reader, b_writer):
+                    return
+            else:
+                b_writer.write(head)
             # either side ending ends the connection (a WebSocket is not used half-closed)
             pipes = [asyncio.ensure_future(self._pipe(reader, b_writer)),
                      asyncio.ensure_future(self._pipe(b_reader, writer))]
@@ -137,6 +183,22 @@ class CheckedFront:
                 self.active -= 1
             writer.close()
             self._tasks.discard(task)
+
+    @staticmethod
+    async def _upgrade_as(head: bytes, name: str, writer: asyncio.StreamWriter, b_reader: asyncio.StreamReader,
+                          b_writer: asyncio.StreamWriter) -> bool:
+        """Pass an upgrade request offering an older name of the protocol on as the SDK's, and the
+        server's answer back naming the client's (a client checks that the server chose one it
+        offered). False if the server closed before answering."""
+        b_writer.write(with_subprotocol(head, SDK_SUBPROTOCOL))
+        try:
+            answer = await asyncio.wait_for(b_reader.readuntil(b"\r\n\r\n"), HEAD_TIMEOUT)
+        except (asyncio.TimeoutError, asyncio.IncompleteReadError, asyncio.LimitOverrunError, OSError,
+                ssl.SSLError):
+            b_writer.close()
+            return False
+        writer.write(with_subprotocol(answer, name))
+        return True
 
     @staticmethod
     async def _pipe(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:

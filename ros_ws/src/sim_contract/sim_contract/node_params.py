@@ -204,8 +204,9 @@ NMEA_OUT = ParamTable(
                        f"{NMEA_UDP_PORT})", read_only=True),
     P("ropes", [""], "The run's ropes as in the scenario: \"rope=<end_a>,<end_b>\"", read_only=True),
     P("ship_files", [""], "\"vessel=path\": the ship files of the AIS dimensions", read_only=True),
-    P("scenario", "", "The run's scenario file: its vessels' ship files (where ship_files names none) and "
-                      "ship_overrides", read_only=True),
+    P("scenario", "", "The run's scenario file (path or library name): its vessels' ship files (where ship_files "
+                      "names none) and ship_overrides; parameters left at their defaults take its vessels, ropes, "
+                      "exchange rate, origin and nmea settings", read_only=True),
     P("mmsi", [""], "\"vessel=244990001\" (default 244990001, 244990002, ... in the order of vessels)",
       read_only=True),
     P("gear_ratios", [""], "\"vessel=5.2\": engine rpm / shaft rpm (default 1)", read_only=True),
@@ -216,6 +217,10 @@ NMEA_OUT = ParamTable(
     P("origin_height", 0.0, "ellipsoid height of the water", -1e3, 1e4, "m"),
     P("utc_start", DEFAULT_UTC_START, "UTC of simulation time 0 (ISO 8601)"),
     P("static_every", 10, "AIS type 5 every n-th report", 1, 100000),
+    P("heading_talker", "II", "Talker ID of the heading and rate-of-turn sentences (HDT, ROT); a gyro's is HE, "
+                              "which gpsd 3.22 drops (it reads II, GP, HC, IN, TI)", read_only=True),
+    P("engine_talker", "II", "Talker ID of the engine and shaft rpm sentences (RPM); the engine room's is ER, "
+                             "which gpsd 3.22 drops", read_only=True),
 )
 
 # live_view live_view: the Foxglove WebSocket server and the browser instructor station (in the
