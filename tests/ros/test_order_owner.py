@@ -44,7 +44,7 @@ def test_an_outside_order_takes_the_controls_it_changes_and_the_script_yields():
     assert "script yields" in notes[0].detail and "/send_command" in notes[0].detail
     assert "engine +0.80 (was +0.50)" in notes[0].detail and "helm 10.0 deg starboard" in notes[1].detail
     assert notes[0].value == 0.8 and notes[1].value == -H10
-    assert not confirm  # the conductor sent the tug nothing since
+    assert confirm  # taken: confirmed (the vessel holds what was announced even if the order missed it)
     # the script's engine and helm orders yield, the anchor does not: the order carries the person's values
     order, notes = o.script_vessel("tug", "events[2]", engine=0.0, helm=0.0, anchor=ANCHOR_LET_GO)
     assert (order.engine, order.helm, order.anchor) == (0.8, -H10, ANCHOR_LET_GO)
@@ -79,11 +79,13 @@ def test_confirmation_when_the_script_ordered_the_vessel_since_the_outside_order
     # stamped 49, seen at step 51: the script's order of step 50 may have been applied after it
     _, confirm = o.outside_vessel("tug", VesselOrder(0.9, H10), "/console", stamp_step=49)
     assert confirm and o.confirmation("tug") == VesselOrder(0.9, H10)
-    _, confirm = o.outside_vessel("tug", VesselOrder(0.1, H10), "/console", stamp_step=51)
-    assert not confirm
+    # the same person's next order, stamped after the script's last one: nothing to confirm
+    notes, confirm = o.outside_vessel("tug", VesselOrder(0.1, H10), "/console", stamp_step=51)
+    assert notes == [] and not confirm
     notes, confirm = o.outside_winch("towline", WinchOrder(0.0, 1, 0.0, 0.0, 9e4), "/console", stamp_step=0)
-    assert notes[0].control == "winch" and "brake hold" in notes[0].detail and not confirm
+    assert notes[0].control == "winch" and "brake hold" in notes[0].detail and confirm
     assert o.confirmation("towline") == WinchOrder(0.0, 1, 0.0, 0.0, 9e4)
+    assert o.outside_winch("towline", WinchOrder(0.1), "/console", stamp_step=0) == ([], False)
 
 
 def test_hand_back():
@@ -109,7 +111,7 @@ def test_a_manned_vessel_is_the_crews():
     order, notes = o.script_vessel("barge", "events[0]", engine=0.5)
     assert order is None and notes[0].kind == "scripted_order_yielded"
     notes, confirm = o.outside_vessel("barge", VesselOrder(0.4, H10), "/console", 0)
-    assert notes == [] and not confirm and o.held["barge"] == VesselOrder(0.4, H10)
+    assert notes == [] and not confirm and o.held["barge"] == VesselOrder(0.4, H10)  # the crew's: not echoed
     assert [n.kind for n in o.hand_back("barge", ["all"], "/x")] == ["hand_back_refused"]
     with pytest.raises(ValueError, match="ship"):
         _owners(manned=["ship"])

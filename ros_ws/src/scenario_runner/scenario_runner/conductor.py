@@ -511,6 +511,13 @@ class Conductor(Node):
                 self.event(k, note.kind, note.target, note.detail, note.value)
         return confirm
 
+    def announce_manned(self, k: int) -> None:
+        """The manned vessels, said at the start: every order of theirs is a person's."""
+        for i, v in enumerate(self.sc.vessels):
+            if v.manned:
+                self.event(k, "manual_order", v.name, f"{v.name} is manned (vessels[{i}].manned): engine, helm and "
+                           "anchor are the crew's; the script gives it no orders")
+
     def order_publishers(self):
         return list(self.cmd_pubs.values()) + list(self.winch_pubs.values())
 
@@ -743,6 +750,7 @@ class _Session:
         sc, conductor, executor, recorder, stats = self.sc, self.conductor, self.executor, self.recorder, self.stats
         conductor.event(0, "scenario_started", "", f"scenario '{sc.name}' (run {stats.run_id}): {n_steps} steps "
                         f"at {sc.exchange_rate:g} Hz, {sc.mode}")
+        conductor.announce_manned(0)
         t_start = time.monotonic()
         cpu_start = time.process_time() + self.procs.cpu_seconds()
         period = conductor.period_ns * 1e-9

@@ -68,15 +68,19 @@ def parse_args(argv):
     return args
 
 
-def _wait_for_readers(node, pub, topic: str, deadline: float, spin) -> bool:
+def _wait_for_readers(node, pub, topic: str, deadline: float, spin, wanted: str = "") -> bool:
     """Wait until every reader of topic the graph knows of (the vessel, a recorder, a console) has
-    matched, and the graph has shown no new one for SETTLE s: a volatile sample published before a
-    reader matches never reaches it. False if no reader matched by the deadline (with the vessel
-    matched, a reader still discovering at the deadline gets nothing)."""
+    matched, the graph shows a reader of the namespace `wanted` (the vessel node: the runner's
+    readers, discovered with /clock, can be all matched before the vessel's is known), and the
+    graph has shown no new one for SETTLE s: a volatile sample published before a reader matches
+    never reaches it. False if no reader matched by the deadline (with the vessel matched, a reader
+    still discovering at the deadline gets nothing)."""
     settled_since = None
     while True:
         now = time.monotonic()
-        if 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
+        found = not wanted or any(i.node_namespace.rstrip("/") == wanted
+                                  for i in node.get_subscriptions_info_by_topic(topic))
+        if found and 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
             settled_since = settled_since or now
             if now - settled_since >= SETTLE:
                 return True
@@ -107,7 +111,8 @@ def main(argv=None) -> int:
         # The clock first: once its publisher (the runner) is discovered, so are the runner's readers
         # (its recorder) in all but a rare case, which the settling below covers.
         clock.wait(spin, timeout=CLOCK_TIMEOUT, discovery=CLOCK_DISCOVERY)
-        if not _wait_for_readers(node, pub, topic, time.monotonic() + args.wait, spin):
+        if not _wait_for_readers(node, pub, topic, time.monotonic() + args.wait, spin,
+                                 wanted="" if hand_back else f"/{name}"):
             listener = "the scenario runner" if hand_back else f"the vessel node for '{args.vessel}'"
             sys.stderr.write(f"send_command: no subscriber on {topic} after {args.wait:g} s "
                              f"(is {listener} running, same ROS_DOMAIN_ID?)\n")
