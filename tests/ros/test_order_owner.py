@@ -44,7 +44,7 @@ def test_an_outside_order_takes_the_controls_it_changes_and_the_script_yields():
     assert "script yields" in notes[0].detail and "/send_command" in notes[0].detail
     assert "engine +0.80 (was +0.50)" in notes[0].detail and "helm 10.0 deg starboard" in notes[1].detail
     assert notes[0].value == 0.8 and notes[1].value == -H10
-    assert confirm  # taken: confirmed (the vessel holds what was announced even if the order missed it)
+    assert not confirm  # the conductor sent the tug nothing since
     # the script's engine and helm orders yield, the anchor does not: the order carries the person's values
     order, notes = o.script_vessel("tug", "events[2]", engine=0.0, helm=0.0, anchor=ANCHOR_LET_GO)
     assert (order.engine, order.helm, order.anchor) == (0.8, -H10, ANCHOR_LET_GO)
@@ -83,9 +83,10 @@ def test_confirmation_when_the_script_ordered_the_vessel_since_the_outside_order
     notes, confirm = o.outside_vessel("tug", VesselOrder(0.1, H10), "/console", stamp_step=51)
     assert notes == [] and not confirm
     notes, confirm = o.outside_winch("towline", WinchOrder(0.0, 1, 0.0, 0.0, 9e4), "/console", stamp_step=0)
-    assert notes[0].control == "winch" and "brake hold" in notes[0].detail and confirm
+    assert notes[0].control == "winch" and "brake hold" in notes[0].detail and not confirm
     assert o.confirmation("towline") == WinchOrder(0.0, 1, 0.0, 0.0, 9e4)
-    assert o.outside_winch("towline", WinchOrder(0.1), "/console", stamp_step=0) == ([], False)
+    o.sent("towline", 7)
+    assert o.outside_winch("towline", WinchOrder(0.1), "/console", stamp_step=6) == ([], True)
 
 
 def test_hand_back():

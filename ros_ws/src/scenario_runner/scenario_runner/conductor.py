@@ -447,6 +447,7 @@ class Conductor(Node):
         self.own_sent: Dict[str, collections.deque] = {}  # topic -> bytes of own orders not yet seen back
         self.outside: List[tuple] = []  # outside orders and hand-backs, in arrival order, decided at the next step
         self.order_topics: Dict[str, str] = {}  # topic -> vessel or rope
+        self._who_cache: Dict[str, Tuple[int, float, str]] = {}  # topic -> (publishers, when, who)
         for v in self.sc.vessels:
             if v.motion is None and v.name not in self.piloted:
                 self.order_topics[T.vessel_topic(v.name, T.COMMAND)] = v.name
@@ -477,13 +478,20 @@ class Conductor(Node):
             self.outside.append((msg.target, controls, msg.source or "an outside node"))
 
     def _who(self, topic: str) -> str:
-        """The nodes other than this one that publish topic: who gave the order, if one."""
+        """The nodes other than this one that publish topic: who gave the order, if one. Asked
+        of the graph at most once a second per topic, and when its publisher count changes (a
+        flood of orders must not cost a graph query each)."""
+        count, now = self.count_publishers(topic), time.monotonic()
+        cached = self._who_cache.get(topic)
+        if cached is not None and cached[0] == count and now < cached[1] + 1.0:
+            return cached[2]
         me = self.get_fully_qualified_name()
         others = sorted({_node_of(i) for i in self.get_publishers_info_by_topic(topic)} - {me})
         others = [n for n in others if "_UNKNOWN_" not in n]
-        if not others:
-            return "an outside node"
-        return others[0] if len(others) == 1 else f"one of {', '.join(others)}"
+        who = ("an outside node" if not others else others[0] if len(others) == 1 else
+               f"one of {', '.join(others)}")
+        self._who_cache[topic] = (count, now, who)
+        return who
 
     def _take_outside(self, k: int) -> set:
         """Decide on the outside orders and hand-backs that came in since the last step, in

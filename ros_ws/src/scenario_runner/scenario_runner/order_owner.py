@@ -150,10 +150,9 @@ class OrderOwners:
                        stamp_step: int) -> Tuple[List[Announcement], bool]:
         """An order somebody else gave a vessel (its stamp's step, stamp_step). Returns the
         announcements of the controls it takes, and whether the conductor must confirm the held
-        command (send it again, stamped with the step it decides at): when the order takes a
-        control (the vessel then holds, from that step on, what was announced, even if the order
-        itself reached the conductor but not the vessel), or when the conductor sent the vessel
-        an order since stamp_step, which the vessel may have applied after this one."""
+        command (send it again, stamped with the step it decides at): it sent the vessel an order
+        since stamp_step, which the vessel may have applied after this one (the later of two
+        orders for one step wins)."""
         held = self.held[vessel]
         notes = []
         for control, old, new in (("engine", held.engine, order.engine), ("helm", held.helm, order.helm),
@@ -163,13 +162,13 @@ class OrderOwners:
                 notes += self._claim(vessel, control, who, f"{describe(control, new)}" + (
                     f" (was {describe(control, old).split(' ', 1)[1]})" if control != "anchor" else ""), float(new))
         self.held[vessel] = VesselOrder(order.engine, order.helm)
-        return notes, bool(notes) or self.last_sent.get(vessel, -1) >= stamp_step
+        return notes, self.last_sent.get(vessel, -1) >= stamp_step
 
     def outside_winch(self, rope: str, order: WinchOrder, who: str, stamp_step: int) -> Tuple[List[Announcement], bool]:
         """An order somebody else gave a winch: it takes the winch (as outside_vessel)."""
         self.winches[rope] = order
         notes = self._claim(rope, WINCH, who, describe(WINCH, order), order.payout_rate)
-        return notes, bool(notes) or self.last_sent.get(rope, -1) >= stamp_step
+        return notes, self.last_sent.get(rope, -1) >= stamp_step
 
     def _claim(self, target: str, control: str, who: str, what: str, value: float) -> List[Announcement]:
         """Control taken by who: announced when it was the script's, or another's before."""
