@@ -136,3 +136,53 @@ def test_manual_orders_stick_until_handed_back(tmp_path, rclpy_context):
     finished = [e for e in ev if e[1] == "scenario_finished"]
     wall = float(re.search(r"in (\d+\.\d) s wall", finished[0][3]).group(1))
     assert 0.95 * DURATION <= wall <= 2.0 * DURATION, finished
+
+
+def test_an_outside_autopilot_takes_the_helm(tmp_path, rclpy_context, start_node):
+    """The example autopilot started by hand (free-running, fixed engine order 0.5 as the script
+    gave) during a paced run: its helm orders take the helm (`manual_order` naming it), the
+    script's later helm order yields; the script's engine order fires, and the autopilot's next
+    order (engine 0.5 again) takes the engine back: an outside controller ordering every step
+    owns what it orders."""
+    from rclpy.node import Node
+    from rosgraph_msgs.msg import Clock
+    sc = {"name": "autopilot_orders", "duration": 24.0, "exchange_rate": RATE, "mode": "realtime",
+          "vessels": [{"name": "tug", "ship_file": "harbour_tug.yaml"}],
+          "events": [{"time": 0.0, "vessel": "tug", "engine_order": 0.5},
+                     {"time": 20.0, "vessel": "tug", "engine_order": 0.7, "steering_deg": 0.0}]}
+    path = tmp_path / "autopilot_orders.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    out = tmp_path / "autopilot_orders.mcap"
+    node = Node("clock_watch", context=rclpy_context)
+    clock = [0.0]
+    node.create_subscription(Clock, "/clock", lambda m: clock.__setitem__(0, m.clock.sec + m.clock.nanosec * 1e-9),
+                             10)
+    run = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), str(path), "--output", str(out),
+                            "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for_sim_time(node, clock, 1.0, run)
+        start_node("scenario_runner", "autopilot", "--ros-args", "-r", "__ns:=/tug_autopilot", "-p", "vessel:=tug",
+                   "-p", "heading:=90.0", "-p", "speed_control:=false", "-p", "engine_order:=0.5")
+        stdout, stderr = run.communicate(timeout=120)
+    finally:
+        if run.poll() is None:
+            run.kill()
+    assert run.returncode == 0, stderr
+
+    from recording.recorded_run import Recording, status_column
+    rec = Recording(str(out))
+    ev = [(round(e["time"], 3), e["kind"], e["target"], e["detail"]) for e in rec.events]
+    manual = [e for e in ev if e[1] == "manual_order"]
+    assert [e[3].split(":")[0] for e in manual] == ["tug helm", "tug engine"], manual
+    assert all("/tug_autopilot/autopilot" in e[3] for e in manual), manual
+    assert manual[0][0] < 19.0 and 20.0 <= manual[1][0] <= 21.0, manual  # the engine: after the script's 0.7
+    yielded = [(e[0], e[3].split(":")[0]) for e in ev if e[1] == "scripted_order_yielded"]
+    assert yielded == [(20.0, "events[1]")], yielded
+    assert [e for e in ev if e[:3] == (20.0, "order", "tug") and e[3].startswith("engine +0.70, steering ")], ev
+    st = rec.vessels["tug"]["status"]
+    t, engine = st["t"], status_column(st, "engine_order")
+    helm = np.degrees(status_column(st, "steering_angle_ordered"))
+    after = t > 20.0 + 1e-6
+    # (the script's 0.7 holds a step or so: the pilot's next order takes the engine back)
+    assert engine[-1] == 0.5 and np.count_nonzero(engine[after] == 0.7) <= 3
+    assert np.count_nonzero(helm[after]) > 0.5 * np.count_nonzero(after)  # still the pilot's helm, not midships

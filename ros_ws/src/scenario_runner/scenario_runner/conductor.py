@@ -40,8 +40,8 @@ from sim_plumbing import shm_hygiene
 from sim_plumbing import step_channel
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import CONFLICT_MARK, MAX_LEAD_STEPS, RESCUE_AFTER, RateLimitedLog
-from scenario_runner.order_owner import (ANCHOR_LET_GO, ANCHOR_HEAVE_UP, ANCHOR_NO_CHANGE, HAND_BACK, WINCH, OrderOwners,
-                                         VesselOrder, WinchOrder, describe)
+from scenario_runner.order_owner import (ANCHOR_LET_GO, ANCHOR_HEAVE_UP, ANCHOR_NO_CHANGE, HAND_BACK, WINCH,
+                                         OrderOwners, VesselOrder, WinchOrder, describe)
 from scenario_runner.node_processes import LAYOUTS, NodeProcesses, in_process_nodes
 from scenario_runner.run_nodes import (NodeSpec, RunError, external_outputs, instrument_specs, node_specs,
                                       per_step_outputs)
@@ -538,8 +538,9 @@ class Conductor(Node):
         if self.recorder:
             self.recorder.log_time_ns = k * self.period_ns
         confirm = self._take_outside(k)
-        orders = self._orders_at(k)
-        for target in confirm - set(orders):
+        orders = self._orders_at(k)  # a scripted order carries the held values: it confirms them too
+        confirm -= set(orders)
+        for target in confirm:
             orders[target] = self.owners.confirmation(target)
         ordered = []
         for target, order in sorted(orders.items()):

@@ -133,7 +133,8 @@ class OrderOwners:
         self.held[vessel] = VesselOrder(order.engine, order.helm)
         return order, notes
 
-    def script_winch(self, rope: str, label: str, payout_rate: float) -> Tuple[Optional[WinchOrder], List[Announcement]]:
+    def script_winch(self, rope: str, label: str,
+                     payout_rate: float) -> Tuple[Optional[WinchOrder], List[Announcement]]:
         """A scripted winch order: the order to send, or None and the announcement if the winch
         is in manual control."""
         who = self.manual.get((rope, WINCH))
