@@ -175,3 +175,17 @@ def test_realtime_and_lockstep_exclude_each_other(capsys):
         build_parser().parse_args(["x.yaml", "--realtime", "--lockstep"])
     assert exc.value.code == 2 and "not allowed with argument" in capsys.readouterr().err
     assert "--realtime" in build_parser().format_help()
+
+
+def test_send_command_hand_back_arguments(capsys):
+    from scenario_runner.send_command import parse_args
+    assert parse_args(["tug", "--hand-back"]).hand_back == "all"
+    assert parse_args(["tug", "--hand-back", "engine, helm"]).hand_back == "engine,helm"
+    assert parse_args(["tug", "--engine", "0.5"]).hand_back is None
+    for bad in (["tug", "--hand-back", "rudder"], ["tug", "--hand-back", "engine", "--engine", "0.5"],
+                ["tug", "--hand-back", ","]):
+        with pytest.raises(SystemExit) as exc:
+            parse_args(bad)
+        assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "'rudder'" in err and "one or the other" in err

@@ -58,6 +58,10 @@ def parse_args(argv):
                         f"{', '.join(VESSEL_CONTROLS + (WINCH,))} or all (default all)")
     p.add_argument("--wait", type=float, default=10.0, help="seconds to wait for the vessel node (default 10)")
     args = p.parse_args(argv)
+    orders = [a.split("=")[0] for a in argv if a.split("=")[0] in ("--engine", "--steering-deg", "--anchor")]
+    if args.hand_back is not None and orders:
+        p.error(f"--hand-back gives controls back to the script; {', '.join(orders)} would be an order: one or the "
+                "other")
     if args.hand_back is not None:
         controls = [c.strip() for c in args.hand_back.split(",") if c.strip()]
         unknown = sorted(set(controls) - set(VESSEL_CONTROLS + (WINCH, "all")))
