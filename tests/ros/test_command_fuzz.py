@@ -42,8 +42,8 @@ def test_random_commands_during_a_paced_run(tmp_path, ros_domain, rclpy_context)
     sent = {t: 0 for t in pubs}
     rng = np.random.default_rng(13)
     deadline = time.monotonic() + 120
-    # the recorder and the node itself take each command topic
-    while any(p.get_subscription_count() < 2 for p in pubs.values()) and time.monotonic() < deadline:
+    # the recorder, the runner (it watches for outside orders) and the node itself take each command topic
+    while any(p.get_subscription_count() < 3 for p in pubs.values()) and time.monotonic() < deadline:
         time.sleep(0.1)
     time.sleep(1.0)  # the paced run is under way
 

@@ -14,6 +14,7 @@ starts; every error names the file, the key and what was expected.
       - name: tug              # ROS namespace
         ship_file: harbour_tug.yaml
         initial: {x: 0.0, y: 0.0, heading_deg: 0.0, speed: 0.0}
+        # manned: true         # a person gives every order (console, page, send_command); the script none
     ropes:
       - name: towline
         rope_file: table1.yaml
@@ -179,6 +180,9 @@ class VesselSpec(_Strict):
     motion: Optional[Motion] = None
     # Merged over the ship file (e.g. {towline_simple: {enabled: true, gamma_max_deg: 20}}).
     ship_overrides: Optional[Dict[str, Any]] = None
+    # true: a person (console, instructor page, send_command) or an outside controller gives every
+    # order; the script gives this vessel none (an event for it is refused). docs/scenarios.md
+    manned: bool = False
 
 
 class RopeSpec(_Strict):
@@ -514,8 +518,12 @@ def _check_rope_ends(path: str, sc: Scenario, vessels: List[str]) -> None:
 
 
 def _check_prescribed_starts(path: str, sc: Scenario) -> None:
-    """A prescribed vessel starts as its law says: an initial speed that says otherwise is refused."""
+    """A prescribed vessel starts as its law says: an initial speed that says otherwise is refused.
+    It takes no orders, so it cannot be manned."""
     for i, v in enumerate(sc.vessels):
+        if v.motion is not None and v.manned:
+            raise ScenarioError(f"{path}: key 'vessels[{i}].manned': '{v.name}' follows a prescribed motion "
+                                f"({v.motion.type}) and takes no orders")
         if v.motion is not None and "speed" in v.initial.model_fields_set:
             surge = v.motion.start()[0]
             if abs(v.initial.speed - surge) > 1e-3:
@@ -532,6 +540,9 @@ def _check_autopilots(path: str, sc: Scenario, vessels: List[str]) -> Dict[str, 
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' is not in 'vessels' ({vessels})")
         if a.vessel in driven:
             raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' already has an autopilot")
+        if any(v.manned for v in sc.vessels if v.name == a.vessel):
+            raise ScenarioError(f"{path}: key 'autopilots[{i}].vessel': '{a.vessel}' is manned (vessels[].manned: "
+                                "true): its orders come from outside the scenario, not from a scenario autopilot")
         driven[a.vessel] = a.name
         _check_runner_params(path, i, a)
     return driven
@@ -571,6 +582,11 @@ def _check_events(path: str, sc: Scenario, vessels: List[str], driven: Dict[str,
         if ev.vessel in driven:
             raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is steered by autopilot "
                                 f"'{driven[ev.vessel]}'; give its orders as the autopilot's params")
+        manned = next((j for j, v in enumerate(sc.vessels) if v.name == ev.vessel and v.manned), None)
+        if manned is not None:
+            raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' is manned "
+                                f"(vessels[{manned}].manned: true): the script gives it no orders; remove the event "
+                                f"or the key 'vessels[{manned}].manned'")
         prescribed = next((v for v in sc.vessels if v.name == ev.vessel and v.motion is not None), None)
         if prescribed is not None:
             raise ScenarioError(f"{path}: key 'events[{i}].vessel': '{ev.vessel}' follows a prescribed motion "

@@ -26,6 +26,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 import numpy as np
 import rclpy
 from rclpy.node import Node
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from nav_msgs.msg import Odometry
 from tug_msgs.msg import ScenarioEvent, SimStep, StepDone, VesselCommand, WinchCommand
@@ -38,10 +39,16 @@ from sim_plumbing import record_feed
 from sim_plumbing import shm_hygiene
 from sim_plumbing import step_channel
 from sim_plumbing import ros_common as rc
-from sim_plumbing.stepping import CONFLICT_MARK, RESCUE_AFTER, RateLimitedLog
+from sim_plumbing.stepping import CONFLICT_MARK, MAX_LEAD_STEPS, RESCUE_AFTER, RateLimitedLog
+from scenario_runner.order_owner import (ANCHOR_LET_GO, ANCHOR_HEAVE_UP, ANCHOR_NO_CHANGE, HAND_BACK, WINCH,
+                                         OrderOwners, VesselOrder, WinchOrder, describe)
 from scenario_runner.node_processes import LAYOUTS, NodeProcesses, in_process_nodes
 from scenario_runner.run_nodes import (NodeSpec, RunError, external_outputs, instrument_specs, node_specs,
                                       per_step_outputs)
+
+
+# a scripted anchor order as VesselCommand takes it
+SCRIPT_ANCHOR = {"let_go": ANCHOR_LET_GO, "heave_up": ANCHOR_HEAVE_UP}
 
 
 class Untrusted(RunError):
@@ -154,10 +161,11 @@ class Conductor(Node):
         self.done_sub = self.create_subscription(StepDone, rc.STEP_DONE_TOPIC, self._on_done_raw, rc.PROTOCOL_QOS,
                                                  raw=True)
         self.rescued = 0  # StepDones the executor did not deliver, taken in wait_for (rc.take_missed)
-        # Orders: timed events by step, state-triggered events armed in file order (_orders_at)
-        self.held = {v.name: VesselCommand(engine_order=float(v.initial.engine_order),
-                                           steering_angle=math.radians(v.initial.steering_deg))
-                     for v in sc.vessels}
+        # Orders: timed events by step, state-triggered events armed in file order (_orders_at);
+        # who owns each control, and what each vessel and winch holds (order_owner.py)
+        self.owners = OrderOwners({v.name: (float(v.initial.engine_order), math.radians(v.initial.steering_deg))
+                                   for v in sc.vessels}, winches=list(self.winch_pubs),
+                                  manned=[v.name for v in sc.vessels if v.manned])
         self.timed: Dict[int, List[int]] = {}
         for i, ev in enumerate(sc.events):
             if ev.time is not None:
@@ -174,6 +182,7 @@ class Conductor(Node):
                                                    rc.LATCHED_STATE_QOS) for name in self.watched]
         # Vessels steered by a lockstep autopilot get its order stamped k at every step k.
         self.piloted = sorted(a.vessel for a in sc.autopilots)
+        self._watch_orders()
 
     def _on_done_raw(self, data: bytes) -> None:
         if self.recorder:
@@ -394,10 +403,12 @@ class Conductor(Node):
             return speed > trigger.speed_above
         return surge < trigger.surge_below
 
-    def _orders_at(self, k: int) -> List[Tuple[str, object]]:
-        """The orders of step k: its timed events, then the state-triggered events armed (every
-        event listed before fired) whose condition the state of step k meets, in file order,
-        merged into the held command: one order per namespace per step."""
+    def _orders_at(self, k: int) -> Dict[str, object]:
+        """The orders of step k (namespace -> VesselOrder or WinchOrder): its timed events, then
+        the state-triggered events armed (every event listed before fired) whose condition the
+        state of step k meets, in file order. Each event sets only the controls it names and the
+        script owns (order_owner.py); the rest keep what the vessel holds: one order per namespace
+        per step."""
         events = self.sc.events
         firing = list(self.timed.get(k, []))
         self.fired.update(firing)
@@ -413,38 +424,142 @@ class Conductor(Node):
         for i in sorted(firing, key=lambda j: (events[j].time if events[j].time is not None else k / self.sc.exchange_rate, j)):
             ev = events[i]
             if ev.vessel is not None:
-                cmd = self.held[ev.vessel]
-                cmd = VesselCommand(engine_order=cmd.engine_order, steering_angle=cmd.steering_angle,
-                                    anchor=VesselCommand.ANCHOR_NO_CHANGE)
-                if ev.engine_order is not None:
-                    cmd.engine_order = float(ev.engine_order)
-                if ev.steering_deg is not None:
-                    cmd.steering_angle = math.radians(ev.steering_deg)
-                if ev.anchor is not None:
-                    cmd.anchor = {"let_go": VesselCommand.ANCHOR_LET_GO, "heave_up": VesselCommand.ANCHOR_HEAVE_UP}[
-                        ev.anchor]
-                self.held[ev.vessel] = cmd
-                out[ev.vessel] = cmd
+                order, notes = self.owners.script_vessel(
+                    ev.vessel, f"events[{i}]", engine=ev.engine_order,
+                    helm=None if ev.steering_deg is None else math.radians(ev.steering_deg),
+                    anchor=None if ev.anchor is None else SCRIPT_ANCHOR[ev.anchor])
+                earlier = out.get(ev.vessel)
+                if order is not None and earlier is not None and order.anchor == ANCHOR_NO_CHANGE:
+                    order.anchor = earlier.anchor  # two events for one vessel in one step: both count
             else:
-                out[ev.rope] = WinchCommand(payout_rate=float(ev.payout_rate))
-        return sorted(out.items())
+                order, notes = self.owners.script_winch(ev.rope, f"events[{i}]", ev.payout_rate)
+            for note in notes:
+                self.event(k, note.kind, note.target, note.detail, note.value)
+            if order is not None:
+                out[ev.vessel or ev.rope] = order
+        return out
+
+    # -- orders from outside the script (order_owner.py) -------------------------------------
+    def _watch_orders(self) -> None:
+        """Subscribe the order topics of every vessel and winch the script may order (not
+        prescribed, not steered by the scenario's autopilot), raw, and /scenario/events for
+        hand-back requests: orders that are not this conductor's own are somebody else's."""
+        self.own_sent: Dict[str, collections.deque] = {}  # topic -> bytes of own orders not yet seen back
+        self.outside: List[tuple] = []  # outside orders and hand-backs, in arrival order, decided at the next step
+        self.order_topics: Dict[str, str] = {}  # topic -> vessel or rope
+        self._who_cache: Dict[str, Tuple[int, float, str]] = {}  # topic -> (publishers, when, who)
+        for v in self.sc.vessels:
+            if v.motion is None and v.name not in self.piloted:
+                self.order_topics[T.vessel_topic(v.name, T.COMMAND)] = v.name
+        for rope in self.winch_pubs:
+            self.order_topics[T.rope_topic(rope, T.WINCH)] = rope
+        self.order_subs = [self.create_subscription(
+            WinchCommand if target in self.winch_pubs else VesselCommand, topic,
+            lambda data, topic=topic: self._on_order_raw(topic, data), rc.COMMAND_SUB_QOS, raw=True)
+            for topic, target in self.order_topics.items()]
+        self.hand_back_sub = self.create_subscription(ScenarioEvent, rc.EVENTS_TOPIC, self._on_event,
+                                                      rc.EVENTS_QOS)
+
+    def _on_order_raw(self, topic: str, data: bytes) -> None:
+        own = self.own_sent.get(topic)
+        if own and data in own:
+            while own.popleft() != data:
+                pass  # orders arrive in the order they were sent: older ones are not coming back
+            return
+        target = self.order_topics[topic]
+        decode = cdr.decode_winch_command if target in self.winch_pubs else cdr.decode_vessel_command
+        msg = cdr.decode_or_report(decode, data, lambda why: None)  # the node refuses it, and says so
+        if msg is not None and _takes(msg):
+            self.outside.append((target, msg, self._who(topic)))
+
+    def _on_event(self, msg: ScenarioEvent) -> None:
+        if msg.kind == HAND_BACK:
+            controls = [c.strip() for c in msg.detail.split(",") if c.strip()]
+            self.outside.append((msg.target, controls, msg.source or "an outside node"))
+
+    def _who(self, topic: str) -> str:
+        """The nodes other than this one that publish topic: who gave the order, if one. Asked
+        of the graph at most once a second per topic, and when its publisher count changes (a
+        flood of orders must not cost a graph query each)."""
+        count, now = self.count_publishers(topic), time.monotonic()
+        cached = self._who_cache.get(topic)
+        if cached is not None and cached[0] == count and now < cached[1] + 1.0:
+            return cached[2]
+        me = self.get_fully_qualified_name()
+        others = sorted({_node_of(i) for i in self.get_publishers_info_by_topic(topic)} - {me})
+        others = [n for n in others if "_UNKNOWN_" not in n]
+        who = ("an outside node" if not others else others[0] if len(others) == 1 else
+               f"one of {', '.join(others)}")
+        self._who_cache[topic] = (count, now, who)
+        return who
+
+    def _take_outside(self, k: int) -> set:
+        """Decide on the outside orders and hand-backs that came in since the last step, in
+        arrival order, announced stamped k; the targets whose held orders must be confirmed."""
+        confirm = set()
+        items, self.outside = self.outside, []
+        for target, what, who in items:
+            if isinstance(what, list):
+                if target not in self.owners.held and target not in self.owners.winches:
+                    self.get_logger().warning(f"hand-back for '{target}' by {who}: not a vessel or winch of the run")
+                    continue
+                notes = self.owners.hand_back(target, what, who)
+            else:
+                stamp_step = what.stamp_ns // self.period_ns
+                if stamp_step > k + MAX_LEAD_STEPS:
+                    continue  # the node refuses it: too far ahead
+                if isinstance(what, cdr.WinchCommandIn):
+                    notes, again = self.owners.outside_winch(target, WinchOrder(*what[1:]), who, stamp_step)
+                else:
+                    notes, again = self.owners.outside_vessel(
+                        target, VesselOrder(what.engine_order, what.steering_angle, what.anchor), who, stamp_step)
+                if again:
+                    confirm.add(target)
+            for note in notes:
+                self.event(k, note.kind, note.target, note.detail, note.value)
+        return confirm
+
+    def announce_manned(self, k: int) -> None:
+        """The manned vessels, said at the start: every order of theirs is a person's."""
+        for i, v in enumerate(self.sc.vessels):
+            if v.manned:
+                self.event(k, "manual_order", v.name, f"{v.name} is manned (vessels[{i}].manned): engine, helm and "
+                           "anchor are the crew's; the script gives it no orders")
 
     def order_publishers(self):
         return list(self.cmd_pubs.values()) + list(self.winch_pubs.values())
+
+    def own_readers(self, publisher) -> int:
+        """Readers of an order publisher that are this conductor's own (watching the topic)."""
+        return 1 if publisher.topic_name in self.order_topics else 0
 
     def send_step(self, k: int) -> None:
         stamp = rc.step_time(k, self.period_ns)
         if self.recorder:
             self.recorder.log_time_ns = k * self.period_ns
+        confirm = self._take_outside(k)
+        orders = self._orders_at(k)  # a scripted order carries the held values: it confirms them too
+        confirm -= set(orders)
+        for target in confirm:
+            orders[target] = self.owners.confirmation(target)
         ordered = []
-        for target, order in self._orders_at(k):
-            order.header.stamp = stamp
-            if isinstance(order, VesselCommand):
-                self.cmd_pubs[target].publish(order)
+        for target, order in sorted(orders.items()):
+            if isinstance(order, VesselOrder):
+                msg, topic, pub = (VesselCommand(engine_order=order.engine, steering_angle=order.helm,
+                                                 anchor=order.anchor), T.vessel_topic(target, T.COMMAND),
+                                   self.cmd_pubs[target])
             else:
-                self.winch_pubs[target].publish(order)
+                msg, topic, pub = WinchCommand(**dataclasses.asdict(order)), T.rope_topic(target, T.WINCH), \
+                    self.winch_pubs[target]
+            msg.header.stamp = stamp
+            data = serialize_message(msg)
+            if topic in self.order_topics:
+                self.own_sent.setdefault(topic, collections.deque(maxlen=256)).append(data)
+            pub.publish(data)
+            self.owners.sent(target, k)
             ordered.append(target)
-            self.event(k, "order", target, self._describe(order))
+            self.event(k, "order", target, self._describe(msg) + (
+                " (confirms the held orders after an outside order)" if target in confirm else ""))
         stamp_ns = k * self.period_ns
         # the trigger first: the nodes start computing while /clock goes out (they stamp by
         # step number and do not read the clock to compute)
@@ -460,15 +575,24 @@ class Conductor(Node):
     @staticmethod
     def _describe(order) -> str:
         if isinstance(order, WinchCommand):
-            return f"winch pay-out {order.payout_rate:+.2f} m/s"
+            return describe(WINCH, WinchOrder(order.payout_rate, order.mode, order.set_tension,
+                                              order.recover_tension, order.brake_load))
         anchor = {0: "", 1: ", let go anchor", 2: ", heave up anchor"}[order.anchor]
         return f"engine {order.engine_order:+.2f}, steering {math.degrees(order.steering_angle):+.1f} deg{anchor}"
 
-    def event(self, k: int, kind: str, target: str, detail: str) -> None:
+    def event(self, k: int, kind: str, target: str, detail: str, value: float = math.nan) -> None:
         ev = ScenarioEvent(step=k, source=self.get_fully_qualified_name(), kind=kind, target=target,
-                           detail=detail, value=float("nan"))
+                           detail=detail, value=float(value))
         ev.header.stamp = rc.step_time(k, self.period_ns)
         self.event_pub.publish(ev)
+
+
+def _takes(msg) -> bool:
+    """Would the node take this order (finite values, a known anchor order or winch mode)? The
+    conductor counts only those as given."""
+    if isinstance(msg, cdr.WinchCommandIn):
+        return all(math.isfinite(x) for x in msg[1:]) and msg.mode in (0, 1, 2) and min(msg[3:]) >= 0.0
+    return math.isfinite(msg.engine_order) and math.isfinite(msg.steering_angle) and msg.anchor in (0, 1, 2)
 
 
 def _said(answer: Optional[Tuple[bool, str]]) -> str:
@@ -618,7 +742,7 @@ class _Session:
         matched them before step 0 goes out."""
         recorder = self.recorder
         want = 2 if recorder else 1
-        needs = [(p, want) for p in self.conductor.order_publishers()]
+        needs = [(p, want + self.conductor.own_readers(p)) for p in self.conductor.order_publishers()]
         needs.append((self.conductor.step_pub, len(self.specs)))
         deadline = time.monotonic() + ready_timeout
         while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
@@ -635,6 +759,7 @@ class _Session:
         sc, conductor, executor, recorder, stats = self.sc, self.conductor, self.executor, self.recorder, self.stats
         conductor.event(0, "scenario_started", "", f"scenario '{sc.name}' (run {stats.run_id}): {n_steps} steps "
                         f"at {sc.exchange_rate:g} Hz, {sc.mode}")
+        conductor.announce_manned(0)
         t_start = time.monotonic()
         cpu_start = time.process_time() + self.procs.cpu_seconds()
         period = conductor.period_ns * 1e-9

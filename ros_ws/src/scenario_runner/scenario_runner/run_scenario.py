@@ -150,6 +150,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help="processes: every node its own process (as `ros2 run` starts them); "
                              "one_process: all nodes in this process on one executor")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
+    pace = parser.add_mutually_exclusive_group()
+    pace.add_argument("--realtime", dest="mode", action="store_const", const="realtime",
+                      help="pace the run on the wall clock, one simulated second a second (overrides the "
+                           "scenario's mode): for people at the console, the page or send_command")
+    pace.add_argument("--lockstep", dest="mode", action="store_const", const="lockstep",
+                      help="run as fast as the nodes compute (overrides the scenario's mode)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("--live", action="store_true",
                         help="serve the run to Foxglove / Lichtblick on a WebSocket (live_view package)")
@@ -345,6 +351,8 @@ def plan_run(args) -> Tuple[Optional[RunPlan], int]:
         return None, 2
     for warning in sc.warnings:
         sys.stderr.write(f"run_scenario: warning: {path}: {warning}\n")
+    if getattr(args, "mode", None):  # --realtime / --lockstep
+        sc = sc.model_copy(update={"mode": args.mode})
     steps = sc.steps if args.duration is None else min(sc.steps, int(round(args.duration * sc.exchange_rate)))
     output = args.output or sc.recording.path or os.path.join("output", f"{sc.name}.mcap")
     stem = os.path.splitext(os.path.basename(output))[0] or sc.name

@@ -2,6 +2,13 @@
 
     ros2 run scenario_runner send_command tug --engine 0.5 --steering-deg 10
     ros2 run scenario_runner send_command s175 --anchor let_go
+    ros2 run scenario_runner send_command tug --hand-back engine,helm
+
+An order from here is a manual order: the scenario's scripted orders for the controls it changes
+yield from then on (docs/scenarios.md, "Who gives the orders"), until --hand-back gives them
+back (engine, helm, anchor, winch, or all; a winch is handed back with the rope's name:
+send_command towline --hand-back winch). A hand-back is a tug_msgs/ScenarioEvent of kind
+hand_back on /scenario/events, which the scenario runner answers with manual_handed_back.
 
 Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
 exits. The order is stamped with the simulation time (the newest /clock) whenever /clock is
@@ -20,8 +27,9 @@ import time
 import rclpy
 from rclpy.duration import Duration
 from rclpy.node import Node
-from tug_msgs.msg import VesselCommand
+from tug_msgs.msg import ScenarioEvent, VesselCommand
 
+from scenario_runner.order_owner import HAND_BACK, VESSEL_CONTROLS, WINCH
 from sim_plumbing import ros_common as rc
 from sim_plumbing.sim_time import SimClock
 
@@ -45,19 +53,38 @@ def parse_args(argv):
     p.add_argument("--steering-deg", type=float, default=0.0,
                    help="rudder or bucket angle in degrees, positive turns to port (default 0)")
     p.add_argument("--anchor", choices=sorted(ANCHOR_ORDERS), default="none", help="anchor order")
+    p.add_argument("--hand-back", metavar="CONTROLS", nargs="?", const="all",
+                   help="give controls back to the scenario's script instead of sending an order: comma-separated "
+                        f"{', '.join(VESSEL_CONTROLS + (WINCH,))} or all (default all)")
     p.add_argument("--wait", type=float, default=10.0, help="seconds to wait for the vessel node (default 10)")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    orders = [a.split("=")[0] for a in argv if a.split("=")[0] in ("--engine", "--steering-deg", "--anchor")]
+    if args.hand_back is not None and orders:
+        p.error(f"--hand-back gives controls back to the script; {', '.join(orders)} would be an order: one or the "
+                "other")
+    if args.hand_back is not None:
+        controls = [c.strip() for c in args.hand_back.split(",") if c.strip()]
+        unknown = sorted(set(controls) - set(VESSEL_CONTROLS + (WINCH, "all")))
+        if unknown or not controls:
+            p.error(f"--hand-back {args.hand_back!r}: expected {', '.join(VESSEL_CONTROLS + (WINCH,))} or all, "
+                    "comma-separated")
+        args.hand_back = ",".join(controls)
+    return args
 
 
-def _wait_for_readers(node, pub, topic: str, deadline: float, spin) -> bool:
+def _wait_for_readers(node, pub, topic: str, deadline: float, spin, wanted: str = "") -> bool:
     """Wait until every reader of topic the graph knows of (the vessel, a recorder, a console) has
-    matched, and the graph has shown no new one for SETTLE s: a volatile sample published before a
-    reader matches never reaches it. False if no reader matched by the deadline (with the vessel
-    matched, a reader still discovering at the deadline gets nothing)."""
+    matched, the graph shows a reader of the namespace `wanted` (the vessel node: the runner's
+    readers, discovered with /clock, can be all matched before the vessel's is known), and the
+    graph has shown no new one for SETTLE s: a volatile sample published before a reader matches
+    never reaches it. False if no reader matched by the deadline (with the vessel matched, a reader
+    still discovering at the deadline gets nothing)."""
     settled_since = None
     while True:
         now = time.monotonic()
-        if 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
+        found = not wanted or any(i.node_namespace.rstrip("/") == wanted
+                                  for i in node.get_subscriptions_info_by_topic(topic))
+        if found and 0 < pub.get_subscription_count() >= node.count_subscribers(topic):
             settled_since = settled_since or now
             if now - settled_since >= SETTLE:
                 return True
@@ -78,19 +105,28 @@ def main(argv=None) -> int:
     rc.init_rclpy(argv)
     node = Node("send_command")
     try:
-        topic = f"/{args.vessel.strip('/')}/command"
-        pub = node.create_publisher(VesselCommand, topic, rc.COMMAND_QOS)
+        name = args.vessel.strip('/')
+        hand_back = args.hand_back is not None
+        topic = rc.EVENTS_TOPIC if hand_back else f"/{name}/command"
+        pub = (node.create_publisher(ScenarioEvent, topic, rc.EVENTS_QOS) if hand_back else
+               node.create_publisher(VesselCommand, topic, rc.COMMAND_QOS))
         clock = SimClock(node)
         spin = lambda timeout_sec: rclpy.spin_once(node, timeout_sec=timeout_sec)  # noqa: E731
         # The clock first: once its publisher (the runner) is discovered, so are the runner's readers
         # (its recorder) in all but a rare case, which the settling below covers.
         clock.wait(spin, timeout=CLOCK_TIMEOUT, discovery=CLOCK_DISCOVERY)
-        if not _wait_for_readers(node, pub, topic, time.monotonic() + args.wait, spin):
+        if not _wait_for_readers(node, pub, topic, time.monotonic() + args.wait, spin,
+                                 wanted="" if hand_back else f"/{name}"):
+            listener = "the scenario runner" if hand_back else f"the vessel node for '{args.vessel}'"
             sys.stderr.write(f"send_command: no subscriber on {topic} after {args.wait:g} s "
-                             f"(is the vessel node for '{args.vessel}' running, same ROS_DOMAIN_ID?)\n")
+                             f"(is {listener} running, same ROS_DOMAIN_ID?)\n")
             return 1
-        msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
-                            anchor=ANCHOR_ORDERS[args.anchor])
+        if hand_back:
+            msg = ScenarioEvent(source=node.get_fully_qualified_name(), kind=HAND_BACK, target=name,
+                                detail=args.hand_back, value=math.nan)
+        else:
+            msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
+                                anchor=ANCHOR_ORDERS[args.anchor])
         spin(0.0)
         msg.header.stamp = clock.now()
         pub.publish(msg)
@@ -100,6 +136,10 @@ def main(argv=None) -> int:
         if not pub.wait_for_all_acked(Duration(seconds=10.0)):
             sys.stderr.write(f"send_command: {topic} did not acknowledge the command within 10 s\n")
             return 1
+        if hand_back:
+            print(f"sent to {topic}: hand back {args.hand_back} of {name} to the script; stamped "
+                  f"{msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9:.3f} s, {clock.source}")
+            return 0
         print(f"sent to {topic}: engine {args.engine:+.2f}, steering {args.steering_deg:+.1f} deg, "
               f"anchor {args.anchor}; stamped {msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9:.3f} s, "
               f"{clock.source}")
