@@ -13,11 +13,12 @@ best block per case, which equals wall time on an idle core and is robust on a s
   waves direct:  the same sea evaluated directly at every element every step (the rope's wave
                  cache too small, so sample_waves falls back to waves.wave_kinematics_wet: the
                  cost before the recurrence).
-Prints us per exchange step and the ratios waves / calm and direct / calm per N; --micro also
+Prints us per exchange step and the ratios waves / calm and direct / calm per N (a table per
+--components: 150, the issue's 100-200, by default); --micro also
 the cost per element and component of sample_waves alone, recurrence against direct.
 
 Usage: PYTHONPATH=<the ros_ws/src packages> python benchmarks/bench_rope_waves.py
-    [--n 11,50,200] [--block 200] [--repeat 5] [--micro]
+    [--n 11,50,200] [--components 150] [--block 200] [--repeat 5] [--micro]
 """
 import argparse
 import math
@@ -42,16 +43,16 @@ SEA = {"hs": 2.0, "tp": 7.0, "from_deg": 250.0, "spreading_s": 8.0, "components"
 CASES = ("calm", "waves", "waves direct")
 
 
-def _environment(case):
+def _environment(case, components=150):
     spec = {"current": [0.3, 0.1]}
     if case != "calm":
-        spec["waves"] = SEA
+        spec["waves"] = dict(SEA, components=components)
     return EnvironmentSampler(Environment.from_mapping(spec)).data
 
 
-def _rope(n, case):
+def _rope(n, case, components):
     rope = RopeChain.slack(P, np.array([0.0, 0.0, 1.0]), np.array([98.0, 0.0, 1.0]), n_elements=n)
-    rope.attach_environment(_environment(case))
+    rope.attach_environment(_environment(case, components))
     if case == "waves direct":
         rope._wave_cache = np.zeros((1, 1))     # does not fit: the direct evaluation
     return rope
@@ -68,13 +69,13 @@ def _block(rope, steps):
     return (time.process_time() - t0) / steps
 
 
-def step_table(ns, block, repeat):
+def step_table(ns, block, repeat, components):
     print(f"rope exchange step (dt {DT} s, 2 sub-steps), us per step (best of {repeat} blocks of "
-          f"{block}); sea of {SEA['components']} components")
+          f"{block}); sea of {components} components")
     print("| N | calm | waves (recurrence) | waves direct | waves / calm | direct / calm |")
     print("|---|---|---|---|---|---|")
     for n in ns:
-        ropes = {c: _rope(n, c) for c in CASES}
+        ropes = {c: _rope(n, c, components) for c in CASES}
         for c in CASES:
             _block(ropes[c], 50)            # compile, settle into the run
         best = {c: math.inf for c in CASES}
@@ -121,11 +122,13 @@ def main():
     ap.add_argument("--n", default="11,50,200", help="element counts, comma separated")
     ap.add_argument("--block", type=int, default=200, help="exchange steps per timed block")
     ap.add_argument("--repeat", type=int, default=5, help="rounds of blocks (best taken)")
+    ap.add_argument("--components", default="150", help="wave components, comma separated (a table each)")
     ap.add_argument("--micro", action="store_true", help="also time sample_waves alone")
     a = ap.parse_args()
     if a.micro:
         micro()
-    step_table([int(v) for v in a.n.split(",")], a.block, a.repeat)
+    for components in (int(v) for v in a.components.split(",")):
+        step_table([int(v) for v in a.n.split(",")], a.block, a.repeat, components)
 
 
 if __name__ == "__main__":
