@@ -66,7 +66,7 @@ def test_held_element_feels_the_morison_force_of_the_airy_kinematics(axis):
     env[P_TIME] = t
     rope.attach_environment(env)
     rope._pack()
-    K.sample_environment(rope._S, rope._io, env, 0.0)     # the waves at t (dt 0: no half step)
+    K.sample_environment(rope._S, rope._io, env, 0.0, rope._wave_cache)   # the waves at t (dt 0: no half step)
     par = K._read_params(rope._io, 1.0)                    # h = 1: the right-hand side is F
     for j in range(rope.n_elements):
         terms = K._element_terms(K._element_state(rope._S, j), par)

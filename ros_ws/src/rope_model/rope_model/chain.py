@@ -204,6 +204,7 @@ class RopeChain:
         self.W = np.zeros((n, 3))
         self.env = self._calm_env(n)
         self._environment = None    # attach_environment
+        self._wave_cache = K.new_wave_cache(n, 0)   # the waves' phasors (kernels.sample_waves)
 
     def _init_ends(self, end_a, end_b, p_a, p_b):
         """End modes and attachment points; by default the points are the rope ends of the
@@ -348,6 +349,7 @@ class RopeChain:
         sea_environment.sampler.EnvironmentSampler's packed array, whose time it advances by
         each step's dt. None detaches (the last values stay, as after set_environment)."""
         self._environment = data
+        self._wave_cache = K.new_wave_cache(self.n_elements, 0 if data is None else K.wave_components(data))
 
     def set_environment(self, current=None, wind=None, seabed_depth=None):
         """The environment for the following steps, sampled by the caller at the element
@@ -716,6 +718,8 @@ class RopeChain:
         self._S, self._F = S, F
         if self._ws.shape[1] < n + 1:
             self._ws = K.new_workspace(n)
+        if not K.wave_cache_fits(self._wave_cache, n, 0):   # the winch added links: a larger one
+            self._wave_cache = K.new_wave_cache(n, self._wave_cache.shape[1])
         self._packed = True
 
     def _kernel(self, h, n_sub, payout, dt):
@@ -777,7 +781,7 @@ class RopeChain:
             if self._environment is not None:    # at the step's start, as the kernel's path below
                 if not self._packed:
                     self._pack()
-                K.sample_environment(self._S, self._io, self._environment, dt)
+                K.sample_environment(self._S, self._io, self._environment, dt, self._wave_cache)
                 self._environment[K.P_TIME] += dt
             st = drum.step(self, dt, n_sub, h)
         else:  # the kernel restores the last good state itself on divergence, moves the
@@ -788,7 +792,7 @@ class RopeChain:
                 st = K.run_substeps(self._S, self._F, self._io, self._ws, h, n_sub, 0.0, dt)
             else:
                 st = K.run_substeps_in_environment(self._S, self._F, self._io, self._ws, h, n_sub, 0.0, dt,
-                                                   self._environment)
+                                                   self._environment, self._wave_cache)
             if st == K.PARTED:
                 self._collect_events(self.time)
                 st = K.OK
