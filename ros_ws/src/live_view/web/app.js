@@ -10,6 +10,12 @@ const params = new URLSearchParams(location.search);
 const KN = 1852 / 3600;
 const $ = (id) => document.getElementById(id);
 const fmt = (v, d) => (v === null || v === undefined || !Number.isFinite(v)) ? '--' : v.toFixed(d);
+// an angle with the page's one sign convention (REP-103: + port, - starboard) and the side named
+const signed = (v, d) => {
+  const t = fmt(v, d);
+  if (t === '--' || Number(t) === 0) return t === '--' ? t : (0).toFixed(d);
+  return `${v > 0 ? '+' : ''}${t} ${v > 0 ? 'P' : 'S'}`;
+};
 
 const app = {
   snap: null, scene: {}, selected: params.get('vessel') || null, rope: params.get('rope') || null,
@@ -303,14 +309,23 @@ let dirty = true;
 app.invalidate = () => { dirty = true; };
 
 // ---------------------------------------------------------------- cameras
-const followPos = new THREE.Vector3(), lastTarget = new THREE.Vector3();
+// Follow frames the followed vessel's tow (the vessels joined to it by ropes, a rope's ends
+// matched to the nearest hull), Bird's-eye every vessel: their hulls and the ropes, fitted into
+// the part of the canvas the overlays leave free, refitted as they move. The mouse wheel zooms
+// every camera (Follow and Bird's-eye: towards the followed vessel; clicking the camera's button
+// again fits the tow once more); Free orbit is OrbitControls' own.
+const followPos = new THREE.Vector3(), followLook = new THREE.Vector3(), lastTarget = new THREE.Vector3();
 let cameraInit = false;
+const zoom = { follow: 1, birdseye: 1 };  // 1: the tow fitted; < 1 closer, > 1 farther
+app.zoom = zoom;
+const FOLLOW_ELEVATION = 28 * Math.PI / 180;  // the follow camera looks down this much
 function targetVessel() {
   const s = app.snap;
   if (!s || !app.selected || !s.vessels[app.selected]) return null;
   return s.vessels[app.selected];
 }
 function setCamera(mode) {
+  if (mode === app.camera && zoom[mode] !== undefined) zoom[mode] = 1;  // the same button again: fit
   app.camera = mode;
   for (const b of document.querySelectorAll('#camera-bar button')) b.classList.toggle('on', b.dataset.camera === mode);
   orbit.enabled = mode === 'orbit';
@@ -319,37 +334,118 @@ function setCamera(mode) {
     // OrbitControls takes its up axis from the camera when made: keep ENU z up
     camera.up.set(0, 0, 1);
     orbit.object.up.set(0, 0, 1);
-    orbit.update();
   }
   cameraInit = false;
   dirty = true;
 }
 for (const b of document.querySelectorAll('#camera-bar button')) b.onclick = () => setCamera(b.dataset.camera);
+canvas.addEventListener('wheel', (e) => {
+  if (app.camera === 'orbit') return;  // OrbitControls zooms
+  e.preventDefault();
+  zoom[app.camera] = Math.min(6, Math.max(0.04, zoom[app.camera] * Math.exp(0.0015 * e.deltaY)));
+  dirty = true;
+}, { passive: false });
 
+const hullLength = (name) => (vessels3.get(name) || { length: 30 }).length;
+const yawOf = (v) => Math.atan2(2 * (v.q[3] * v.q[2] + v.q[0] * v.q[1]), 1 - 2 * (v.q[1] * v.q[1] + v.q[2] * v.q[2]));
+function nearestVessel(p, s) {
+  let best = null, gap = Infinity;
+  for (const [n, v] of Object.entries(s.vessels)) {
+    const d = Math.hypot(v.x - p[0], v.y - p[1]) - 0.5 * hullLength(n);
+    if (d < gap) { gap = d; best = n; }
+  }
+  return gap < 25 ? best : null;
+}
+// the vessels joined to `name` by ropes (either end), and those ropes
+function towOf(name, s) {
+  const links = [];
+  for (const [r, o] of Object.entries(s.ropes)) {
+    const pts = o.points || [];
+    if (pts.length) links.push([r, nearestVessel(pts[0], s), nearestVessel(pts[pts.length - 1], s)]);
+  }
+  const vessels = new Set([name]), ropes = new Set();
+  for (let grew = true; grew;) {
+    grew = false;
+    for (const [r, a, b] of links) {
+      if (!vessels.has(a) && !vessels.has(b)) continue;
+      ropes.add(r);
+      for (const x of [a, b]) if (x && !vessels.has(x)) { vessels.add(x); grew = true; }
+    }
+  }
+  return { vessels: [...vessels], ropes: [...ropes] };
+}
+app.towOf = (name) => app.snap ? towOf(name, app.snap) : null;
+// points to keep in view: each hull's square of its length, at the waterline and above; the ropes
+function towPoints(tow, s) {
+  const pts = [];
+  for (const n of tow.vessels) {
+    const v = s.vessels[n], h = 0.5 * hullLength(n);
+    for (const [dx, dy] of [[-h, -h], [h, -h], [h, h], [-h, h]]) {
+      pts.push(new THREE.Vector3(v.x + dx, v.y + dy, 0), new THREE.Vector3(v.x + dx, v.y + dy, 0.25 * h));
+    }
+  }
+  for (const r of tow.ropes) {
+    const p = s.ropes[r].points || [];
+    for (let i = 0; i < p.length; i += Math.max(1, Math.floor(p.length / 12))) pts.push(new THREE.Vector3(...p[i]));
+  }
+  return pts;
+}
+// The band of the canvas the overlays leave free (CSS px from the top and from the bottom), and
+// the view shifted so that the band's middle is the picture's centre.
+function freeBand() {
+  const H = canvas.clientHeight, top = 40, box = $('plot-box');
+  const bottom = box ? Math.min(0.45 * H, H - box.offsetTop + 8) : 0;
+  return { top, bottom, H, W: canvas.clientWidth };
+}
+// The distance from target along -forward at which every point is inside the band (with a margin)
+function fitDistance(target, forward, up, pts, band) {
+  const right = new THREE.Vector3().crossVectors(forward, up).normalize();
+  const tanV = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2) * (band.H - band.top - band.bottom) / band.H;
+  const tanH = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2) * camera.aspect;
+  const d = new THREE.Vector3();
+  let need = 30;
+  for (const p of pts) {
+    d.subVectors(p, target);
+    const x = Math.abs(d.dot(right)) * 1.12, y = Math.abs(d.dot(up)) * 1.12, depth = d.dot(forward);
+    need = Math.max(need, x / tanH - depth, y / tanV - depth);
+  }
+  return need;
+}
 const FOLLOW_LAG = 0.12;  // s: time constant of the follow camera
 function placeCamera(dt) {
   const v = targetVessel();
   if (!v) return;
-  const L = (vessels3.get(app.selected) || { length: 30 }).length;
-  const p = new THREE.Vector3(v.x, v.y, 0);
-  const yaw = Math.atan2(2 * (v.q[3] * v.q[2] + v.q[0] * v.q[1]), 1 - 2 * (v.q[1] * v.q[1] + v.q[2] * v.q[2]));
-  if (app.camera === 'follow') {
-    const back = 2.5 * L + 50, up = 1.1 * L + 26;
-    followPos.set(p.x - back * Math.cos(yaw), p.y - back * Math.sin(yaw), up);
-    if (!cameraInit) camera.position.copy(followPos); else camera.position.lerp(followPos, 1 - Math.exp(-dt / FOLLOW_LAG));
-    orbit.target.copy(p);
-    camera.lookAt(p.x + 0.3 * L * Math.cos(yaw), p.y + 0.3 * L * Math.sin(yaw), 0);
-  } else if (app.camera === 'birdseye') {
-    const h = Math.max(150, 7 * L);
-    camera.position.set(p.x, p.y, h);
-    orbit.target.copy(p);
-    camera.lookAt(p);
-  } else {
-    if (!cameraInit) {
-      camera.position.set(p.x - 2.5 * L - 70, p.y - 2.5 * L - 70, 1.2 * L + 40);
-      orbit.target.copy(p);
-      lastTarget.copy(p);
+  const s = app.snap, band = freeBand();
+  camera.setViewOffset(band.W, band.H, 0, (band.bottom - band.top) / 2, band.W, band.H);
+  // Bird's-eye: every vessel and rope; Follow: the followed vessel's tow
+  const tow = app.camera === 'birdseye' ? { vessels: Object.keys(s.vessels), ropes: Object.keys(s.ropes) } :
+    towOf(app.selected, s);
+  const pts = towPoints(tow, s);
+  const box = new THREE.Box3().setFromPoints(pts), centre = box.getCenter(new THREE.Vector3());
+  const p = new THREE.Vector3(v.x, v.y, 0), yaw = yawOf(v);
+  if (app.camera === 'follow' || (app.camera === 'orbit' && !cameraInit)) {
+    const z = app.camera === 'follow' ? zoom.follow : 1;
+    const target = new THREE.Vector3().lerpVectors(p, centre, Math.min(1, z));
+    const forward = new THREE.Vector3(Math.cos(yaw) * Math.cos(FOLLOW_ELEVATION),
+      Math.sin(yaw) * Math.cos(FOLLOW_ELEVATION), -Math.sin(FOLLOW_ELEVATION));
+    const up = new THREE.Vector3(0, 0, 1).addScaledVector(forward, -forward.z).normalize();
+    const dist = z * fitDistance(target, forward, up, pts, band);
+    followPos.copy(target).addScaledVector(forward, -Math.max(dist, 0.6 * hullLength(app.selected) + 15));
+    if (!cameraInit) { camera.position.copy(followPos); followLook.copy(target); } else {
+      const k = 1 - Math.exp(-dt / FOLLOW_LAG);
+      camera.position.lerp(followPos, k); followLook.lerp(target, k);
     }
+    camera.lookAt(followLook);
+    orbit.target.copy(followLook);
+    lastTarget.copy(p);
+    if (app.camera === 'orbit') orbit.update();
+  } else if (app.camera === 'birdseye') {
+    const target = new THREE.Vector3().lerpVectors(p, centre, Math.min(1, zoom.birdseye));
+    const dist = zoom.birdseye * fitDistance(target, new THREE.Vector3(0, 0, -1), new THREE.Vector3(0, 1, 0), pts, band);
+    camera.position.set(target.x, target.y, Math.max(dist, 40));
+    orbit.target.copy(target);
+    camera.lookAt(target);
+  } else {
     // the orbit centre travels with the vessel
     const dx = p.x - lastTarget.x, dy = p.y - lastTarget.y;
     camera.position.x += dx; camera.position.y += dy;
@@ -404,18 +500,23 @@ function setGauge(id, text, value, t, frac, level) {
 }
 const safe = (s) => s.replace(/[^A-Za-z0-9_-]/g, '_');
 
+// what a vessel can be ordered (the station reads its ship file): engine, steering; unknown yet: both
+const controlsOf = (v) => v.controls || { engine: true, steering: true };
+app.controlsOf = (name) => app.snap && app.snap.vessels[name] ? controlsOf(app.snap.vessels[name]) : null;
+
 function buildGauges(s) {
   const vs = Object.keys(s.vessels).sort(), rs = Object.keys(s.ropes).sort();
-  const key = vs.join(',') + '|' + rs.join(',');
+  const key = vs.map((v) => `${v}:${JSON.stringify(s.vessels[v].controls)}`).join(',') + '|' + rs.join(',');
   if (key === app.gaugeKey || !vs.length) return;
   app.gaugeKey = key;
   $('vessel-gauges').innerHTML = vs.map((v) => {
-    const n = safe(v);
+    const n = safe(v), c = controlsOf(s.vessels[v]);
+    const kind = s.vessels[v].controls ? (c.engine ? '' : ' (unpowered)') : '';
     return `<div class="gauge" style="grid-column: 1 / -1; border: none; padding: 0">` +
-      `<b>${v}</b> <span class="muted" id="g-${n}-anchor"></span></div>` +
+      `<b>${v}</b>${kind} <span class="muted" id="g-${n}-anchor"></span></div>` +
       gauge(`g-${n}-speed`, 'speed kn') + gauge(`g-${n}-heading`, 'heading deg T') +
-      gauge(`g-${n}-engine`, 'engine order') + gauge(`g-${n}-rpm`, 'shaft rpm') +
-      gauge(`g-${n}-rudder`, 'rudder / bucket deg') + gauge(`g-${n}-heel`, 'heel deg') +
+      (c.engine ? gauge(`g-${n}-engine`, 'engine order') + gauge(`g-${n}-rpm`, 'shaft rpm') : '') +
+      (c.steering ? gauge(`g-${n}-rudder`, 'rudder / bucket deg, + port') : '') + gauge(`g-${n}-heel`, 'heel deg') +
       gauge(`g-${n}-girting`, 'girting ratio') + gauge(`g-${n}-roll`, 'roll deg') +
       gauge(`g-${n}-pitch`, 'pitch deg') + gauge(`g-${n}-hs`, 'sea Hs m') + gauge(`g-${n}-te`, 'encounter s') +
       gauge(`g-${n}-seafrom`, 'sea from deg');
@@ -449,8 +550,8 @@ function updateGauges(s) {
     setGauge(`g-${n}-engine`, v.engine_order === undefined ? '--' : (v.engine_order >= 0 ? '+' : '') +
       fmt(v.engine_order, 2), v.engine_order, v.t, Math.abs(v.engine_order || 0));
     setGauge(`g-${n}-rpm`, fmt(v.rpm, 0), v.rpm, v.t, 0);
-    setGauge(`g-${n}-rudder`, `${fmt(v.steering_deg, 1)} (${fmt(v.steering_ordered_deg, 0)})`, v.steering_deg, v.t,
-      Math.abs(v.steering_deg || 0) / 45);
+    setGauge(`g-${n}-rudder`, `${signed(v.steering_deg, 1)} (${signed(v.steering_ordered_deg, 0)})`, v.steering_deg,
+      v.t, Math.abs(v.steering_deg || 0) / 45);
     setGauge(`g-${n}-heel`, fmt(v.heel_deg, 1), v.heel_deg, v.t, Math.abs(v.heel_deg || 0) / 20,
       Math.abs(v.heel_deg || 0) > 10 ? 'warn' : '');
     const gr = v.girting_ratio, thr = v.girting_threshold || 1;
@@ -491,6 +592,55 @@ function updateGauges(s) {
     if (m) m.textContent = `${r.model}${bl ? `, breaking load ${fmt(bl / 1000, 0)} kN` : ''}` +
       `${r.broken ? ', PARTED' : ''}`;
   }
+}
+
+// ---------------------------------------------------------------- states: alerts, the run, events
+// Shown over the 3D view (#alerts, one line each, data-alert = its kind): a parted rope, a vessel
+// aground, an anchor dragging (on the bottom, moving over the ground), a vessel whose data stopped
+// (no message for run.silent_after s while the run goes on), the end of the run or replay.
+const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
+function alertsOf(s) {
+  const out = [], run = s.run || {}, after = run.silent_after || 3;
+  const parted = Object.fromEntries((s.events || []).filter((e) => e.kind === 'rope_parted').map((e) => [e.target, e]));
+  for (const [name, r] of Object.entries(s.ropes)) {
+    if (!r.broken) continue;
+    const e = parted[name];
+    out.push(['parted', `${name.toUpperCase()} PARTED` + (e ? ` at t = ${fmt(e.t, 1)} s` +
+      (Number.isFinite(e.value) ? `, ${fmt(e.value / 1000, 1)} kN` : '') : '')]);
+  }
+  for (const [name, v] of Object.entries(s.vessels)) {
+    if (v.grounded) out.push(['aground', `${name} AGROUND (under-keel clearance ${fmt(v.ukc, 2)} m)`]);
+    if (v.anchor_dragging) out.push(['anchor', `${name} ANCHOR DRAGGING (${fmt(v.speed_kn, 1)} kn over the ground)`]);
+    if (run.state !== 'ended' && v.silent_s >= after) {
+      out.push(['nodata', `${name}: NO DATA for ${v.silent_s} s (its node stopped, or the simulation is held up)`]);
+    }
+  }
+  if (run.state === 'ended') out.push(['ended', `${run.source === 'replay' ? 'REPLAY' : 'RUN'} ENDED: ${run.ended}`]);
+  return out;
+}
+function showStates(s) {
+  const alerts = alertsOf(s), html = alerts.map(([k, t]) => `<div data-alert="${k}">${esc(t)}</div>`).join('');
+  if ($('alerts').innerHTML !== html) $('alerts').innerHTML = html;
+  app.alerts = alerts;
+  const run = s.run || {};
+  app.ordersClosed = run.orders_closed || null;
+  $('orders-closed').textContent = app.ordersClosed ? `Orders refused: ${app.ordersClosed}` : '';
+  enableControls();
+  showEvents(s.events || []);
+}
+// /scenario/events, newest first: the script's orders, the nodes' events, who holds the orders
+// (manual_order / manual_handed_back), the run's start and end
+const EVENT_CLASS = { rope_parted: 'alarm', rope_failed: 'alarm', grounded: 'alarm', contact_failed: 'alarm',
+  command_rejected: 'warn', command_clamped: 'warn', hand_back_refused: 'warn', manual_order: 'own',
+  manual_handed_back: 'own', scripted_order_yielded: 'own', scenario_finished: 'end', scenario_started: 'end' };
+function showEvents(events) {
+  const key = `${events.length}|${events.length ? events[events.length - 1].t + events[events.length - 1].kind : ''}`;
+  if (key === app.eventsKey) return;
+  app.eventsKey = key;
+  $('events').innerHTML = events.slice().reverse().map((e) =>
+    `<div class="ev ${EVENT_CLASS[e.kind] || ''}" data-kind="${esc(e.kind)}"><span class="t">${fmt(e.t, 1)} s</span> ` +
+    `<b>${esc(e.kind.replace(/_/g, ' '))}</b>${e.target ? ` ${esc(e.target)}` : ''}: ${esc(e.detail)}</div>`).join('') ||
+    '<div class="muted">none yet</div>';
 }
 
 // ---------------------------------------------------------------- tension plot
@@ -540,11 +690,15 @@ function drawPlot(s) {
 
 // ---------------------------------------------------------------- orders
 async function sendRaw(topic, body) {
-  const r = await fetch(`/api/publish?topic=${encodeURIComponent(topic)}`,
-    { method: 'POST', headers: { 'Content-Type': 'application/json' }, body });
   let a;
-  try { a = await r.json(); } catch (e) { a = { accepted: false, reason: `HTTP ${r.status}` }; }
-  a.status = r.status;
+  try {
+    const r = await fetch(`/api/publish?topic=${encodeURIComponent(topic)}`,
+      { method: 'POST', headers: { 'Content-Type': 'application/json' }, body });
+    try { a = await r.json(); } catch (e) { a = { accepted: false, reason: `HTTP ${r.status}` }; }
+    a.status = r.status;
+  } catch (e) {
+    a = { accepted: false, status: 0, reason: 'no connection to the live view node: the order went nowhere' };
+  }
   app.answers.push(a);
   const el = $('answer');
   // forwarded (202): published by a stand-alone live view, which cannot vouch for the run's clock
@@ -568,7 +722,7 @@ let throttle = null;
 function touched() { app.touched = performance.now(); }
 function showSliders() {
   $('engine-out').textContent = Number($('engine').value).toFixed(2);
-  $('steering-out').textContent = String(Number($('steering').value));
+  $('steering-out').textContent = signed(Number($('steering').value), 0);
 }
 for (const id of ['engine', 'steering']) {
   $(id).addEventListener('input', () => {
@@ -603,11 +757,18 @@ function selectVessel(name) {
   app.touched = 0;  // the sliders take the new vessel's orders
   cameraInit = false;
   dirty = true;
-  const v = app.snap && app.snap.vessels[name];
-  const has = !!(v && v.has_command);
-  for (const id of ['engine', 'steering', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern', 'steer-port',
-    'midships', 'steer-stbd', 'anchor-let-go', 'anchor-heave-up']) $(id).disabled = !has;
-  for (const id of ['winch-payout', 'winch-hold', 'winch-heave', 'winch-rate']) $(id).disabled = !app.rope;
+  enableControls();
+}
+// the controls of what the selected vessel has (no engine, no helm on an unpowered barge), none
+// when orders go nowhere (the run or replay ended, a replay, no connection)
+function enableControls() {
+  const v = app.snap && app.snap.vessels[app.selected];
+  const open = !app.ordersClosed && !app.disconnected;
+  const has = !!(v && v.has_command) && open, c = v ? controlsOf(v) : { engine: false, steering: false };
+  for (const id of ['engine', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern']) $(id).disabled = !has || !c.engine;
+  for (const id of ['steering', 'steer-port', 'midships', 'steer-stbd']) $(id).disabled = !has || !c.steering;
+  for (const id of ['anchor-let-go', 'anchor-heave-up']) $(id).disabled = !has || !v || v.anchor === 'none';
+  for (const id of ['winch-payout', 'winch-hold', 'winch-heave', 'winch-rate']) $(id).disabled = !app.rope || !open;
 }
 $('vessel').onchange = () => { app.userChose = true; selectVessel($('vessel').value); };
 
@@ -644,12 +805,26 @@ function apply(s) {
   for (const r of Object.values(s.ropes)) app.peakSeen = Math.max(app.peakSeen, r.tension);
   for (const [name, r] of Object.entries(s.ropes)) updateRope(name, r);
   updateGauges(s);
+  showStates(s);
   drawPlot(s);
   syncSliders(s);
   askScene(s);
   if (app.firstT === undefined && s.t !== null) app.firstT = s.t;  // the first simulation time shown
   app.updates += 1;
   dirty = true;
+}
+
+// the run in a word: live, replay, run ended / replay ended, no data, waiting
+function showConnection(s) {
+  const run = s.run || {}, el = $('conn');
+  let text, good = false;
+  if (s.t === null) text = 'waiting for the simulation';
+  else if (run.state === 'ended') text = run.source === 'replay' ? 'replay ended' : 'run ended';
+  else if (run.silent_s >= (run.silent_after || 3)) text = `no data for ${run.silent_s} s`;
+  else { text = run.state === 'replay' ? 'replay' : 'live'; good = true; }
+  el.textContent = text;
+  el.className = good ? 'good' : 'bad';
+  el.dataset.state = run.state || '';
 }
 
 async function poll() {
@@ -662,13 +837,19 @@ async function poll() {
     // a snapshot like the last but for its number (the simulation paused, not started yet, or a
     // replay at its end): nothing to update or draw
     const key = text.replace(/"sample": \d+, /, '');
+    if (app.disconnected) { app.disconnected = false; enableControls(); }
     if (key !== app.lastKey) apply(s);
     app.lastKey = key;
-    $('conn').textContent = s.t === null ? 'waiting for the simulation' : 'live';
-    $('conn').className = s.t === null ? 'bad' : 'good';
+    showConnection(s);
   } catch (e) {
-    $('conn').textContent = 'no connection to the live view node';
+    // the run's own live view closes with the run: said as the end of the run when it had ended
+    const run = (app.snap && app.snap.run) || {};
+    $('conn').textContent = run.state === 'ended' ? `${run.source === 'replay' ? 'replay' : 'run'} ended; the live ` +
+      'view has closed' : app.snap ? 'no connection to the live view node: the run has ended or stopped' :
+      'no connection to the live view node';
     $('conn').className = 'bad';
+    $('conn').dataset.state = 'disconnected';
+    if (!app.disconnected) { app.disconnected = true; enableControls(); }
     period = 1.0;
   }
   setTimeout(poll, 1000 * period);
