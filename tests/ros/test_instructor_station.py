@@ -515,3 +515,127 @@ def test_sea_surface_in_the_page(browser, artifacts):
         server.shutdown()
         server.server_close()
     print(f"sea surface: {ms:.1f} ms a snapshot in the page")
+
+
+# ---------------------------------------------------------------- cameras, gauges and states
+
+def _frames(page, n=2):
+    page.evaluate(f"() => new Promise(r => {{ let k = {n}; const f = () => (--k > 0 ? requestAnimationFrame(f) : r());"
+                  "requestAnimationFrame(f); })")
+
+
+def _check_every_vessel(page, names, mode):
+    """Every vessel is drawn in this camera mode: inside the canvas, clear of the plot box, and the
+    pixels around it change when it is hidden (the picture held still, the names hidden)."""
+    page.click(f"#camera-bar button[data-camera={mode}]")
+    _frames(page, 3)
+    box = page.evaluate("(() => { const r = document.getElementById('plot-box').getBoundingClientRect(); "
+                        "const c = document.getElementById('scene').getBoundingClientRect(); "
+                        "return {plot: [r.left, r.top, r.right, r.bottom], canvas: [c.left, c.top, c.right, c.bottom]}; })()")
+    found = {}
+    for name in names:
+        pos = page.evaluate(f"instructor.project({name!r})")
+        x0, y0, x1, y1 = box["canvas"]
+        assert x0 + 10 <= pos["x"] <= x1 - 10 and y0 + 10 <= pos["y"] <= y1 - 10, (mode, name, pos, box)
+        px0, py0, px1, py1 = box["plot"]
+        assert not (px0 - 10 <= pos["x"] <= px1 + 10 and py0 - 10 <= pos["y"] <= py1 + 10), (mode, name, pos, box)
+        png, changed = _check_vessel_pixels(page, name)
+        found[name] = (round(pos["x"]), round(pos["y"]), changed)
+    return png, found
+
+
+def _check_wheel(page, mode):
+    """The mouse wheel over the 3D view brings the camera closer in this mode, and back."""
+    page.click(f"#camera-bar button[data-camera={mode}]")
+    page.click(f"#camera-bar button[data-camera={mode}]")  # again: the tow fitted
+    _frames(page, 3)
+    before = page.evaluate("instructor.cameraDistance()")
+    page.mouse.move(400, 300)
+    for _ in range(4):
+        page.mouse.wheel(0, -150)
+        _frames(page)
+    time.sleep(0.3)  # OrbitControls damps nothing here, but its wheel events arrive one by one
+    _frames(page, 3)
+    closer = page.evaluate("instructor.cameraDistance()")
+    page.click(f"#camera-bar button[data-camera={mode}]")  # fitted again (orbit: unchanged)
+    _frames(page, 2)
+    return before, closer
+
+
+def test_cameras_keep_the_tow_in_view(tmp_path, ros_domain, browser, artifacts, repo_root):
+    """The default demo (lockstep, cut at 150 s) with the page: once the tow is under way every
+    vessel is on the canvas in Follow, Bird's-eye and Free orbit (pixel check), the wheel zooms in
+    each mode; the unpowered barge has no engine, rpm or rudder gauge and no engine or helm
+    control; the script's orders are in the events list; after the run the page says it ended and
+    an order is refused with the reason. The docs' screenshot (docs/figures/instructor_station.png)
+    is this run's, written there with TUGSIM_UPDATE_FIGURES=1."""
+    from ament_index_python.packages import get_package_share_directory
+    share = get_package_share_directory("scenario_runner")
+    duration = 150.0
+    sc = yaml.safe_load(open(f"{share}/scenarios/default_demo.yaml"))
+    sc.update(name="tow_in_view", duration=duration)
+    sc["events"] = [e for e in sc["events"] if e["time"] < duration]
+    path = tmp_path / "tow_in_view.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    http_port = _free_port()
+    url = f"http://127.0.0.1:{http_port}/"
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), str(path), "--output",
+                             str(tmp_path / "tow.mcap"), "--quiet", "--live", "--live-port", str(_free_port()),
+                             "--ros-args", "-p", f"live_view:http_port:={http_port}"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    report = {}
+    try:
+        _wait_http(url, proc)
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "instructor.snap && instructor.snap.t > 75 && instructor.hasGeometry('tug') && "
+                         "instructor.hasGeometry('barge') && instructor.snap.vessels.barge.controls", timeout=200)
+        page.evaluate("instructor.hold = true; instructor.showLabels(false)")
+        report["t"] = page.evaluate("instructor.snap.t")
+        report["tow"] = page.evaluate("instructor.towOf('tug')")
+        for mode in ("follow", "birdseye", "orbit"):
+            png, report[mode] = _check_every_vessel(page, ["tug", "barge"], mode)
+            artifacts(f"tow_{mode}.png", png)
+        report["wheel"] = {mode: _check_wheel(page, mode) for mode in ("follow", "birdseye", "orbit")}
+        report["gauges"] = page.evaluate("""() => Object.fromEntries(['tug', 'barge'].map(v => [v,
+            ['speed', 'heading', 'engine', 'rpm', 'rudder', 'heel'].filter(k => document.getElementById(`g-${v}-${k}`))]))""")
+        page.select_option("#vessel", "barge")
+        report["barge_controls"] = page.evaluate("""() => Object.fromEntries(['engine', 'engine-stop', 'steering',
+            'steer-port'].map(id => [id, document.getElementById(id).disabled]))""")
+        page.select_option("#vessel", "tug")
+        report["events"] = page.evaluate("[...document.querySelectorAll('#events .ev')].map(e => e.dataset.kind)")
+        report["signs"] = page.evaluate("document.getElementById('signs').textContent")
+        # the screenshot of the docs: Follow, the tow fitted, names shown
+        page.evaluate("instructor.showLabels(true); instructor.hold = false")
+        page.click("#camera-bar button[data-camera=follow]")
+        page.click("#camera-bar button[data-camera=follow]")
+        _wait_page(page, f"instructor.snap.t > {report['t'] + 12}", timeout=60)
+        time.sleep(0.5)
+        figure = page.screenshot()
+        artifacts("instructor_station.png", figure)
+        if os.environ.get("TUGSIM_UPDATE_FIGURES") == "1":
+            with open(os.path.join(repo_root, "docs", "figures", "instructor_station.png"), "wb") as f:
+                f.write(figure)
+        stdout, stderr = proc.communicate(timeout=300)
+        _wait_page(page, "/ended|closed/.test(document.getElementById('conn').textContent)", timeout=30)
+        report["conn"] = page.evaluate("document.getElementById('conn').textContent")
+        report["after"] = page.evaluate("instructor.send('/tug/command', {engine_order: 0.3, steering_angle: 0})")
+        report["answer"] = page.evaluate("document.getElementById('answer').textContent")
+        report["errors"] = [e for e in errors if not e.startswith("Failed to load resource")]
+        page.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    print(report)
+    assert proc.returncode == 0, stderr[-3000:]
+    assert not report["errors"], report["errors"]
+    assert sorted(report["tow"]["vessels"]) == ["barge", "tug"] and report["tow"]["ropes"] == ["towline"], report["tow"]
+    for mode, (before, closer) in report["wheel"].items():
+        assert closer < 0.8 * before, (mode, before, closer)
+    assert report["gauges"] == {"tug": ["speed", "heading", "engine", "rpm", "rudder", "heel"],
+                                "barge": ["speed", "heading", "heel"]}, report["gauges"]
+    assert all(report["barge_controls"].values()), report["barge_controls"]
+    assert {"order", "scenario_started"} <= set(report["events"]), report["events"]
+    assert "+ port" in report["signs"] and "REP-103" in report["signs"] and "knots" in report["signs"]
+    assert "run" in report["conn"] and ("ended" in report["conn"] or "stopped" in report["conn"]), report["conn"]
+    assert report["after"]["accepted"] is False and "refused" in report["answer"], (report["after"], report["answer"])

@@ -226,7 +226,7 @@ class RunState:
 
     state: 'waiting' (no vessel seen yet), 'live' (a run), 'replay' (a recording played by
     `recording replay`, whose node publishes the vessels' topics: nothing obeys orders), 'ended'
-    (why: the scenario_finished event, or every publisher of the vessels' odometry gone after
+    (`ended` says why: the scenario_finished event, or every publisher of the vessels' odometry gone after
     data came: the run's nodes stopped, the replay played out). A new run or replay (a
     scenario_started event, publishers back after all had gone, the simulation time going back)
     makes it live again. ROS-free: fed by the station."""
@@ -245,7 +245,7 @@ class RunState:
         if kind == "scenario_started":
             self.ended, self.gone = None, False
         elif kind == "scenario_finished" and self.ended is None:
-            self.ended = f"{self._what()} ended: scenario finished at t = {t:.1f} s"
+            self.ended = f"scenario finished at t = {t:.1f} s"
 
     def stamp(self, t: float) -> None:
         self.had_data = True
@@ -262,8 +262,8 @@ class RunState:
         elif self.had_data and not self.gone:
             self.gone = True
             if self.ended is None:
-                self.ended = ("replay ended: the recording has been played" if self.source == "replay" else
-                              "run ended: the simulation's vessel nodes have stopped")
+                self.ended = ("the recording has been played" if self.source == "replay" else
+                              "the simulation's vessel nodes have stopped")
 
     @property
     def state(self) -> str:
@@ -276,7 +276,7 @@ class RunState:
     def orders_closed(self) -> Optional[str]:
         """Why an order goes nowhere now, or None."""
         if self.ended is not None:
-            return f"the {self.ended}: nothing obeys orders any more"
+            return f"the {self._what()} has ended ({self.ended}): nothing obeys orders any more"
         if self.source == "replay":
             return "a replay of a recording: the recorded vessels obey no orders"
         return None

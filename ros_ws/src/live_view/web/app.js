@@ -22,7 +22,9 @@ const app = {
   camera: params.get('camera') || 'follow', touched: 0, frames: 0, updates: 0, lastSceneAsk: 0,
   peakSeen: 1, answers: [],
 };
-window.instructor = app;  // for tests and the curious: app.snap, app.project(name), app.send(...)
+// for tests and the curious: app.snap, app.project(name), app.send(...); app.hold = true keeps the
+// picture still (snapshots not applied) for a pixel check
+window.instructor = app;
 
 // ---------------------------------------------------------------- 3D scene
 const canvas = $('scene');
@@ -248,6 +250,7 @@ function applyGeometry(name, d) {
   const k = Math.max(0.5, v.length / 30);
   v.label.scale.set(16 * k, 4 * k, 1);
   v.label.position.set(0, 0, bb.max.z + 4 * k);
+  v.top = bb.max.z;
   v.hasGeometry = true;
 }
 
@@ -318,7 +321,9 @@ const followPos = new THREE.Vector3(), followLook = new THREE.Vector3(), lastTar
 let cameraInit = false;
 const zoom = { follow: 1, birdseye: 1 };  // 1: the tow fitted; < 1 closer, > 1 farther
 app.zoom = zoom;
-const FOLLOW_ELEVATION = 28 * Math.PI / 180;  // the follow camera looks down this much
+// the follow camera looks down this much, from this far round from astern (starboard quarter): the
+// tow is not one hull hiding the next
+const FOLLOW_ELEVATION = 30 * Math.PI / 180, FOLLOW_QUARTER = 35 * Math.PI / 180;
 function targetVessel() {
   const s = app.snap;
   if (!s || !app.selected || !s.vessels[app.selected]) return null;
@@ -426,12 +431,13 @@ function placeCamera(dt) {
   if (app.camera === 'follow' || (app.camera === 'orbit' && !cameraInit)) {
     const z = app.camera === 'follow' ? zoom.follow : 1;
     const target = new THREE.Vector3().lerpVectors(p, centre, Math.min(1, z));
-    const forward = new THREE.Vector3(Math.cos(yaw) * Math.cos(FOLLOW_ELEVATION),
-      Math.sin(yaw) * Math.cos(FOLLOW_ELEVATION), -Math.sin(FOLLOW_ELEVATION));
+    const look = yaw + FOLLOW_QUARTER;
+    const forward = new THREE.Vector3(Math.cos(look) * Math.cos(FOLLOW_ELEVATION),
+      Math.sin(look) * Math.cos(FOLLOW_ELEVATION), -Math.sin(FOLLOW_ELEVATION));
     const up = new THREE.Vector3(0, 0, 1).addScaledVector(forward, -forward.z).normalize();
     const dist = z * fitDistance(target, forward, up, pts, band);
     followPos.copy(target).addScaledVector(forward, -Math.max(dist, 0.6 * hullLength(app.selected) + 15));
-    if (!cameraInit) { camera.position.copy(followPos); followLook.copy(target); } else {
+    if (!cameraInit || app.hold) { camera.position.copy(followPos); followLook.copy(target); } else {
       const k = 1 - Math.exp(-dt / FOLLOW_LAG);
       camera.position.lerp(followPos, k); followLook.lerp(target, k);
     }
@@ -454,6 +460,12 @@ function placeCamera(dt) {
     orbit.update();
   }
   cameraInit = true;
+  // names readable at any distance: the sprite 15 % of the distance wide, never below the hull's own scale
+  for (const [name, o] of vessels3) {
+    const w = Math.max(16 * Math.max(0.5, hullLength(name) / 30), 0.15 * camera.position.distanceTo(o.group.position));
+    o.label.scale.set(w, w / 4, 1);
+    o.label.position.z = (o.top === undefined ? 4 : o.top) + 0.2 * w;
+  }
   grid.position.set(Math.round(p.x / 50) * 50, Math.round(p.y / 50) * 50, 0.02);
 }
 
@@ -480,6 +492,8 @@ app.project = (name) => {
 
 app.hasGeometry = (name) => !!(vessels3.get(name) || {}).hasGeometry;
 app.setVisible = (name, on) => { const v = vessels3.get(name); if (v) v.group.visible = on; dirty = true; };
+app.showLabels = (on) => { for (const v of vessels3.values()) v.label.visible = on; dirty = true; };
+app.cameraDistance = () => camera.position.distanceTo(orbit.target);
 
 // ---------------------------------------------------------------- gauges
 function gauge(id, name) {
@@ -838,7 +852,7 @@ async function poll() {
     // replay at its end): nothing to update or draw
     const key = text.replace(/"sample": \d+, /, '');
     if (app.disconnected) { app.disconnected = false; enableControls(); }
-    if (key !== app.lastKey) apply(s);
+    if (key !== app.lastKey && !app.hold) apply(s);
     app.lastKey = key;
     showConnection(s);
   } catch (e) {
