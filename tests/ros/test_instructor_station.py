@@ -315,19 +315,29 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     try:
         _wait_http(url, live)
         assert _get(url + "api/sea") == {"waves": None}  # the recording's scenario (beside it): calm
-        # at twice the recorded pace (the page follows the replay's /clock, whatever its rate)
-        replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "2"],
+        # at the recorded pace (the page follows the replay's /clock, whatever its rate)
+        replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "1"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         page, errors = _open_page(browser, url)
         _wait_page(page, "instructor.snap && instructor.snap.t > 4 && instructor.hasGeometry('tug') && "
                          "document.getElementById('g-towline-tension')")
+        # a replay obeys no orders: refused with the reason, during the replay and after its end
+        _wait_page(page, "instructor.snap.run.state === 'replay'", timeout=30)
+        during = page.evaluate("instructor.send('/tug/command', {engine_order: 0.3, steering_angle: 0})")
         for _ in range(8):
             readings.append(_read_gauges(page))
             time.sleep(0.45)
         png, _ = _check_vessel_pixels(page, "tug")
         artifacts("replay.png", png)
-        page.close()
         assert replay.wait(60) == 0
+        _wait_page(page, "document.getElementById('conn').textContent === 'replay ended'", timeout=30)
+        after = page.evaluate("instructor.send('/tug/command', {engine_order: 0.3, steering_angle: 0})")
+        ended = {"alerts": page.evaluate("instructor.alerts"),
+                 "answer": page.evaluate("document.getElementById('answer').textContent"),
+                 "closed": page.evaluate("document.getElementById('orders-closed').textContent"),
+                 "engine_disabled": page.evaluate("document.getElementById('engine').disabled")}
+        artifacts("replay_ended.png", page.screenshot())
+        page.close()
     finally:
         for p in (replay, live):
             if p is not None and p.poll() is None:
@@ -339,6 +349,14 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
         log.close()
     print((tmp_path / "live_view.log").read_text()[-3000:])
     assert not errors, errors
+    assert during["status"] == 409 and during["accepted"] is False and "a replay of a recording" in during["reason"], \
+        during
+    assert after["status"] == 409 and "the replay has ended" in after["reason"], after
+    assert ended["alerts"][-1][0] == "ended" and ended["alerts"][-1][1].startswith("REPLAY ENDED: "), ended
+    assert "refused (409)" in ended["answer"] and ended["closed"].startswith("Orders refused: the replay has ended"), \
+        ended
+    assert ended["engine_disabled"] is True
+    assert "client input refused" in (tmp_path / "live_view.log").read_text()
     assert len({r["speed"]["t"] for r in readings}) >= 4  # it moves
     _check_gauges_against(decoded(str(out), GAUGE_TOPICS), readings)
     assert readings[0]["model"].startswith("element_chain, breaking load 157 kN"), readings[0]["model"]
@@ -639,3 +657,150 @@ def test_cameras_keep_the_tow_in_view(tmp_path, ros_domain, browser, artifacts, 
     assert "+ port" in report["signs"] and "REP-103" in report["signs"] and "knots" in report["signs"]
     assert "run" in report["conn"] and ("ended" in report["conn"] or "stopped" in report["conn"]), report["conn"]
     assert report["after"]["accepted"] is False and "refused" in report["answer"], (report["after"], report["answer"])
+
+
+def test_run_state_and_vessel_controls():
+    """In process: what each library ship can be ordered (from its ship file), the default demo's
+    vessels from the scenario; the run's state through a run, a new run, a replay and its end,
+    and the reason orders are refused."""
+    from live_view.instructor import RunState, controls_from_particulars, controls_of_ship
+    both, none = {"engine": True, "steering": True}, {"engine": False, "steering": False}
+    for ship in ("harbour_tug.yaml", "asd_tug.yaml", "s175_003.yaml", "planing_40ft.yaml"):
+        assert controls_of_ship(ship) == both, ship
+    for ship in ("barge_002_full.yaml", "box_barge_000.yaml"):
+        assert controls_of_ship(ship) == none, ship
+    assert controls_of_ship("harbour_tug.yaml", motion="constant_speed") == none
+    assert controls_from_particulars("default_demo.yaml") == {"tug": both, "barge": none}
+    with pytest.raises(ValueError, match="no_such_ship"):
+        controls_of_ship("no_such_ship.yaml")
+
+    run = RunState()
+    assert (run.state, run.orders_closed()) == ("waiting", None)
+    run.publishers([])  # nothing yet: not an end
+    run.stamp(0.0)
+    run.publishers(["tug_vessel", "barge_vessel"])
+    assert (run.state, run.orders_closed()) == ("live", None)
+    run.stamp(40.0)
+    run.event("scenario_finished", 40.0)
+    assert run.state == "ended" and run.ended == "scenario finished at t = 40.0 s"
+    assert run.orders_closed() == ("the run has ended (scenario finished at t = 40.0 s): nothing obeys orders any "
+                                   "more")
+    run.stamp(40.0)  # the last step's messages after the event: still ended
+    assert run.state == "ended"
+    run.event("scenario_started", 0.0)  # a new run
+    run.stamp(0.0)
+    assert run.state == "live"
+    run.publishers(["mcap_replay"])
+    assert run.state == "replay" and run.orders_closed() == ("a replay of a recording: the recorded vessels obey no "
+                                                             "orders")
+    run.publishers([])
+    assert run.state == "ended" and run.ended == "the recording has been played"
+    assert run.orders_closed().startswith("the replay has ended (the recording has been played)")
+    run.publishers(["mcap_replay"])  # played again
+    assert run.state == "replay"
+    run.stamp(50.0)
+    run.event("scenario_finished", 50.0)
+    run.stamp(10.0)  # --loop: from an earlier time again
+    assert run.state == "replay"
+
+
+def _vessel(**over):
+    d = {"t": 125.6, "x": 0.0, "y": 0.0, "z": 0.0, "q": [0.0, 0.0, 0.7071068, 0.7071068], "speed_kn": 0.0,
+         "heading_deg": 0.0, "heel_deg": 0.0, "trim_deg": 0.0, "has_command": True, "step": 6280,
+         "engine_order": 0.0, "rpm": 0.0, "steering_deg": 0.0, "steering_ordered_deg": 0.0, "stw_kn": 0.0,
+         "thrust": 0.0, "girting_ratio": 0.0, "girting_threshold": 0.7, "girting_warning": False, "anchor": "none",
+         "roll_deg": 0.0, "pitch_deg": 0.0, "heave": 0.0, "wave_elevation": 0.0, "wave_hs": 0.0,
+         "wave_encounter_period": None, "wave_encounter_angle_deg": 0.0, "grounded": False, "ukc": None,
+         "anchor_dragging": False, "silent_s": 0, "controls": {"engine": True, "steering": True}}
+    d.update(over)
+    return d
+
+
+STATE_EVENTS = [
+    {"t": 0.0, "step": 0, "kind": "scenario_started", "target": "", "detail": "scenario 'x'", "value": None},
+    {"t": 46.98, "step": 2349, "kind": "manual_order", "target": "tug",
+     "detail": "tug helm: manual order by console: 5 deg port; the script yields its helm orders for tug",
+     "value": 0.0873},
+    {"t": 60.0, "step": 3000, "kind": "manual_handed_back", "target": "tug",
+     "detail": "tug helm: handed back to the script by send_command", "value": None},
+    {"t": 110.0, "step": 5500, "kind": "grounded", "target": "tug", "detail": "under-keel clearance -0.40 m",
+     "value": -0.4},
+    {"t": 125.44, "step": 6272, "kind": "rope_parted", "target": "towline", "detail": "parted at 157.1 kN",
+     "value": 157100.0},
+]
+
+
+def _states_snapshot(run: dict) -> dict:
+    tug = _vessel(y=0.0, speed_kn=1.23, grounded=True, ukc=-0.4, anchor="dredging", anchor_dragging=True,
+                  steering_deg=5.0, steering_ordered_deg=5.0)
+    barge = _vessel(y=-117.5, silent_s=5, controls={"engine": False, "steering": False})
+    rope = {"t": 125.6, "step": 6280, "model": "element_chain", "points": [[0.0, -10.0, 0.0], [0.0, -60.0, 0.0]],
+            "tensions": [0.0, 0.0], "tension": 0.0, "tension_a": 0.0, "tension_b": 0.0, "breaking_load": 156900.0,
+            "ratio": 0.0, "deployed_length": 90.0, "stretched_length": 50.0, "broken": True, "payout_rate": None,
+            "winch": "no order", "has_winch": True}
+    return {"t": 125.6, "sample": 1, "period": 0.1, "vessels": {"tug": tug, "barge": barge}, "ropes": {"towline": rope},
+            "history": {}, "input_topics": ["/tug/command", "/barge/command", "/towline/winch"], "run": run,
+            "events": STATE_EVENTS}
+
+
+def test_states_on_the_page(browser, artifacts):
+    """The page against a stand-in of the station (a fixed snapshot): a parted towline, a tug aground
+    with its anchor dragging, a barge silent for 5 s are alerts over the 3D view; the events list
+    shows the order-ownership events (newest first, marked); the unpowered barge has no engine,
+    rpm or rudder gauge; the helm gauge carries the sign convention. Then the snapshot of a replay
+    that ended: 'replay ended', its reason, the order controls off."""
+    import threading
+    from live_view import instructor
+    live = {"state": "live", "ended": None, "source": "run", "orders_closed": None, "silent_s": 0,
+            "silent_after": 3.0}
+    station = _StandInStation({"waves": None}, _states_snapshot(live))
+
+    class Handler(instructor._Handler):
+        pass
+    Handler.station = station
+    server = instructor._Server(("127.0.0.1", 0), Handler)
+    station.port = server.server_address[1]
+    station.node.web_policy = station.trust.WebPolicy("127.0.0.1", [station.port])
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    thread.start()
+    url = f"http://127.0.0.1:{station.port}/"
+    try:
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "window.instructor && instructor.alerts && instructor.frames > 1", 30)
+        alerts = page.evaluate("[...document.querySelectorAll('#alerts div')].map(d => [d.dataset.alert, "
+                               "d.textContent])")
+        events = page.evaluate("[...document.querySelectorAll('#events .ev')].map(e => [e.dataset.kind, "
+                               "e.className, e.textContent])")
+        gauges = page.evaluate("""() => ({barge: ['engine', 'rpm', 'rudder', 'speed'].filter(k =>
+            document.getElementById(`g-barge-${k}`)), rudder: document.querySelector('#g-tug-rudder .value').textContent,
+            rudder_name: document.querySelector('#g-tug-rudder .name').textContent,
+            conn: document.getElementById('conn').textContent})""")
+        artifacts("states.png", page.screenshot())
+        ended = {"state": "ended", "ended": "the recording has been played", "source": "replay",
+                 "orders_closed": "the replay has ended (the recording has been played): nothing obeys orders any more",
+                 "silent_s": 4, "silent_after": 3.0}
+        station._state = json.dumps(_states_snapshot(ended)).encode()
+        _wait_page(page, "document.getElementById('conn').textContent === 'replay ended'", 10)
+        after = page.evaluate("""() => ({alerts: instructor.alerts, engine: document.getElementById('engine').disabled,
+            winch: document.getElementById('winch-payout').disabled,
+            closed: document.getElementById('orders-closed').textContent})""")
+        artifacts("states_replay_ended.png", page.screenshot())
+        assert not [e for e in errors if not e.startswith("Failed to load resource")], errors
+        page.close()
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert alerts == [["parted", "TOWLINE PARTED at t = 125.4 s, 157.1 kN"],
+                      ["aground", "tug AGROUND (under-keel clearance -0.40 m)"],
+                      ["anchor", "tug ANCHOR DRAGGING (1.2 kn over the ground)"],
+                      ["nodata", "barge: NO DATA for 5 s (its node stopped, or the simulation is held up)"]], alerts
+    assert [k for k, _, _ in events] == ["rope_parted", "grounded", "manual_handed_back", "manual_order",
+                                         "scenario_started"], events
+    assert all("own" in c.split() for k, c, _ in events if k.startswith("manual")), events
+    assert "manual order by console" in events[3][2] and events[3][2].startswith("47.0 s manual order tug: "), events
+    assert gauges == {"barge": ["speed"], "rudder": "+5.0 P (+5 P)", "rudder_name": "rudder / bucket deg, + port",
+                      "conn": "live"}, gauges
+    assert after["alerts"][-1] == ["ended", "REPLAY ENDED: the recording has been played"], after
+    assert after["engine"] and after["winch"], after
+    assert after["closed"] == "Orders refused: the replay has ended (the recording has been played): nothing obeys " \
+                              "orders any more", after

@@ -596,7 +596,7 @@ function updateGauges(s) {
     const kn = r.tension / 1000;
     const bl = r.breaking_load;
     const ratio = bl ? r.tension / bl : null;
-    setGauge(`g-${n}-tension`, bl ? `${fmt(kn, 1)} (${fmt(100 * ratio, 0)}% BL)` : fmt(kn, 1),
+    setGauge(`g-${n}-tension`, r.broken ? 'PARTED' : bl ? `${fmt(kn, 1)} (${fmt(100 * ratio, 0)}% BL)` : fmt(kn, 1),
       Number(kn.toFixed(1)), r.t, ratio === null ? kn / 200 : ratio,
       r.broken || (ratio !== null && ratio > 0.8) ? 'alarm' : ratio !== null && ratio > 0.5 ? 'warn' : '');
     setGauge(`g-${n}-length`, fmt(r.deployed_length, 1), Number(r.deployed_length.toFixed(1)), r.t, 0);
