@@ -203,6 +203,7 @@ function textSprite(text) {
   g.strokeText(text, 128, 32); g.fillText(text, 128, 32);
   const s = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(c), depthTest: false }));
   s.scale.set(16, 4, 1);
+  s.renderOrder = 10;  // after the (transparent) water, which would otherwise veil a name beyond its centre
   return s;
 }
 
