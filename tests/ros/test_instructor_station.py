@@ -549,7 +549,8 @@ def _check_every_vessel(page, names, mode):
     _frames(page, 3)
     box = page.evaluate("(() => { const r = document.getElementById('plot-box').getBoundingClientRect(); "
                         "const c = document.getElementById('scene').getBoundingClientRect(); "
-                        "return {plot: [r.left, r.top, r.right, r.bottom], canvas: [c.left, c.top, c.right, c.bottom]}; })()")
+                        "return {plot: [r.left, r.top, r.right, r.bottom], "
+                        "canvas: [c.left, c.top, c.right, c.bottom]}; })()")
     found = {}
     for name in names:
         pos = page.evaluate(f"instructor.project({name!r})")
@@ -622,7 +623,8 @@ def test_cameras_keep_the_tow_in_view(tmp_path, ros_domain, browser, artifacts, 
             artifacts(f"tow_{mode}.png", png)
         report["wheel"] = {mode: _check_wheel(page, mode) for mode in ("follow", "birdseye", "orbit")}
         report["gauges"] = page.evaluate("""() => Object.fromEntries(['tug', 'barge'].map(v => [v,
-            ['speed', 'heading', 'engine', 'rpm', 'rudder', 'heel'].filter(k => document.getElementById(`g-${v}-${k}`))]))""")
+            ['speed', 'heading', 'engine', 'rpm', 'rudder', 'heel'].filter(
+                k => document.getElementById(`g-${v}-${k}`))]))""")
         page.select_option("#vessel", "barge")
         report["barge_controls"] = page.evaluate("""() => Object.fromEntries(['engine', 'engine-stop', 'steering',
             'steer-port'].map(id => [id, document.getElementById(id).disabled]))""")
@@ -769,7 +771,8 @@ def test_states_on_the_page(browser, artifacts):
         events = page.evaluate("[...document.querySelectorAll('#events .ev')].map(e => [e.dataset.kind, "
                                "e.className, e.textContent])")
         gauges = page.evaluate("""() => ({barge: ['engine', 'rpm', 'rudder', 'speed'].filter(k =>
-            document.getElementById(`g-barge-${k}`)), rudder: document.querySelector('#g-tug-rudder .value').textContent,
+            document.getElementById(`g-barge-${k}`)),
+            rudder: document.querySelector('#g-tug-rudder .value').textContent,
             rudder_name: document.querySelector('#g-tug-rudder .name').textContent,
             conn: document.getElementById('conn').textContent})""")
         artifacts("states.png", page.screenshot())

@@ -19,7 +19,11 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
                      REP-103), heave, the encountered sea (Hs, encounter period, angle); per
                      rope the polyline of its connections with their tensions, peak tension,
                      breaking load, deployed length, winch order; the tension history of the last
-                     HISTORY_SECONDS of simulated time
+                     HISTORY_SECONDS of simulated time; per vessel also what it can be ordered
+                     (`controls`, from its ship file: vessel_controls), grounded and under-keel
+                     clearance, anchor dragging, seconds without data (`silent_s`); the run's
+                     state (RunState: waiting, live, replay, ended and why, why orders are
+                     refused) and the newest EVENTS_KEPT /scenario/events
   GET  /api/scene    per vessel the hull, deck and attachment points (body frame) of its markers
   GET  /api/sea      the run's sea (sea_description): {"waves": null} on a calm sea, else the
                      components of the very WaveField the vessel nodes sample (built here from the
@@ -38,7 +42,8 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
                      checks, the rate limit shared by every HTTP client, refusals logged and
                      counted, out-of-range values clamped. Answers 200 (accepted, with the clamp
                      notes), 202 (forwarded: a stand-alone live view, which cannot vouch for the
-                     run's clock, published it; the vessel decides), 400 (refused: malformed,
+                     run's clock, published it; the vessel decides), 409 (refused: nothing would
+                     obey it: a replay, or the run or replay has ended; the reason), 400 (refused: malformed,
                      non-finite, unknown fields, too deep or too long a number), 403 (not a command
                      or winch topic), 413 (too large), 415 (not JSON), 429 (rate).
 

@@ -42,7 +42,9 @@ The node holds its servers in ``self.servers`` (each with a ``stop()``): the bro
 instructor station (instructor.py: a page with a 3D view, gauges, a tension plot and controls,
 on http://127.0.0.1:8080, parameter ``http_port``, -1 for none) is added with add_server() and
 stopped with the node. Its commands go through the same checks, rate limit and counts as the
-WebSocket clients' (take_input()).
+WebSocket clients' (take_input()). Every client's order is refused (counted as "ended") while
+``orders_closed()`` gives a reason: the station's, during a replay and once the run or replay
+has ended (nothing would obey it).
 """
 from __future__ import annotations
 

@@ -448,7 +448,8 @@ function placeCamera(dt) {
     if (app.camera === 'orbit') orbit.update();
   } else if (app.camera === 'birdseye') {
     const target = new THREE.Vector3().lerpVectors(p, centre, Math.min(1, zoom.birdseye));
-    const dist = zoom.birdseye * fitDistance(target, new THREE.Vector3(0, 0, -1), new THREE.Vector3(0, 1, 0), pts, band);
+    const down = new THREE.Vector3(0, 0, -1), north = new THREE.Vector3(0, 1, 0);
+    const dist = zoom.birdseye * fitDistance(target, down, north, pts, band);
     camera.position.set(target.x, target.y, Math.max(dist, 40));
     orbit.target.copy(target);
     camera.lookAt(target);
@@ -654,7 +655,8 @@ function showEvents(events) {
   app.eventsKey = key;
   $('events').innerHTML = events.slice().reverse().map((e) =>
     `<div class="ev ${EVENT_CLASS[e.kind] || ''}" data-kind="${esc(e.kind)}"><span class="t">${fmt(e.t, 1)} s</span> ` +
-    `<b>${esc(e.kind.replace(/_/g, ' '))}</b>${e.target ? ` ${esc(e.target)}` : ''}: ${esc(e.detail)}</div>`).join('') ||
+    `<b>${esc(e.kind.replace(/_/g, ' '))}</b>${e.target ? ` ${esc(e.target)}` : ''}: ${esc(e.detail)}</div>`
+  ).join('') ||
     '<div class="muted">none yet</div>';
 }
 
@@ -780,7 +782,9 @@ function enableControls() {
   const v = app.snap && app.snap.vessels[app.selected];
   const open = !app.ordersClosed && !app.disconnected;
   const has = !!(v && v.has_command) && open, c = v ? controlsOf(v) : { engine: false, steering: false };
-  for (const id of ['engine', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern']) $(id).disabled = !has || !c.engine;
+  for (const id of ['engine', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern']) {
+    $(id).disabled = !has || !c.engine;
+  }
   for (const id of ['steering', 'steer-port', 'midships', 'steer-stbd']) $(id).disabled = !has || !c.steering;
   for (const id of ['anchor-let-go', 'anchor-heave-up']) $(id).disabled = !has || !v || v.anchor === 'none';
   for (const id of ['winch-payout', 'winch-hold', 'winch-heave', 'winch-rate']) $(id).disabled = !app.rope || !open;
