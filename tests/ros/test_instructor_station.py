@@ -9,7 +9,13 @@
   clients may not publish, an oversized body, a wrong content type) is refused and counted, an
   out-of-range order is clamped, and the log says so;
 - a replay of a recording, the station of a stand-alone live_view node: the gauges show the
-  recorded values, the breaking load from the recording's metadata.
+  recorded values, the breaking load from the recording's metadata; orders are refused (409)
+  during the replay and after its end, which the page shows;
+- the default demo in lockstep: every vessel on the canvas in each camera mode (pixel check),
+  the wheel zooms in each, no engine gauges or controls for the unpowered barge, the events
+  list, the end of the run (and the docs' screenshot, with TUGSIM_UPDATE_FIGURES=1);
+- in process and against a stand-in station: each ship's controls, the run's state, the alerts
+  (parted, aground, anchor dragging, no data, ended) and the order-ownership events.
 
 Screenshots are kept as test artifacts in output/test_artifacts/instructor_station/ (and the
 test's tmp_path).
@@ -692,6 +698,8 @@ def test_run_state_and_vessel_controls():
     run.publishers(["mcap_replay"])
     assert run.state == "replay" and run.orders_closed() == ("a replay of a recording: the recorded vessels obey no "
                                                              "orders")
+    run.publishers([], quiet=False)  # data still coming: a lapse of discovery, not the end
+    assert run.state == "replay"
     run.publishers([])
     assert run.state == "ended" and run.ended == "the recording has been played"
     assert run.orders_closed().startswith("the replay has ended (the recording has been played)")
@@ -722,6 +730,9 @@ STATE_EVENTS = [
      "value": 0.0873},
     {"t": 60.0, "step": 3000, "kind": "manual_handed_back", "target": "tug",
      "detail": "tug helm: handed back to the script by send_command", "value": None},
+    {"t": 62.0, "step": 3100, "kind": "manual_order", "target": "tug",
+     "detail": "tug engine: manual order by instructor page: 0.3; the script yields its engine orders for tug",
+     "value": 0.3},
     {"t": 110.0, "step": 5500, "kind": "grounded", "target": "tug", "detail": "under-keel clearance -0.40 m",
      "value": -0.4},
     {"t": 125.44, "step": 6272, "kind": "rope_parted", "target": "towline", "detail": "parted at 157.1 kN",
@@ -774,7 +785,8 @@ def test_states_on_the_page(browser, artifacts):
             document.getElementById(`g-barge-${k}`)),
             rudder: document.querySelector('#g-tug-rudder .value').textContent,
             rudder_name: document.querySelector('#g-tug-rudder .name').textContent,
-            conn: document.getElementById('conn').textContent})""")
+            conn: document.getElementById('conn').textContent,
+            manual: ['tug', 'barge'].map(v => document.getElementById(`g-${v}-anchor`).textContent)})""")
         artifacts("states.png", page.screenshot())
         ended = {"state": "ended", "ended": "the recording has been played", "source": "replay",
                  "orders_closed": "the replay has ended (the recording has been played): nothing obeys orders any more",
@@ -794,12 +806,13 @@ def test_states_on_the_page(browser, artifacts):
                       ["aground", "tug AGROUND (under-keel clearance -0.40 m)"],
                       ["anchor", "tug ANCHOR DRAGGING (1.2 kn over the ground)"],
                       ["nodata", "barge: NO DATA for 5 s (its node stopped, or the simulation is held up)"]], alerts
-    assert [k for k, _, _ in events] == ["rope_parted", "grounded", "manual_handed_back", "manual_order",
-                                         "scenario_started"], events
+    assert [k for k, _, _ in events] == ["rope_parted", "grounded", "manual_order", "manual_handed_back",
+                                         "manual_order", "scenario_started"], events
     assert all("own" in c.split() for k, c, _ in events if k.startswith("manual")), events
-    assert "manual order by console" in events[3][2] and events[3][2].startswith("47.0 s manual order tug: "), events
+    assert "manual order by console" in events[4][2] and events[4][2].startswith("47.0 s manual order tug: "), events
     assert gauges == {"barge": ["speed"], "rudder": "+5.0 P (+5 P)", "rudder_name": "rudder / bucket deg, + port",
-                      "conn": "live"}, gauges
+                      "conn": "live", "manual": ["anchor dredging; through water 0.00 kn; manual: engine",
+                                                 "anchor none; through water 0.00 kn"]}, gauges
     assert after["alerts"][-1] == ["ended", "REPLAY ENDED: the recording has been played"], after
     assert after["engine"] and after["winch"], after
     assert after["closed"] == "Orders refused: the replay has ended (the recording has been played): nothing obeys " \

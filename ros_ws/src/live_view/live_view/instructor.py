@@ -258,13 +258,14 @@ class RunState:
             self.ended, self.gone = None, False  # started again from an earlier time
         self.last_t = t if self.last_t is None else (t if self.ended is None else max(t, self.last_t))
 
-    def publishers(self, nodes: List[str]) -> None:
-        """The names of the nodes publishing the vessels' odometry now."""
+    def publishers(self, nodes: List[str], quiet: bool = True) -> None:
+        """The names of the nodes publishing the vessels' odometry now; quiet: no vessel data for
+        SILENT_AFTER s (publishers missing while data still flows are a lapse of discovery, not an end)."""
         if nodes:
             self.source = "replay" if REPLAY_NODE in nodes else "run"
             if self.gone:
                 self.ended, self.gone = None, False
-        elif self.had_data and not self.gone:
+        elif self.had_data and not self.gone and quiet:
             self.gone = True
             if self.ended is None:
                 self.ended = ("the recording has been played" if self.source == "replay" else
@@ -444,10 +445,11 @@ class InstructorStation:
         now = time.monotonic()
         while self._spent_clients:  # answered (or given up) at an earlier tick
             self.node.destroy_client(self._spent_clients.pop())
-        publishers = []
+        publishers, newest = [], 0.0
         for v in self._names("/odom"):
             publishers += [i.node_name for i in self.node.get_publishers_info_by_topic(T.vessel_topic(v, T.ODOM))]
-        self.run.publishers(publishers)
+            newest = max(newest, self.node.slots[T.vessel_topic(v, T.ODOM)].arrived)
+        self.run.publishers(publishers, quiet=now - newest >= SILENT_AFTER)
         wanted = [(topic[1:-len("/state")], topic, ["rope_file"], self._take_rope_file)
                   for topic in list(self.node.slots) if topic.endswith("/state") and topic.count("/") == 2]
         wanted += [(v, T.vessel_topic(v, T.ODOM), ["ship_file", "ship_overrides", "motion"], self._take_ship_file)

@@ -590,8 +590,9 @@ function updateGauges(s) {
     setGauge(`g-${n}-seafrom`, calm || ang === undefined ? '--' : `${fmt(Math.abs(ang), 0)} ` +
       `${Math.abs(ang) < 0.5 ? 'ahead' : Math.abs(ang) > 179.5 ? 'astern' : ang > 0 ? 'port' : 'stbd'}`,
     calm ? null : ang, v.t, Math.abs(ang || 0) / 180);
-    const an = $(`g-${n}-anchor`);
-    if (an) an.textContent = `anchor ${v.anchor || '-'}; through water ${fmt(v.stw_kn, 2)} kn`;
+    const an = $(`g-${n}-anchor`), manual = (app.manual || {})[name];
+    if (an) an.textContent = `anchor ${v.anchor || '-'}; through water ${fmt(v.stw_kn, 2)} kn` +
+      (manual && manual.size ? `; manual: ${[...manual].sort().join(', ')}` : '');
   }
   for (const [name, r] of Object.entries(s.ropes)) {
     const n = safe(name);
@@ -649,6 +650,19 @@ function showStates(s) {
 const EVENT_CLASS = { rope_parted: 'alarm', rope_failed: 'alarm', grounded: 'alarm', contact_failed: 'alarm',
   command_rejected: 'warn', command_clamped: 'warn', hand_back_refused: 'warn', manual_order: 'own',
   manual_handed_back: 'own', scripted_order_yielded: 'own', scenario_finished: 'end', scenario_started: 'end' };
+// who holds the orders: target -> the controls in manual control, from the ownership events
+// (their detail starts "<target> <control>:")
+function manualControls(events) {
+  const manual = {};
+  for (const e of events) {
+    if (e.kind !== 'manual_order' && e.kind !== 'manual_handed_back') continue;
+    const m = (e.detail || '').match(/^\S+ (\S+):/);
+    if (!m) continue;
+    const set = manual[e.target] || (manual[e.target] = new Set());
+    if (e.kind === 'manual_order') set.add(m[1]); else set.delete(m[1]);
+  }
+  return manual;
+}
 function showEvents(events) {
   const key = `${events.length}|${events.length ? events[events.length - 1].t + events[events.length - 1].kind : ''}`;
   if (key === app.eventsKey) return;
@@ -823,6 +837,7 @@ function apply(s) {
   seaFollow(s);
   for (const r of Object.values(s.ropes)) app.peakSeen = Math.max(app.peakSeen, r.tension);
   for (const [name, r] of Object.entries(s.ropes)) updateRope(name, r);
+  app.manual = manualControls(s.events || []);
   updateGauges(s);
   showStates(s);
   drawPlot(s);
