@@ -9,7 +9,13 @@
   clients may not publish, an oversized body, a wrong content type) is refused and counted, an
   out-of-range order is clamped, and the log says so;
 - a replay of a recording, the station of a stand-alone live_view node: the gauges show the
-  recorded values, the breaking load from the recording's metadata.
+  recorded values, the breaking load from the recording's metadata; orders are refused (409)
+  during the replay and after its end, which the page shows;
+- the default demo in lockstep: every vessel on the canvas in each camera mode (pixel check),
+  the wheel zooms in each, no engine gauges or controls for the unpowered barge, the events
+  list, the end of the run (and the docs' screenshot, with TUGSIM_UPDATE_FIGURES=1);
+- in process and against a stand-in station: each ship's controls, the run's state, the alerts
+  (parted, aground, anchor dragging, no data, ended) and the order-ownership events.
 
 Screenshots are kept as test artifacts in output/test_artifacts/instructor_station/ (and the
 test's tmp_path).
@@ -315,19 +321,29 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
     try:
         _wait_http(url, live)
         assert _get(url + "api/sea") == {"waves": None}  # the recording's scenario (beside it): calm
-        # at twice the recorded pace (the page follows the replay's /clock, whatever its rate)
-        replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "2"],
+        # at the recorded pace (the page follows the replay's /clock, whatever its rate)
+        replay = subprocess.Popen([executable_path("recording", "replay"), str(out), "--rate", "1"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         page, errors = _open_page(browser, url)
         _wait_page(page, "instructor.snap && instructor.snap.t > 4 && instructor.hasGeometry('tug') && "
                          "document.getElementById('g-towline-tension')")
+        # a replay obeys no orders: refused with the reason, during the replay and after its end
+        _wait_page(page, "instructor.snap.run.state === 'replay'", timeout=30)
+        during = page.evaluate("instructor.send('/tug/command', {engine_order: 0.3, steering_angle: 0})")
         for _ in range(8):
             readings.append(_read_gauges(page))
             time.sleep(0.45)
         png, _ = _check_vessel_pixels(page, "tug")
         artifacts("replay.png", png)
-        page.close()
         assert replay.wait(60) == 0
+        _wait_page(page, "document.getElementById('conn').textContent === 'replay ended'", timeout=30)
+        after = page.evaluate("instructor.send('/tug/command', {engine_order: 0.3, steering_angle: 0})")
+        ended = {"alerts": page.evaluate("instructor.alerts"),
+                 "answer": page.evaluate("document.getElementById('answer').textContent"),
+                 "closed": page.evaluate("document.getElementById('orders-closed').textContent"),
+                 "engine_disabled": page.evaluate("document.getElementById('engine').disabled")}
+        artifacts("replay_ended.png", page.screenshot())
+        page.close()
     finally:
         for p in (replay, live):
             if p is not None and p.poll() is None:
@@ -339,6 +355,14 @@ def test_instructor_station_during_replay(tmp_path, ros_domain, browser, artifac
         log.close()
     print((tmp_path / "live_view.log").read_text()[-3000:])
     assert not errors, errors
+    assert during["status"] == 409 and during["accepted"] is False and "a replay of a recording" in during["reason"], \
+        during
+    assert after["status"] == 409 and "the replay has ended" in after["reason"], after
+    assert ended["alerts"][-1][0] == "ended" and ended["alerts"][-1][1].startswith("REPLAY ENDED: "), ended
+    assert "refused (409)" in ended["answer"] and ended["closed"].startswith("Orders refused: the replay has ended"), \
+        ended
+    assert ended["engine_disabled"] is True
+    assert "client input refused" in (tmp_path / "live_view.log").read_text()
     assert len({r["speed"]["t"] for r in readings}) >= 4  # it moves
     _check_gauges_against(decoded(str(out), GAUGE_TOPICS), readings)
     assert readings[0]["model"].startswith("element_chain, breaking load 157 kN"), readings[0]["model"]
@@ -515,3 +539,281 @@ def test_sea_surface_in_the_page(browser, artifacts):
         server.shutdown()
         server.server_close()
     print(f"sea surface: {ms:.1f} ms a snapshot in the page")
+
+
+# ---------------------------------------------------------------- cameras, gauges and states
+
+def _frames(page, n=2):
+    page.evaluate(f"() => new Promise(r => {{ let k = {n}; const f = () => (--k > 0 ? requestAnimationFrame(f) : r());"
+                  "requestAnimationFrame(f); })")
+
+
+def _check_every_vessel(page, names, mode):
+    """Every vessel is drawn in this camera mode: inside the canvas, clear of the plot box, and the
+    pixels around it change when it is hidden (the picture held still, the names hidden)."""
+    page.click(f"#camera-bar button[data-camera={mode}]")
+    _frames(page, 3)
+    box = page.evaluate("(() => { const r = document.getElementById('plot-box').getBoundingClientRect(); "
+                        "const c = document.getElementById('scene').getBoundingClientRect(); "
+                        "return {plot: [r.left, r.top, r.right, r.bottom], "
+                        "canvas: [c.left, c.top, c.right, c.bottom]}; })()")
+    found = {}
+    for name in names:
+        pos = page.evaluate(f"instructor.project({name!r})")
+        x0, y0, x1, y1 = box["canvas"]
+        assert x0 + 10 <= pos["x"] <= x1 - 10 and y0 + 10 <= pos["y"] <= y1 - 10, (mode, name, pos, box)
+        px0, py0, px1, py1 = box["plot"]
+        assert not (px0 - 10 <= pos["x"] <= px1 + 10 and py0 - 10 <= pos["y"] <= py1 + 10), (mode, name, pos, box)
+        png, changed = _check_vessel_pixels(page, name)
+        found[name] = (round(pos["x"]), round(pos["y"]), changed)
+    return png, found
+
+
+def _check_wheel(page, mode):
+    """The mouse wheel over the 3D view brings the camera closer in this mode, and back."""
+    page.click(f"#camera-bar button[data-camera={mode}]")
+    page.click(f"#camera-bar button[data-camera={mode}]")  # again: the tow fitted
+    _frames(page, 3)
+    before = page.evaluate("instructor.cameraDistance()")
+    page.mouse.move(400, 300)
+    for _ in range(4):
+        page.mouse.wheel(0, -150)
+        _frames(page)
+    time.sleep(0.3)  # OrbitControls damps nothing here, but its wheel events arrive one by one
+    _frames(page, 3)
+    closer = page.evaluate("instructor.cameraDistance()")
+    page.click(f"#camera-bar button[data-camera={mode}]")  # fitted again (orbit: unchanged)
+    _frames(page, 2)
+    return before, closer
+
+
+def test_cameras_keep_the_tow_in_view(tmp_path, ros_domain, browser, artifacts, repo_root):
+    """The default demo (lockstep, cut at 220 s) with the page: once the tow is under way every
+    vessel is on the canvas in Follow, Bird's-eye and Free orbit (pixel check), the wheel zooms in
+    each mode; the unpowered barge has no engine, rpm or rudder gauge and no engine or helm
+    control; the script's orders are in the events list; after the run the page says it ended and
+    an order is refused with the reason. The docs' screenshot (docs/figures/instructor_station.png)
+    is this run's, written there with TUGSIM_UPDATE_FIGURES=1."""
+    from ament_index_python.packages import get_package_share_directory
+    share = get_package_share_directory("scenario_runner")
+    duration = 220.0
+    sc = yaml.safe_load(open(f"{share}/scenarios/default_demo.yaml"))
+    sc.update(name="tow_in_view", duration=duration)
+    sc["events"] = [e for e in sc["events"] if e["time"] < duration]
+    path = tmp_path / "tow_in_view.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    http_port = _free_port()
+    url = f"http://127.0.0.1:{http_port}/"
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), str(path), "--output",
+                             str(tmp_path / "tow.mcap"), "--quiet", "--live", "--live-port", str(_free_port()),
+                             "--ros-args", "-p", f"live_view:http_port:={http_port}"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    report = {}
+    try:
+        _wait_http(url, proc)
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "instructor.snap && instructor.snap.t > 120 && instructor.hasGeometry('tug') && "
+                         "instructor.hasGeometry('barge') && instructor.snap.vessels.barge.controls", timeout=240)
+        # the screenshot of the docs: Follow, the tow fitted, names shown
+        _frames(page, 3)
+        figure = page.screenshot()
+        artifacts("instructor_station.png", figure)
+        if os.environ.get("TUGSIM_UPDATE_FIGURES") == "1":
+            with open(os.path.join(repo_root, "docs", "figures", "instructor_station.png"), "wb") as f:
+                f.write(figure)
+        page.evaluate("instructor.hold = true; instructor.showLabels(false)")
+        report["t"] = page.evaluate("instructor.snap.t")
+        report["tow"] = page.evaluate("instructor.towOf('tug')")
+        for mode in ("follow", "birdseye", "orbit"):
+            png, report[mode] = _check_every_vessel(page, ["tug", "barge"], mode)
+            artifacts(f"tow_{mode}.png", png)
+        report["wheel"] = {mode: _check_wheel(page, mode) for mode in ("follow", "birdseye", "orbit")}
+        report["gauges"] = page.evaluate("""() => Object.fromEntries(['tug', 'barge'].map(v => [v,
+            ['speed', 'heading', 'engine', 'rpm', 'rudder', 'heel'].filter(
+                k => document.getElementById(`g-${v}-${k}`))]))""")
+        page.select_option("#vessel", "barge")
+        report["barge_controls"] = page.evaluate("""() => Object.fromEntries(['engine', 'engine-stop', 'steering',
+            'steer-port'].map(id => [id, document.getElementById(id).disabled]))""")
+        page.select_option("#vessel", "tug")
+        report["events"] = page.evaluate("[...document.querySelectorAll('#events .ev')].map(e => e.dataset.kind)")
+        report["signs"] = page.evaluate("document.getElementById('signs').textContent")
+        page.evaluate("instructor.showLabels(true); instructor.hold = false")
+        stdout, stderr = proc.communicate(timeout=400)
+        _wait_page(page, "/ended|closed/.test(document.getElementById('conn').textContent)", timeout=30)
+        report["conn"] = page.evaluate("document.getElementById('conn').textContent")
+        report["after"] = page.evaluate("instructor.send('/tug/command', {engine_order: 0.3, steering_angle: 0})")
+        report["answer"] = page.evaluate("document.getElementById('answer').textContent")
+        report["errors"] = [e for e in errors if not e.startswith("Failed to load resource")]
+        page.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    print(report)
+    assert proc.returncode == 0, stderr[-3000:]
+    assert not report["errors"], report["errors"]
+    assert sorted(report["tow"]["vessels"]) == ["barge", "tug"] and report["tow"]["ropes"] == ["towline"], report["tow"]
+    for mode, (before, closer) in report["wheel"].items():
+        assert closer < 0.8 * before, (mode, before, closer)
+    assert report["gauges"] == {"tug": ["speed", "heading", "engine", "rpm", "rudder", "heel"],
+                                "barge": ["speed", "heading", "heel"]}, report["gauges"]
+    assert all(report["barge_controls"].values()), report["barge_controls"]
+    assert {"order", "scenario_started"} <= set(report["events"]), report["events"]
+    assert "+ port" in report["signs"] and "REP-103" in report["signs"] and "knots" in report["signs"]
+    assert "run" in report["conn"] and ("ended" in report["conn"] or "stopped" in report["conn"]), report["conn"]
+    assert report["after"]["accepted"] is False and "refused" in report["answer"], (report["after"], report["answer"])
+
+
+def test_run_state_and_vessel_controls():
+    """In process: what each library ship can be ordered (from its ship file), the default demo's
+    vessels from the scenario; the run's state through a run, a new run, a replay and its end,
+    and the reason orders are refused."""
+    from live_view.instructor import RunState, controls_from_particulars, controls_of_ship
+    both, none = {"engine": True, "steering": True}, {"engine": False, "steering": False}
+    for ship in ("harbour_tug.yaml", "asd_tug.yaml", "s175_003.yaml", "planing_40ft.yaml"):
+        assert controls_of_ship(ship) == both, ship
+    for ship in ("barge_002_full.yaml", "box_barge_000.yaml"):
+        assert controls_of_ship(ship) == none, ship
+    assert controls_of_ship("harbour_tug.yaml", motion="constant_speed") == none
+    assert controls_from_particulars("default_demo.yaml") == {"tug": both, "barge": none}
+    with pytest.raises(ValueError, match="no_such_ship"):
+        controls_of_ship("no_such_ship.yaml")
+
+    run = RunState()
+    assert (run.state, run.orders_closed()) == ("waiting", None)
+    run.publishers([])  # nothing yet: not an end
+    run.stamp(0.0)
+    run.publishers(["tug_vessel", "barge_vessel"])
+    assert (run.state, run.orders_closed()) == ("live", None)
+    run.stamp(40.0)
+    run.event("scenario_finished", 40.0)
+    assert run.state == "ended" and run.ended == "scenario finished at t = 40.0 s"
+    assert run.orders_closed() == ("the run has ended (scenario finished at t = 40.0 s): nothing obeys orders any "
+                                   "more")
+    run.stamp(40.0)  # the last step's messages after the event: still ended
+    assert run.state == "ended"
+    run.event("scenario_started", 0.0)  # a new run
+    run.stamp(0.0)
+    assert run.state == "live"
+    run.publishers(["mcap_replay"])
+    assert run.state == "replay" and run.orders_closed() == ("a replay of a recording: the recorded vessels obey no "
+                                                             "orders")
+    run.publishers([], quiet=False)  # data still coming: a lapse of discovery, not the end
+    assert run.state == "replay"
+    run.publishers([])
+    assert run.state == "ended" and run.ended == "the recording has been played"
+    assert run.orders_closed().startswith("the replay has ended (the recording has been played)")
+    run.publishers(["mcap_replay"])  # played again
+    assert run.state == "replay"
+    run.stamp(50.0)
+    run.event("scenario_finished", 50.0)
+    run.stamp(10.0)  # --loop: from an earlier time again
+    assert run.state == "replay"
+
+
+def _vessel(**over):
+    d = {"t": 125.6, "x": 0.0, "y": 0.0, "z": 0.0, "q": [0.0, 0.0, 0.7071068, 0.7071068], "speed_kn": 0.0,
+         "heading_deg": 0.0, "heel_deg": 0.0, "trim_deg": 0.0, "has_command": True, "step": 6280,
+         "engine_order": 0.0, "rpm": 0.0, "steering_deg": 0.0, "steering_ordered_deg": 0.0, "stw_kn": 0.0,
+         "thrust": 0.0, "girting_ratio": 0.0, "girting_threshold": 0.7, "girting_warning": False, "anchor": "none",
+         "roll_deg": 0.0, "pitch_deg": 0.0, "heave": 0.0, "wave_elevation": 0.0, "wave_hs": 0.0,
+         "wave_encounter_period": None, "wave_encounter_angle_deg": 0.0, "grounded": False, "ukc": None,
+         "anchor_dragging": False, "silent_s": 0, "controls": {"engine": True, "steering": True}}
+    d.update(over)
+    return d
+
+
+STATE_EVENTS = [
+    {"t": 0.0, "step": 0, "kind": "scenario_started", "target": "", "detail": "scenario 'x'", "value": None},
+    {"t": 46.98, "step": 2349, "kind": "manual_order", "target": "tug",
+     "detail": "tug helm: manual order by console: 5 deg port; the script yields its helm orders for tug",
+     "value": 0.0873},
+    {"t": 60.0, "step": 3000, "kind": "manual_handed_back", "target": "tug",
+     "detail": "tug helm: handed back to the script by send_command", "value": None},
+    {"t": 62.0, "step": 3100, "kind": "manual_order", "target": "tug",
+     "detail": "tug engine: manual order by instructor page: 0.3; the script yields its engine orders for tug",
+     "value": 0.3},
+    {"t": 110.0, "step": 5500, "kind": "grounded", "target": "tug", "detail": "under-keel clearance -0.40 m",
+     "value": -0.4},
+    {"t": 125.44, "step": 6272, "kind": "rope_parted", "target": "towline", "detail": "parted at 157.1 kN",
+     "value": 157100.0},
+]
+
+
+def _states_snapshot(run: dict) -> dict:
+    tug = _vessel(y=0.0, speed_kn=1.23, grounded=True, ukc=-0.4, anchor="dredging", anchor_dragging=True,
+                  steering_deg=5.0, steering_ordered_deg=5.0)
+    barge = _vessel(y=-117.5, silent_s=5, controls={"engine": False, "steering": False})
+    rope = {"t": 125.6, "step": 6280, "model": "element_chain", "points": [[0.0, -10.0, 0.0], [0.0, -60.0, 0.0]],
+            "tensions": [0.0, 0.0], "tension": 0.0, "tension_a": 0.0, "tension_b": 0.0, "breaking_load": 156900.0,
+            "ratio": 0.0, "deployed_length": 90.0, "stretched_length": 50.0, "broken": True, "payout_rate": None,
+            "winch": "no order", "has_winch": True}
+    return {"t": 125.6, "sample": 1, "period": 0.1, "vessels": {"tug": tug, "barge": barge}, "ropes": {"towline": rope},
+            "history": {}, "input_topics": ["/tug/command", "/barge/command", "/towline/winch"], "run": run,
+            "events": STATE_EVENTS}
+
+
+def test_states_on_the_page(browser, artifacts):
+    """The page against a stand-in of the station (a fixed snapshot): a parted towline, a tug aground
+    with its anchor dragging, a barge silent for 5 s are alerts over the 3D view; the events list
+    shows the order-ownership events (newest first, marked); the unpowered barge has no engine,
+    rpm or rudder gauge; the helm gauge carries the sign convention. Then the snapshot of a replay
+    that ended: 'replay ended', its reason, the order controls off."""
+    import threading
+    from live_view import instructor
+    live = {"state": "live", "ended": None, "source": "run", "orders_closed": None, "silent_s": 0,
+            "silent_after": 3.0}
+    station = _StandInStation({"waves": None}, _states_snapshot(live))
+
+    class Handler(instructor._Handler):
+        pass
+    Handler.station = station
+    server = instructor._Server(("127.0.0.1", 0), Handler)
+    station.port = server.server_address[1]
+    station.node.web_policy = station.trust.WebPolicy("127.0.0.1", [station.port])
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    thread.start()
+    url = f"http://127.0.0.1:{station.port}/"
+    try:
+        page, errors = _open_page(browser, url)
+        _wait_page(page, "window.instructor && instructor.alerts && instructor.frames > 1", 30)
+        alerts = page.evaluate("[...document.querySelectorAll('#alerts div')].map(d => [d.dataset.alert, "
+                               "d.textContent])")
+        events = page.evaluate("[...document.querySelectorAll('#events .ev')].map(e => [e.dataset.kind, "
+                               "e.className, e.textContent])")
+        gauges = page.evaluate("""() => ({barge: ['engine', 'rpm', 'rudder', 'speed'].filter(k =>
+            document.getElementById(`g-barge-${k}`)),
+            rudder: document.querySelector('#g-tug-rudder .value').textContent,
+            rudder_name: document.querySelector('#g-tug-rudder .name').textContent,
+            conn: document.getElementById('conn').textContent,
+            manual: ['tug', 'barge'].map(v => document.getElementById(`g-${v}-anchor`).textContent)})""")
+        artifacts("states.png", page.screenshot())
+        ended = {"state": "ended", "ended": "the recording has been played", "source": "replay",
+                 "orders_closed": "the replay has ended (the recording has been played): nothing obeys orders any more",
+                 "silent_s": 4, "silent_after": 3.0}
+        station._state = json.dumps(_states_snapshot(ended)).encode()
+        _wait_page(page, "document.getElementById('conn').textContent === 'replay ended'", 10)
+        after = page.evaluate("""() => ({alerts: instructor.alerts, engine: document.getElementById('engine').disabled,
+            winch: document.getElementById('winch-payout').disabled,
+            closed: document.getElementById('orders-closed').textContent})""")
+        artifacts("states_replay_ended.png", page.screenshot())
+        assert not [e for e in errors if not e.startswith("Failed to load resource")], errors
+        page.close()
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert alerts == [["parted", "TOWLINE PARTED at t = 125.4 s, 157.1 kN"],
+                      ["aground", "tug AGROUND (under-keel clearance -0.40 m)"],
+                      ["anchor", "tug ANCHOR DRAGGING (1.2 kn over the ground)"],
+                      ["nodata", "barge: NO DATA for 5 s (its node stopped, or the simulation is held up)"]], alerts
+    assert [k for k, _, _ in events] == ["rope_parted", "grounded", "manual_order", "manual_handed_back",
+                                         "manual_order", "scenario_started"], events
+    assert all("own" in c.split() for k, c, _ in events if k.startswith("manual")), events
+    assert "manual order by console" in events[4][2] and events[4][2].startswith("47.0 s manual order tug: "), events
+    assert gauges == {"barge": ["speed"], "rudder": "+5.0 P (+5 P)", "rudder_name": "rudder / bucket deg, + port",
+                      "conn": "live", "manual": ["anchor dredging; through water 0.00 kn; manual: engine",
+                                                 "anchor none; through water 0.00 kn"]}, gauges
+    assert after["alerts"][-1] == ["ended", "REPLAY ENDED: the recording has been played"], after
+    assert after["engine"] and after["winch"], after
+    assert after["closed"] == "Orders refused: the replay has ended (the recording has been played): nothing obeys " \
+                              "orders any more", after

@@ -19,7 +19,11 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
                      REP-103), heave, the encountered sea (Hs, encounter period, angle); per
                      rope the polyline of its connections with their tensions, peak tension,
                      breaking load, deployed length, winch order; the tension history of the last
-                     HISTORY_SECONDS of simulated time
+                     HISTORY_SECONDS of simulated time; per vessel also what it can be ordered
+                     (`controls`, from its ship file: vessel_controls), grounded and under-keel
+                     clearance, anchor dragging, seconds without data (`silent_s`); the run's
+                     state (RunState: waiting, live, replay, ended and why, why orders are
+                     refused) and the newest EVENTS_KEPT /scenario/events
   GET  /api/scene    per vessel the hull, deck and attachment points (body frame) of its markers
   GET  /api/sea      the run's sea (sea_description): {"waves": null} on a calm sea, else the
                      components of the very WaveField the vessel nodes sample (built here from the
@@ -38,7 +42,8 @@ Endpoints (HTTP/1.1, this process's threads, never the ROS executor):
                      checks, the rate limit shared by every HTTP client, refusals logged and
                      counted, out-of-range values clamped. Answers 200 (accepted, with the clamp
                      notes), 202 (forwarded: a stand-alone live view, which cannot vouch for the
-                     run's clock, published it; the vessel decides), 400 (refused: malformed,
+                     run's clock, published it; the vessel decides), 409 (refused: nothing would
+                     obey it: a replay, or the run or replay has ended; the reason), 400 (refused: malformed,
                      non-finite, unknown fields, too deep or too long a number), 403 (not a command
                      or winch topic), 413 (too large), 415 (not JSON), 429 (rate).
 
@@ -70,6 +75,11 @@ from sim_math.rotations import rpy_from_quaternion
 HISTORY_SECONDS = 180.0  # s of simulated time kept for the tension plot
 MAX_BODY = client_input.MAX_MESSAGE_BYTES
 ANCHOR_STATES = {0: "none", 1: "stowed", 2: "letting go", 3: "dredging", 4: "heaving up"}
+ANCHOR_DREDGING = 3  # tug_msgs/VesselStatus.ANCHOR_DREDGING: the anchor on the bottom
+ANCHOR_DRAG_KN = 0.3  # kn over the ground with the anchor on the bottom: the anchor is dragging
+SILENT_AFTER = 3.0  # s (wall clock) without a message from a vessel: the page says "no data"
+EVENTS_KEPT = 60  # the newest /scenario/events shown on the page
+REPLAY_NODE = "mcap_replay"  # the node `ros2 run recording replay` publishes from
 
 # The page's files: URL path -> file under the web root (nothing else is served from disk)
 FILES = {
@@ -101,6 +111,15 @@ def _clean(obj):
 
 def _finite_or_none(v: float) -> Optional[float]:
     return float(v) if math.isfinite(v) else None
+
+
+def _silent(now: float, slot) -> Optional[int]:
+    """Whole seconds (wall clock) since the slot's newest message, 0 under one second: a snapshot
+    changes no more than once a second while nothing arrives (the page redraws on change)."""
+    if slot is None or not slot.arrived:
+        return None
+    age = now - slot.arrived
+    return 0 if age < 1.0 else int(age)
 
 
 def rope_polyline(state) -> Tuple[List[List[float]], List[float]]:
@@ -155,6 +174,120 @@ def sea_description(environment: str) -> dict:
                       "ky": rows[:, C_KY].tolist(), "phase": w.phase.tolist()}}
 
 
+def vessel_controls(cfg: dict, prescribed: bool = False) -> dict:
+    """What a vessel of this ship configuration (tug_dynamics.ship_file.ship_config) can be
+    ordered, for the page's gauges and controls: engine (propellers, azimuth thrusters or a
+    waterjet) and steering (rudders, the thrusters' azimuth or the waterjet's nozzle); nothing on
+    a prescribed motion. An unpowered barge: neither."""
+    if prescribed:
+        return {"engine": False, "steering": False}
+    powered = bool(cfg.get("propellers") or cfg.get("thrusters") or cfg.get("waterjet"))
+    steered = bool(cfg.get("rudders") or cfg.get("thrusters") or cfg.get("waterjet"))
+    return {"engine": powered, "steering": steered}
+
+
+def controls_of_ship(ship_file: str, overrides: str = "", motion: str = "", relative_to: Optional[str] = None) -> dict:
+    """vessel_controls of a ship file (a path, or a name in the installed ships directory) with a
+    vessel node's ship_overrides (YAML text) merged over it. ValueError naming the file."""
+    import yaml
+    from sim_math.data_files import resolve
+    from tug_dynamics.ship_file import ShipFileError, ship_config
+    path = resolve("tug_dynamics", "ships", ship_file, relative_to)
+    try:
+        over = yaml.safe_load(overrides) if overrides else None
+        _, cfg = ship_config(path, over or None)
+    except (ShipFileError, OSError, yaml.YAMLError) as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    return vessel_controls(cfg, prescribed=bool(motion))
+
+
+def controls_from_particulars(path: str) -> Dict[str, dict]:
+    """vessel -> vessel_controls from a scenario (a path or a library name) or a recording (the
+    scenario its particulars name, beside it or in the library; else the ship files its
+    particulars name). ValueError naming the file."""
+    from scenario_format.particulars import particulars_of_recording, scenario_of_recording, scenario_path
+    from scenario_format.scenario import ScenarioError, load_scenario
+    scenario, ships = None, {}
+    if path.endswith(".mcap"):
+        parts = particulars_of_recording(path)
+        ships = {v: d.get("ship_file", "") for v, d in (parts.get("vessels") or {}).items()}
+        if parts.get("scenario"):
+            scenario, _ = scenario_of_recording(path, parts["scenario"])
+    else:
+        scenario = scenario_path(path)
+    if scenario is None:
+        return {v: controls_of_ship(f) for v, f in ships.items() if f}
+    try:
+        sc = load_scenario(scenario, check_files=False)
+    except ScenarioError as exc:
+        raise ValueError(str(exc)) from None
+    import yaml
+    return {v.name: controls_of_ship(v.ship_file, yaml.safe_dump(dict(v.ship_overrides)) if v.ship_overrides else "",
+                                     "prescribed" if v.motion is not None else "", scenario) for v in sc.vessels}
+
+
+class RunState:
+    """What the page says of the run as a whole, and whether orders can go anywhere.
+
+    state: 'waiting' (no vessel seen yet), 'live' (a run), 'replay' (a recording played by
+    `recording replay`, whose node publishes the vessels' topics: nothing obeys orders), 'ended'
+    (`ended` says why: the scenario_finished event, or every publisher of the vessels' odometry gone after
+    data came: the run's nodes stopped, the replay played out). A new run or replay (a
+    scenario_started event, publishers back after all had gone, the simulation time going back)
+    makes it live again. ROS-free: fed by the station."""
+
+    def __init__(self):
+        self.source: Optional[str] = None  # 'run' or 'replay', from the vessels' publishers
+        self.ended: Optional[str] = None
+        self.had_data = False
+        self.gone = False
+        self.last_t: Optional[float] = None
+
+    def _what(self) -> str:
+        return "replay" if self.source == "replay" else "run"
+
+    def event(self, kind: str, t: float) -> None:
+        if kind == "scenario_started":
+            self.ended, self.gone = None, False
+        elif kind == "scenario_finished" and self.ended is None:
+            self.ended = f"scenario finished at t = {t:.1f} s"
+
+    def stamp(self, t: float) -> None:
+        self.had_data = True
+        if self.ended is not None and self.last_t is not None and t < self.last_t - 1e-6:
+            self.ended, self.gone = None, False  # started again from an earlier time
+        self.last_t = t if self.last_t is None else (t if self.ended is None else max(t, self.last_t))
+
+    def publishers(self, nodes: List[str], quiet: bool = True) -> None:
+        """The names of the nodes publishing the vessels' odometry now; quiet: no vessel data for
+        SILENT_AFTER s (publishers missing while data still flows are a lapse of discovery, not an end)."""
+        if nodes:
+            self.source = "replay" if REPLAY_NODE in nodes else "run"
+            if self.gone:
+                self.ended, self.gone = None, False
+        elif self.had_data and not self.gone and quiet:
+            self.gone = True
+            if self.ended is None:
+                self.ended = ("the recording has been played" if self.source == "replay" else
+                              "the simulation's vessel nodes have stopped")
+
+    @property
+    def state(self) -> str:
+        if self.ended is not None:
+            return "ended"
+        if not self.had_data:
+            return "waiting"
+        return "replay" if self.source == "replay" else "live"
+
+    def orders_closed(self) -> Optional[str]:
+        """Why an order goes nowhere now, or None."""
+        if self.ended is not None:
+            return f"the {self._what()} has ended ({self.ended}): nothing obeys orders any more"
+        if self.source == "replay":
+            return "a replay of a recording: the recorded vessels obey no orders"
+        return None
+
+
 class InstructorStation:
     """The HTTP server of the page and its sampler thread (see the module docstring). Lives as long
     as the live view node: started by it, stopped with its servers."""
@@ -184,6 +317,17 @@ class InstructorStation:
                 self.breaking.update(breaking_loads_from(particulars))
             except Exception as exc:  # noqa: BLE001 - a bad file only costs the breaking loads
                 self.log.warning(f"instructor station: no breaking loads from {particulars!r}: {exc}")
+        self.controls: Dict[str, dict] = {}  # vessel -> vessel_controls, from particulars or its node
+        if particulars:
+            try:
+                self.controls.update(controls_from_particulars(particulars))
+            except Exception as exc:  # noqa: BLE001 - a bad file only costs knowing the controls
+                self.log.warning(f"instructor station: no vessel controls from {particulars!r}: {exc}")
+        self.run = RunState()
+        self._events: Deque[dict] = collections.deque(maxlen=EVENTS_KEPT)
+        self._events_lock = threading.Lock()
+        node.tap(T.EVENTS, self._on_event)
+        node.orders_closed = self.run.orders_closed
         self._sea_json = json.dumps(self._sea(particulars)).encode()
         self._asked: Dict[str, float] = {}
         self._spent_clients: List[object] = []
@@ -212,7 +356,7 @@ class InstructorStation:
         for t in self._threads:
             t.start()
         from rclpy.clock import Clock, ClockType
-        self._ask_timer = node.create_timer(2.0, self._ask_rope_nodes, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._ask_timer = node.create_timer(2.0, self._ask_nodes, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.log.info(f"instructor station on {self.url} (display period {1000 * self.period:.0f} ms)")
 
     def _sea(self, particulars: str) -> dict:
@@ -255,10 +399,11 @@ class InstructorStation:
         if self._types is None:
             from nav_msgs.msg import Odometry
             from rclpy.serialization import deserialize_message
-            from tug_msgs.msg import RopeState, VesselCommand, VesselStatus, WinchCommand
+            from tug_msgs.msg import RopeState, ScenarioEvent, VesselCommand, VesselStatus, WinchCommand
             from visualization_msgs.msg import MarkerArray
             self._types = dict(odom=Odometry, status=VesselStatus, state=RopeState, command=VesselCommand,
-                               winch=WinchCommand, markers=MarkerArray, decode=deserialize_message)
+                               winch=WinchCommand, markers=MarkerArray, event=ScenarioEvent,
+                               decode=deserialize_message)
         return self._types
 
     def _decode(self, topic: str, kind: str):
@@ -272,44 +417,77 @@ class InstructorStation:
         except Exception:  # noqa: BLE001 - a message that does not decode is left out
             return None
 
-    # -- breaking loads from the running rope nodes ----------------------------------------
-    def _ask_rope_nodes(self) -> None:
-        """Timer (ROS executor): the rope_file parameter of each rope node whose breaking load is
-        not known yet, then its breaking load from the rope file (rope_model.models.load_params)."""
+    # -- events ------------------------------------------------------------------------
+    def _on_event(self, data: bytes) -> None:
+        """A /scenario/events message as it arrives (the receiving thread): kept for the page's list,
+        and the run's start and end."""
+        t = self.types()
+        try:
+            ev = t["decode"](data, t["event"])
+        except Exception:  # noqa: BLE001 - a message that does not decode is left out
+            return
+        stamp = ev.header.stamp.sec + 1e-9 * ev.header.stamp.nanosec
+        self.run.event(ev.kind, stamp)
+        with self._events_lock:
+            if ev.kind == "scenario_started":
+                self._events.clear()
+            self._events.append({"t": stamp, "step": ev.step, "kind": ev.kind, "target": ev.target,
+                                 "detail": ev.detail, "value": _finite_or_none(ev.value),
+                                 "source": ev.source})
+
+    # -- what the running nodes say: breaking loads, vessel controls, who publishes ------------
+    def _ask_nodes(self) -> None:
+        """Timer (ROS executor): the nodes publishing the vessels' odometry (a run's, or a replay's:
+        RunState), and the parameters of the nodes whose particulars are not known yet: a rope
+        node's rope_file (its breaking load, rope_model.models.load_params), a vessel node's
+        ship_file, ship_overrides and motion (its controls, controls_of_ship)."""
         from rcl_interfaces.srv import GetParameters
         now = time.monotonic()
         while self._spent_clients:  # answered (or given up) at an earlier tick
             self.node.destroy_client(self._spent_clients.pop())
-        for topic in list(self.node.slots):
-            if not topic.endswith("/state"):
+        publishers, newest = [], 0.0
+        for v in self._names("/odom"):
+            publishers += [i.node_name for i in self.node.get_publishers_info_by_topic(T.vessel_topic(v, T.ODOM))]
+            newest = max(newest, self.node.slots[T.vessel_topic(v, T.ODOM)].arrived)
+        self.run.publishers(publishers, quiet=now - newest >= SILENT_AFTER)
+        wanted = [(topic[1:-len("/state")], topic, ["rope_file"], self._take_rope_file)
+                  for topic in list(self.node.slots) if topic.endswith("/state") and topic.count("/") == 2]
+        wanted += [(v, T.vessel_topic(v, T.ODOM), ["ship_file", "ship_overrides", "motion"], self._take_ship_file)
+                   for v in self._names("/odom")]
+        for name, topic, names, take in wanted:
+            known = self.breaking if take == self._take_rope_file else self.controls
+            if name in known or now - self._asked.get(topic, -1e9) < 10.0:
                 continue
-            rope = topic[1:-len("/state")]
-            if rope in self.breaking or now - self._asked.get(rope, -1e9) < 10.0:
-                continue
-            infos = self.node.get_publishers_info_by_topic(topic)
+            infos = [i for i in self.node.get_publishers_info_by_topic(topic) if i.node_name != REPLAY_NODE]
             if not infos:
                 continue
-            self._asked[rope] = now
+            self._asked[topic] = now
             info = infos[0]
             service = f"{info.node_namespace.rstrip('/')}/{info.node_name}/get_parameters"
             client = self.node.create_client(GetParameters, service)
-
-            def done(future, rope=rope, client=client):
-                try:
-                    values = future.result().values
-                    if values and values[0].type == 4 and values[0].string_value:  # PARAMETER_STRING
-                        from rope_model.models import load_params
-                        load = getattr(load_params(values[0].string_value), "breaking_load", None)
-                        self.breaking[rope] = float(load) if load is not None and math.isfinite(load) else None
-                except Exception as exc:  # noqa: BLE001 - asked again later
-                    self.log.debug(f"instructor station: breaking load of {rope}: {exc}")
-                finally:
-                    self._spent_clients.append(client)
             if not client.service_is_ready():
                 self.node.destroy_client(client)
-                self._asked[rope] = now - 8.0  # again at the next tick
+                self._asked[topic] = now - 8.0  # again at the next tick
                 continue
-            client.call_async(GetParameters.Request(names=["rope_file"])).add_done_callback(done)
+
+            def done(future, name=name, client=client, take=take):
+                try:
+                    take(name, [p.string_value if p.type == 4 else "" for p in future.result().values])  # STRING
+                except Exception as exc:  # noqa: BLE001 - asked again later
+                    self.log.debug(f"instructor station: parameters of {name}: {exc}")
+                finally:
+                    self._spent_clients.append(client)
+            client.call_async(GetParameters.Request(names=names)).add_done_callback(done)
+
+    def _take_rope_file(self, rope: str, values: List[str]) -> None:
+        if values and values[0]:
+            from rope_model.models import load_params
+            load = getattr(load_params(values[0]), "breaking_load", None)
+            self.breaking[rope] = float(load) if load is not None and math.isfinite(load) else None
+
+    def _take_ship_file(self, vessel: str, values: List[str]) -> None:
+        if values and values[0]:
+            self.controls[vessel] = controls_of_ship(*values[:3])
 
     # -- sampling --------------------------------------------------------------------------
     def _sample_loop(self) -> None:
@@ -334,11 +512,13 @@ class InstructorStation:
         """One snapshot of everything the page shows, encoded once for every client."""
         vessels, ropes = {}, {}
         t_sim = None
+        now = time.monotonic()
         for v in self._names("/odom"):
             odom = self._decode(T.vessel_topic(v, T.ODOM), "odom")
             if odom is None:
                 continue
             status = self._decode(T.vessel_topic(v, T.STATUS), "status")
+            slot = self.node.slots.get(T.vessel_topic(v, T.ODOM))
             stamp = odom.header.stamp.sec + 1e-9 * odom.header.stamp.nanosec
             t_sim = stamp if t_sim is None else max(t_sim, stamp)
             p, q, lin = odom.pose.pose.position, odom.pose.pose.orientation, odom.twist.twist.linear
@@ -346,7 +526,8 @@ class InstructorStation:
             d = {"t": stamp, "x": p.x, "y": p.y, "z": p.z, "q": [q.x, q.y, q.z, q.w],
                  "speed_kn": math.hypot(lin.x, lin.y) / KNOT, "heading_deg": compass_deg(yaw),
                  "heel_deg": math.degrees(roll), "trim_deg": math.degrees(pitch),
-                 "has_command": T.vessel_topic(v, T.COMMAND) in self.node.input_topics()}
+                 "has_command": T.vessel_topic(v, T.COMMAND) in self.node.input_topics(),
+                 "controls": self.controls.get(v), "silent_s": _silent(now, slot)}
             if status is not None:
                 d.update(step=status.step, engine_order=status.engine_order,
                          rpm=status.shaft_speed * 60.0 / (2.0 * math.pi),
@@ -362,7 +543,9 @@ class InstructorStation:
                          pitch_deg=math.degrees(status.trim + status.pitch), heave=status.heave,
                          wave_elevation=status.wave_elevation, wave_hs=status.wave_significant_height,
                          wave_encounter_period=_finite_or_none(status.wave_encounter_period),
-                         wave_encounter_angle_deg=math.degrees(status.wave_encounter_angle))
+                         wave_encounter_angle_deg=math.degrees(status.wave_encounter_angle),
+                         grounded=bool(status.grounded), ukc=_finite_or_none(status.under_keel_clearance),
+                         anchor_dragging=(status.anchor_state == ANCHOR_DREDGING and d["speed_kn"] > ANCHOR_DRAG_KN))
             vessels[v] = d
         for r in self._names("/state"):
             state = self._decode(T.rope_topic(r, T.STATE), "state")
@@ -393,9 +576,17 @@ class InstructorStation:
             while hist and hist[0][0] < stamp - HISTORY_SECONDS:
                 hist.popleft()
         history = {r: [[round(t, 2), round(x, 1)] for t, x in h] for r, h in self._history.items()}
+        if vessels:
+            self.run.stamp(max(d["t"] for d in vessels.values()))
+        with self._events_lock:
+            events = list(self._events)
+        silent = min((d["silent_s"] for d in vessels.values() if d["silent_s"] is not None), default=None)
+        run = {"state": self.run.state, "ended": self.run.ended, "source": self.run.source,
+               "orders_closed": self.run.orders_closed(), "silent_s": silent, "silent_after": SILENT_AFTER}
         self._state_json = json.dumps(_clean({
             "t": t_sim, "sample": self.samples, "period": self.period, "vessels": vessels, "ropes": ropes,
-            "history": history, "input_topics": self.node.input_topics()}), allow_nan=False).encode()
+            "history": history, "input_topics": self.node.input_topics(), "run": run, "events": events}),
+            allow_nan=False).encode()
         self.samples += 1
 
     def state_json(self) -> bytes:
@@ -424,7 +615,7 @@ class InstructorStation:
     # -- orders ----------------------------------------------------------------------------
     def publish(self, client: str, topic: str, body: bytes) -> Tuple[int, dict]:
         outcome, why, notes = self.node.take_input(client, topic, body, "json")
-        code = {"accepted": 200, "forwarded": 202, "rate": 429, "topic": 403, "message": 400}[outcome]
+        code = {"accepted": 200, "forwarded": 202, "ended": 409, "rate": 429, "topic": 403, "message": 400}[outcome]
         return code, {"accepted": outcome == "accepted", "forwarded": outcome == "forwarded", "outcome": outcome,
                       "topic": topic, "reason": why, "clamped": list(notes)}
 

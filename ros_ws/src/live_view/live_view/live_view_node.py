@@ -42,7 +42,9 @@ The node holds its servers in ``self.servers`` (each with a ``stop()``): the bro
 instructor station (instructor.py: a page with a 3D view, gauges, a tension plot and controls,
 on http://127.0.0.1:8080, parameter ``http_port``, -1 for none) is added with add_server() and
 stopped with the node. Its commands go through the same checks, rate limit and counts as the
-WebSocket clients' (take_input()).
+WebSocket clients' (take_input()). Every client's order is refused (counted as "ended") while
+``orders_closed()`` gives a reason: the station's, during a replay and once the run or replay
+has ended (nothing would obey it).
 """
 from __future__ import annotations
 
@@ -105,11 +107,16 @@ class TopicSlot:
         self.received = 0
         self.sent = 0
         self.last_static = 0.0
+        self.arrived = 0.0  # time.monotonic() of the newest message (the station's "no data for ... s")
+        self.tap: Optional[Callable[[bytes], None]] = None  # every message, as it arrives (the station's events)
         self.lock = threading.Lock()
 
     def offer(self, data: bytes) -> None:
         self.received += 1
         self.last = data
+        self.arrived = time.monotonic()
+        if self.tap is not None:
+            self.tap(data)
         if self.policy == "latest":
             with self.lock:
                 self.latest = data
@@ -312,6 +319,10 @@ class LiveViewNode(Node):
         self._topic_types: Dict[str, str] = {}   # topic -> its type, set before its channel is advertised
         self.subscribed_once = False
         self.servers: List[object] = []
+        self._taps: Dict[str, Callable[[bytes], None]] = {}
+        # why orders go nowhere now (the run or replay has ended, a replay obeys none), else None:
+        # set by the instructor station, asked for every client's order
+        self.orders_closed: Callable[[], Optional[str]] = lambda: None
 
         import foxglove
         from foxglove.websocket import Capability
@@ -376,6 +387,13 @@ class LiveViewNode(Node):
         self.web_policy = trust.WebPolicy(host, [self.port, self.http_port or 0], self.allowed_origins)
 
     # -- servers ---------------------------------------------------------------------------
+    def tap(self, topic: str, callback: Callable[[bytes], None]) -> None:
+        """Hand every message of topic (served now or later) to callback as it arrives (rare topics only:
+        it runs in the receiving thread)."""
+        self._taps[topic] = callback
+        if topic in self.slots:
+            self.slots[topic].tap = callback
+
     def add_server(self, server) -> None:
         """A server that lives as long as the node (anything with stop())."""
         self.servers.append(server)
@@ -419,6 +437,7 @@ class LiveViewNode(Node):
         self._topic_types[topic] = full_type
         channel = self._foxglove.Channel(topic, schema=schema, message_encoding="cdr", context=self.fg_context)
         slot = self.slots[topic] = TopicSlot(topic, full_type, policy_of(topic, full_type), channel)
+        slot.tap = self._taps.get(topic)
         if topic not in self.offered:
             self.create_subscription(msg_class, topic, slot.offer if topic != "/clock" else self._on_clock,
                                      subscription_qos(topic, transient_local), raw=True)
@@ -565,6 +584,10 @@ class LiveViewNode(Node):
                 self._refuse("channel", f"message on a refused channel ({why})")
                 return
             topic, full_type, encoding = target
+            closed = self.orders_closed()
+            if closed is not None:
+                self._refuse("ended", f"{topic} from client {client_id}: {closed}")
+                return
             if not self._rate_ok("websocket", full_type, f"client {client_id}"):
                 return
             self._check_and_publish(f"client {client_id}", topic, full_type, encoding, data)
@@ -575,13 +598,18 @@ class LiveViewNode(Node):
                    client_kind: str = "http") -> Tuple[str, str, Tuple[str, ...]]:
         """An order from another front end (the instructor station: client 'http <address>'), with the
         WebSocket clients' checks and counts, and its own kind's rate limit: (outcome, why, clamp
-        notes), outcome one of 'accepted', 'forwarded', 'rate', 'topic', 'message'."""
+        notes), outcome one of 'accepted', 'forwarded', 'ended' (the run or replay has ended, or a replay:
+        nothing obeys orders), 'rate', 'topic', 'message'."""
         slot = self.slots.get(topic)
         if slot is None or slot.full_type not in client_input.CHECKS or topic not in self._input_pubs:
             why = (f"{client} may publish only on the vessel command and rope winch topics "
                    f"({', '.join(sorted(self._input_pubs)) or 'none here'}), not '{topic[:200]}'")
             self._refuse("channel", why)
             return "topic", why, ()
+        closed = self.orders_closed()
+        if closed is not None:
+            self._refuse("ended", f"{topic} from {client}: {closed}")
+            return "ended", closed, ()
         if not self._rate_ok(client_kind, slot.full_type, client):
             return "rate", f"more than {self.get_parameter('input_rate').value:g} messages/s", ()
         return self._check_and_publish(client, topic, slot.full_type, encoding, data)

@@ -10,13 +10,21 @@ const params = new URLSearchParams(location.search);
 const KN = 1852 / 3600;
 const $ = (id) => document.getElementById(id);
 const fmt = (v, d) => (v === null || v === undefined || !Number.isFinite(v)) ? '--' : v.toFixed(d);
+// an angle with the page's one sign convention (REP-103: + port, - starboard) and the side named
+const signed = (v, d) => {
+  const t = fmt(v, d);
+  if (t === '--' || Number(t) === 0) return t === '--' ? t : (0).toFixed(d);
+  return `${v > 0 ? '+' : ''}${t} ${v > 0 ? 'P' : 'S'}`;
+};
 
 const app = {
   snap: null, scene: {}, selected: params.get('vessel') || null, rope: params.get('rope') || null,
   camera: params.get('camera') || 'follow', touched: 0, frames: 0, updates: 0, lastSceneAsk: 0,
   peakSeen: 1, answers: [],
 };
-window.instructor = app;  // for tests and the curious: app.snap, app.project(name), app.send(...)
+// for tests and the curious: app.snap, app.project(name), app.send(...); app.hold = true keeps the
+// picture still (snapshots not applied) for a pixel check
+window.instructor = app;
 
 // ---------------------------------------------------------------- 3D scene
 const canvas = $('scene');
@@ -195,6 +203,7 @@ function textSprite(text) {
   g.strokeText(text, 128, 32); g.fillText(text, 128, 32);
   const s = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(c), depthTest: false }));
   s.scale.set(16, 4, 1);
+  s.renderOrder = 10;  // after the (transparent) water, which would otherwise veil a name beyond its centre
   return s;
 }
 
@@ -242,6 +251,7 @@ function applyGeometry(name, d) {
   const k = Math.max(0.5, v.length / 30);
   v.label.scale.set(16 * k, 4 * k, 1);
   v.label.position.set(0, 0, bb.max.z + 4 * k);
+  v.top = bb.max.z;
   v.hasGeometry = true;
 }
 
@@ -303,14 +313,25 @@ let dirty = true;
 app.invalidate = () => { dirty = true; };
 
 // ---------------------------------------------------------------- cameras
-const followPos = new THREE.Vector3(), lastTarget = new THREE.Vector3();
+// Follow frames the followed vessel's tow (the vessels joined to it by ropes, a rope's ends
+// matched to the nearest hull), Bird's-eye every vessel: their hulls and the ropes, fitted into
+// the part of the canvas the overlays leave free, refitted as they move. The mouse wheel zooms
+// every camera (Follow and Bird's-eye: towards the followed vessel; clicking the camera's button
+// again fits the tow once more); Free orbit is OrbitControls' own.
+const followPos = new THREE.Vector3(), followLook = new THREE.Vector3(), lastTarget = new THREE.Vector3();
 let cameraInit = false;
+const zoom = { follow: 1, birdseye: 1 };  // 1: the tow fitted; < 1 closer, > 1 farther
+app.zoom = zoom;
+// the follow camera looks down this much, from this far round from astern (starboard quarter): the
+// tow is not one hull hiding the next
+const FOLLOW_ELEVATION = 30 * Math.PI / 180, FOLLOW_QUARTER = 35 * Math.PI / 180;
 function targetVessel() {
   const s = app.snap;
   if (!s || !app.selected || !s.vessels[app.selected]) return null;
   return s.vessels[app.selected];
 }
 function setCamera(mode) {
+  if (mode === app.camera && zoom[mode] !== undefined) zoom[mode] = 1;  // the same button again: fit
   app.camera = mode;
   for (const b of document.querySelectorAll('#camera-bar button')) b.classList.toggle('on', b.dataset.camera === mode);
   orbit.enabled = mode === 'orbit';
@@ -319,37 +340,120 @@ function setCamera(mode) {
     // OrbitControls takes its up axis from the camera when made: keep ENU z up
     camera.up.set(0, 0, 1);
     orbit.object.up.set(0, 0, 1);
-    orbit.update();
   }
   cameraInit = false;
   dirty = true;
 }
 for (const b of document.querySelectorAll('#camera-bar button')) b.onclick = () => setCamera(b.dataset.camera);
+canvas.addEventListener('wheel', (e) => {
+  if (app.camera === 'orbit') return;  // OrbitControls zooms
+  e.preventDefault();
+  zoom[app.camera] = Math.min(6, Math.max(0.04, zoom[app.camera] * Math.exp(0.0015 * e.deltaY)));
+  dirty = true;
+}, { passive: false });
 
+const hullLength = (name) => (vessels3.get(name) || { length: 30 }).length;
+const yawOf = (v) => Math.atan2(2 * (v.q[3] * v.q[2] + v.q[0] * v.q[1]), 1 - 2 * (v.q[1] * v.q[1] + v.q[2] * v.q[2]));
+function nearestVessel(p, s) {
+  let best = null, gap = Infinity;
+  for (const [n, v] of Object.entries(s.vessels)) {
+    const d = Math.hypot(v.x - p[0], v.y - p[1]) - 0.5 * hullLength(n);
+    if (d < gap) { gap = d; best = n; }
+  }
+  return gap < 25 ? best : null;
+}
+// the vessels joined to `name` by ropes (either end), and those ropes
+function towOf(name, s) {
+  const links = [];
+  for (const [r, o] of Object.entries(s.ropes)) {
+    const pts = o.points || [];
+    if (pts.length) links.push([r, nearestVessel(pts[0], s), nearestVessel(pts[pts.length - 1], s)]);
+  }
+  const vessels = new Set([name]), ropes = new Set();
+  for (let grew = true; grew;) {
+    grew = false;
+    for (const [r, a, b] of links) {
+      if (!vessels.has(a) && !vessels.has(b)) continue;
+      ropes.add(r);
+      for (const x of [a, b]) if (x && !vessels.has(x)) { vessels.add(x); grew = true; }
+    }
+  }
+  return { vessels: [...vessels], ropes: [...ropes] };
+}
+app.towOf = (name) => app.snap ? towOf(name, app.snap) : null;
+// points to keep in view: each hull's square of its length, at the waterline and above; the ropes
+function towPoints(tow, s) {
+  const pts = [];
+  for (const n of tow.vessels) {
+    const v = s.vessels[n], h = 0.5 * hullLength(n);
+    for (const [dx, dy] of [[-h, -h], [h, -h], [h, h], [-h, h]]) {
+      pts.push(new THREE.Vector3(v.x + dx, v.y + dy, 0), new THREE.Vector3(v.x + dx, v.y + dy, 0.25 * h));
+    }
+  }
+  for (const r of tow.ropes) {
+    const p = s.ropes[r].points || [];
+    for (let i = 0; i < p.length; i += Math.max(1, Math.floor(p.length / 12))) pts.push(new THREE.Vector3(...p[i]));
+  }
+  return pts;
+}
+// The band of the canvas the overlays leave free (CSS px from the top and from the bottom), and
+// the view shifted so that the band's middle is the picture's centre.
+function freeBand() {
+  const H = canvas.clientHeight, top = 40, box = $('plot-box');
+  const bottom = box ? Math.min(0.45 * H, H - box.offsetTop + 8) : 0;
+  return { top, bottom, H, W: canvas.clientWidth };
+}
+// The distance from target along -forward at which every point is inside the band (with a margin)
+function fitDistance(target, forward, up, pts, band) {
+  const right = new THREE.Vector3().crossVectors(forward, up).normalize();
+  const tanV = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2) * (band.H - band.top - band.bottom) / band.H;
+  const tanH = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2) * camera.aspect;
+  const d = new THREE.Vector3();
+  let need = 30;
+  for (const p of pts) {
+    d.subVectors(p, target);
+    const x = Math.abs(d.dot(right)) * 1.12, y = Math.abs(d.dot(up)) * 1.12, depth = d.dot(forward);
+    need = Math.max(need, x / tanH - depth, y / tanV - depth);
+  }
+  return need;
+}
 const FOLLOW_LAG = 0.12;  // s: time constant of the follow camera
 function placeCamera(dt) {
   const v = targetVessel();
   if (!v) return;
-  const L = (vessels3.get(app.selected) || { length: 30 }).length;
-  const p = new THREE.Vector3(v.x, v.y, 0);
-  const yaw = Math.atan2(2 * (v.q[3] * v.q[2] + v.q[0] * v.q[1]), 1 - 2 * (v.q[1] * v.q[1] + v.q[2] * v.q[2]));
-  if (app.camera === 'follow') {
-    const back = 2.5 * L + 50, up = 1.1 * L + 26;
-    followPos.set(p.x - back * Math.cos(yaw), p.y - back * Math.sin(yaw), up);
-    if (!cameraInit) camera.position.copy(followPos); else camera.position.lerp(followPos, 1 - Math.exp(-dt / FOLLOW_LAG));
-    orbit.target.copy(p);
-    camera.lookAt(p.x + 0.3 * L * Math.cos(yaw), p.y + 0.3 * L * Math.sin(yaw), 0);
-  } else if (app.camera === 'birdseye') {
-    const h = Math.max(150, 7 * L);
-    camera.position.set(p.x, p.y, h);
-    orbit.target.copy(p);
-    camera.lookAt(p);
-  } else {
-    if (!cameraInit) {
-      camera.position.set(p.x - 2.5 * L - 70, p.y - 2.5 * L - 70, 1.2 * L + 40);
-      orbit.target.copy(p);
-      lastTarget.copy(p);
+  const s = app.snap, band = freeBand();
+  camera.setViewOffset(band.W, band.H, 0, (band.bottom - band.top) / 2, band.W, band.H);
+  // Bird's-eye: every vessel and rope; Follow: the followed vessel's tow
+  const tow = app.camera === 'birdseye' ? { vessels: Object.keys(s.vessels), ropes: Object.keys(s.ropes) } :
+    towOf(app.selected, s);
+  const pts = towPoints(tow, s);
+  const box = new THREE.Box3().setFromPoints(pts), centre = box.getCenter(new THREE.Vector3());
+  const p = new THREE.Vector3(v.x, v.y, 0), yaw = yawOf(v);
+  if (app.camera === 'follow' || (app.camera === 'orbit' && !cameraInit)) {
+    const z = app.camera === 'follow' ? zoom.follow : 1;
+    const target = new THREE.Vector3().lerpVectors(p, centre, Math.min(1, z));
+    const look = yaw + FOLLOW_QUARTER;
+    const forward = new THREE.Vector3(Math.cos(look) * Math.cos(FOLLOW_ELEVATION),
+      Math.sin(look) * Math.cos(FOLLOW_ELEVATION), -Math.sin(FOLLOW_ELEVATION));
+    const up = new THREE.Vector3(0, 0, 1).addScaledVector(forward, -forward.z).normalize();
+    const dist = z * fitDistance(target, forward, up, pts, band);
+    followPos.copy(target).addScaledVector(forward, -Math.max(dist, 0.6 * hullLength(app.selected) + 15));
+    if (!cameraInit || app.hold) { camera.position.copy(followPos); followLook.copy(target); } else {
+      const k = 1 - Math.exp(-dt / FOLLOW_LAG);
+      camera.position.lerp(followPos, k); followLook.lerp(target, k);
     }
+    camera.lookAt(followLook);
+    orbit.target.copy(followLook);
+    lastTarget.copy(p);
+    if (app.camera === 'orbit') orbit.update();
+  } else if (app.camera === 'birdseye') {
+    const target = new THREE.Vector3().lerpVectors(p, centre, Math.min(1, zoom.birdseye));
+    const down = new THREE.Vector3(0, 0, -1), north = new THREE.Vector3(0, 1, 0);
+    const dist = zoom.birdseye * fitDistance(target, down, north, pts, band);
+    camera.position.set(target.x, target.y, Math.max(dist, 40));
+    orbit.target.copy(target);
+    camera.lookAt(target);
+  } else {
     // the orbit centre travels with the vessel
     const dx = p.x - lastTarget.x, dy = p.y - lastTarget.y;
     camera.position.x += dx; camera.position.y += dy;
@@ -358,6 +462,12 @@ function placeCamera(dt) {
     orbit.update();
   }
   cameraInit = true;
+  // names readable at any distance: the sprite 15 % of the distance wide, never below the hull's own scale
+  for (const [name, o] of vessels3) {
+    const w = Math.max(16 * Math.max(0.5, hullLength(name) / 30), 0.15 * camera.position.distanceTo(o.group.position));
+    o.label.scale.set(w, w / 4, 1);
+    o.label.position.z = (o.top === undefined ? 4 : o.top) + 0.2 * w;
+  }
   grid.position.set(Math.round(p.x / 50) * 50, Math.round(p.y / 50) * 50, 0.02);
 }
 
@@ -384,6 +494,8 @@ app.project = (name) => {
 
 app.hasGeometry = (name) => !!(vessels3.get(name) || {}).hasGeometry;
 app.setVisible = (name, on) => { const v = vessels3.get(name); if (v) v.group.visible = on; dirty = true; };
+app.showLabels = (on) => { for (const v of vessels3.values()) v.label.visible = on; dirty = true; };
+app.cameraDistance = () => camera.position.distanceTo(orbit.target);
 
 // ---------------------------------------------------------------- gauges
 function gauge(id, name) {
@@ -404,18 +516,23 @@ function setGauge(id, text, value, t, frac, level) {
 }
 const safe = (s) => s.replace(/[^A-Za-z0-9_-]/g, '_');
 
+// what a vessel can be ordered (the station reads its ship file): engine, steering; unknown yet: both
+const controlsOf = (v) => v.controls || { engine: true, steering: true };
+app.controlsOf = (name) => app.snap && app.snap.vessels[name] ? controlsOf(app.snap.vessels[name]) : null;
+
 function buildGauges(s) {
   const vs = Object.keys(s.vessels).sort(), rs = Object.keys(s.ropes).sort();
-  const key = vs.join(',') + '|' + rs.join(',');
+  const key = vs.map((v) => `${v}:${JSON.stringify(s.vessels[v].controls)}`).join(',') + '|' + rs.join(',');
   if (key === app.gaugeKey || !vs.length) return;
   app.gaugeKey = key;
   $('vessel-gauges').innerHTML = vs.map((v) => {
-    const n = safe(v);
+    const n = safe(v), c = controlsOf(s.vessels[v]);
+    const kind = s.vessels[v].controls ? (c.engine ? '' : ' (unpowered)') : '';
     return `<div class="gauge" style="grid-column: 1 / -1; border: none; padding: 0">` +
-      `<b>${v}</b> <span class="muted" id="g-${n}-anchor"></span></div>` +
+      `<b>${v}</b>${kind} <span class="muted" id="g-${n}-anchor"></span></div>` +
       gauge(`g-${n}-speed`, 'speed kn') + gauge(`g-${n}-heading`, 'heading deg T') +
-      gauge(`g-${n}-engine`, 'engine order') + gauge(`g-${n}-rpm`, 'shaft rpm') +
-      gauge(`g-${n}-rudder`, 'rudder / bucket deg') + gauge(`g-${n}-heel`, 'heel deg') +
+      (c.engine ? gauge(`g-${n}-engine`, 'engine order') + gauge(`g-${n}-rpm`, 'shaft rpm') : '') +
+      (c.steering ? gauge(`g-${n}-rudder`, 'rudder / bucket deg, + port') : '') + gauge(`g-${n}-heel`, 'heel deg') +
       gauge(`g-${n}-girting`, 'girting ratio') + gauge(`g-${n}-roll`, 'roll deg') +
       gauge(`g-${n}-pitch`, 'pitch deg') + gauge(`g-${n}-hs`, 'sea Hs m') + gauge(`g-${n}-te`, 'encounter s') +
       gauge(`g-${n}-seafrom`, 'sea from deg');
@@ -449,8 +566,8 @@ function updateGauges(s) {
     setGauge(`g-${n}-engine`, v.engine_order === undefined ? '--' : (v.engine_order >= 0 ? '+' : '') +
       fmt(v.engine_order, 2), v.engine_order, v.t, Math.abs(v.engine_order || 0));
     setGauge(`g-${n}-rpm`, fmt(v.rpm, 0), v.rpm, v.t, 0);
-    setGauge(`g-${n}-rudder`, `${fmt(v.steering_deg, 1)} (${fmt(v.steering_ordered_deg, 0)})`, v.steering_deg, v.t,
-      Math.abs(v.steering_deg || 0) / 45);
+    setGauge(`g-${n}-rudder`, `${signed(v.steering_deg, 1)} (${signed(v.steering_ordered_deg, 0)})`, v.steering_deg,
+      v.t, Math.abs(v.steering_deg || 0) / 45);
     setGauge(`g-${n}-heel`, fmt(v.heel_deg, 1), v.heel_deg, v.t, Math.abs(v.heel_deg || 0) / 20,
       Math.abs(v.heel_deg || 0) > 10 ? 'warn' : '');
     const gr = v.girting_ratio, thr = v.girting_threshold || 1;
@@ -473,15 +590,16 @@ function updateGauges(s) {
     setGauge(`g-${n}-seafrom`, calm || ang === undefined ? '--' : `${fmt(Math.abs(ang), 0)} ` +
       `${Math.abs(ang) < 0.5 ? 'ahead' : Math.abs(ang) > 179.5 ? 'astern' : ang > 0 ? 'port' : 'stbd'}`,
     calm ? null : ang, v.t, Math.abs(ang || 0) / 180);
-    const an = $(`g-${n}-anchor`);
-    if (an) an.textContent = `anchor ${v.anchor || '-'}; through water ${fmt(v.stw_kn, 2)} kn`;
+    const an = $(`g-${n}-anchor`), manual = (app.manual || {})[name];
+    if (an) an.textContent = `anchor ${v.anchor || '-'}; through water ${fmt(v.stw_kn, 2)} kn` +
+      (manual && manual.size ? `; manual: ${[...manual].sort().join(', ')}` : '');
   }
   for (const [name, r] of Object.entries(s.ropes)) {
     const n = safe(name);
     const kn = r.tension / 1000;
     const bl = r.breaking_load;
     const ratio = bl ? r.tension / bl : null;
-    setGauge(`g-${n}-tension`, bl ? `${fmt(kn, 1)} (${fmt(100 * ratio, 0)}% BL)` : fmt(kn, 1),
+    setGauge(`g-${n}-tension`, r.broken ? 'PARTED' : bl ? `${fmt(kn, 1)} (${fmt(100 * ratio, 0)}% BL)` : fmt(kn, 1),
       Number(kn.toFixed(1)), r.t, ratio === null ? kn / 200 : ratio,
       r.broken || (ratio !== null && ratio > 0.8) ? 'alarm' : ratio !== null && ratio > 0.5 ? 'warn' : '');
     setGauge(`g-${n}-length`, fmt(r.deployed_length, 1), Number(r.deployed_length.toFixed(1)), r.t, 0);
@@ -491,6 +609,69 @@ function updateGauges(s) {
     if (m) m.textContent = `${r.model}${bl ? `, breaking load ${fmt(bl / 1000, 0)} kN` : ''}` +
       `${r.broken ? ', PARTED' : ''}`;
   }
+}
+
+// ---------------------------------------------------------------- states: alerts, the run, events
+// Shown over the 3D view (#alerts, one line each, data-alert = its kind): a parted rope, a vessel
+// aground, an anchor dragging (on the bottom, moving over the ground), a vessel whose data stopped
+// (no message for run.silent_after s while the run goes on), the end of the run or replay.
+const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
+function alertsOf(s) {
+  const out = [], run = s.run || {}, after = run.silent_after || 3;
+  const parted = Object.fromEntries((s.events || []).filter((e) => e.kind === 'rope_parted').map((e) => [e.target, e]));
+  for (const [name, r] of Object.entries(s.ropes)) {
+    if (!r.broken) continue;
+    const e = parted[name];
+    out.push(['parted', `${name.toUpperCase()} PARTED` + (e ? ` at t = ${fmt(e.t, 1)} s` +
+      (Number.isFinite(e.value) ? `, ${fmt(e.value / 1000, 1)} kN` : '') : '')]);
+  }
+  for (const [name, v] of Object.entries(s.vessels)) {
+    if (v.grounded) out.push(['aground', `${name} AGROUND (under-keel clearance ${fmt(v.ukc, 2)} m)`]);
+    if (v.anchor_dragging) out.push(['anchor', `${name} ANCHOR DRAGGING (${fmt(v.speed_kn, 1)} kn over the ground)`]);
+    if (run.state !== 'ended' && v.silent_s >= after) {
+      out.push(['nodata', `${name}: NO DATA for ${v.silent_s} s (its node stopped, or the simulation is held up)`]);
+    }
+  }
+  if (run.state === 'ended') out.push(['ended', `${run.source === 'replay' ? 'REPLAY' : 'RUN'} ENDED: ${run.ended}`]);
+  return out;
+}
+function showStates(s) {
+  const alerts = alertsOf(s), html = alerts.map(([k, t]) => `<div data-alert="${k}">${esc(t)}</div>`).join('');
+  if ($('alerts').innerHTML !== html) $('alerts').innerHTML = html;
+  app.alerts = alerts;
+  const run = s.run || {};
+  app.ordersClosed = run.orders_closed || null;
+  $('orders-closed').textContent = app.ordersClosed ? `Orders refused: ${app.ordersClosed}` : '';
+  enableControls();
+  showEvents(s.events || []);
+}
+// /scenario/events, newest first: the script's orders, the nodes' events, who holds the orders
+// (manual_order / manual_handed_back), the run's start and end
+const EVENT_CLASS = { rope_parted: 'alarm', rope_failed: 'alarm', grounded: 'alarm', contact_failed: 'alarm',
+  command_rejected: 'warn', command_clamped: 'warn', hand_back_refused: 'warn', manual_order: 'own',
+  manual_handed_back: 'own', scripted_order_yielded: 'own', scenario_finished: 'end', scenario_started: 'end' };
+// who holds the orders: target -> the controls in manual control, from the ownership events
+// (their detail starts "<target> <control>:")
+function manualControls(events) {
+  const manual = {};
+  for (const e of events) {
+    if (e.kind !== 'manual_order' && e.kind !== 'manual_handed_back') continue;
+    const m = (e.detail || '').match(/^\S+ (\S+):/);
+    if (!m) continue;
+    const set = manual[e.target] || (manual[e.target] = new Set());
+    if (e.kind === 'manual_order') set.add(m[1]); else set.delete(m[1]);
+  }
+  return manual;
+}
+function showEvents(events) {
+  const key = `${events.length}|${events.length ? events[events.length - 1].t + events[events.length - 1].kind : ''}`;
+  if (key === app.eventsKey) return;
+  app.eventsKey = key;
+  $('events').innerHTML = events.slice().reverse().map((e) =>
+    `<div class="ev ${EVENT_CLASS[e.kind] || ''}" data-kind="${esc(e.kind)}"><span class="t">${fmt(e.t, 1)} s</span> ` +
+    `<b>${esc(e.kind.replace(/_/g, ' '))}</b>${e.target ? ` ${esc(e.target)}` : ''}: ${esc(e.detail)}</div>`
+  ).join('') ||
+    '<div class="muted">none yet</div>';
 }
 
 // ---------------------------------------------------------------- tension plot
@@ -540,11 +721,15 @@ function drawPlot(s) {
 
 // ---------------------------------------------------------------- orders
 async function sendRaw(topic, body) {
-  const r = await fetch(`/api/publish?topic=${encodeURIComponent(topic)}`,
-    { method: 'POST', headers: { 'Content-Type': 'application/json' }, body });
   let a;
-  try { a = await r.json(); } catch (e) { a = { accepted: false, reason: `HTTP ${r.status}` }; }
-  a.status = r.status;
+  try {
+    const r = await fetch(`/api/publish?topic=${encodeURIComponent(topic)}`,
+      { method: 'POST', headers: { 'Content-Type': 'application/json' }, body });
+    try { a = await r.json(); } catch (e) { a = { accepted: false, reason: `HTTP ${r.status}` }; }
+    a.status = r.status;
+  } catch (e) {
+    a = { accepted: false, status: 0, reason: 'no connection to the live view node: the order went nowhere' };
+  }
   app.answers.push(a);
   const el = $('answer');
   // forwarded (202): published by a stand-alone live view, which cannot vouch for the run's clock
@@ -568,7 +753,7 @@ let throttle = null;
 function touched() { app.touched = performance.now(); }
 function showSliders() {
   $('engine-out').textContent = Number($('engine').value).toFixed(2);
-  $('steering-out').textContent = String(Number($('steering').value));
+  $('steering-out').textContent = signed(Number($('steering').value), 0);
 }
 for (const id of ['engine', 'steering']) {
   $(id).addEventListener('input', () => {
@@ -603,11 +788,20 @@ function selectVessel(name) {
   app.touched = 0;  // the sliders take the new vessel's orders
   cameraInit = false;
   dirty = true;
-  const v = app.snap && app.snap.vessels[name];
-  const has = !!(v && v.has_command);
-  for (const id of ['engine', 'steering', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern', 'steer-port',
-    'midships', 'steer-stbd', 'anchor-let-go', 'anchor-heave-up']) $(id).disabled = !has;
-  for (const id of ['winch-payout', 'winch-hold', 'winch-heave', 'winch-rate']) $(id).disabled = !app.rope;
+  enableControls();
+}
+// the controls of what the selected vessel has (no engine, no helm on an unpowered barge), none
+// when orders go nowhere (the run or replay ended, a replay, no connection)
+function enableControls() {
+  const v = app.snap && app.snap.vessels[app.selected];
+  const open = !app.ordersClosed && !app.disconnected;
+  const has = !!(v && v.has_command) && open, c = v ? controlsOf(v) : { engine: false, steering: false };
+  for (const id of ['engine', 'engine-stop', 'engine-half', 'engine-full', 'engine-astern']) {
+    $(id).disabled = !has || !c.engine;
+  }
+  for (const id of ['steering', 'steer-port', 'midships', 'steer-stbd']) $(id).disabled = !has || !c.steering;
+  for (const id of ['anchor-let-go', 'anchor-heave-up']) $(id).disabled = !has || !v || v.anchor === 'none';
+  for (const id of ['winch-payout', 'winch-hold', 'winch-heave', 'winch-rate']) $(id).disabled = !app.rope || !open;
 }
 $('vessel').onchange = () => { app.userChose = true; selectVessel($('vessel').value); };
 
@@ -643,13 +837,28 @@ function apply(s) {
   seaFollow(s);
   for (const r of Object.values(s.ropes)) app.peakSeen = Math.max(app.peakSeen, r.tension);
   for (const [name, r] of Object.entries(s.ropes)) updateRope(name, r);
+  app.manual = manualControls(s.events || []);
   updateGauges(s);
+  showStates(s);
   drawPlot(s);
   syncSliders(s);
   askScene(s);
   if (app.firstT === undefined && s.t !== null) app.firstT = s.t;  // the first simulation time shown
   app.updates += 1;
   dirty = true;
+}
+
+// the run in a word: live, replay, run ended / replay ended, no data, waiting
+function showConnection(s) {
+  const run = s.run || {}, el = $('conn');
+  let text, good = false;
+  if (s.t === null) text = 'waiting for the simulation';
+  else if (run.state === 'ended') text = run.source === 'replay' ? 'replay ended' : 'run ended';
+  else if (run.silent_s >= (run.silent_after || 3)) text = `no data for ${run.silent_s} s`;
+  else { text = run.state === 'replay' ? 'replay' : 'live'; good = true; }
+  el.textContent = text;
+  el.className = good ? 'good' : 'bad';
+  el.dataset.state = run.state || '';
 }
 
 async function poll() {
@@ -662,13 +871,19 @@ async function poll() {
     // a snapshot like the last but for its number (the simulation paused, not started yet, or a
     // replay at its end): nothing to update or draw
     const key = text.replace(/"sample": \d+, /, '');
-    if (key !== app.lastKey) apply(s);
+    if (app.disconnected) { app.disconnected = false; enableControls(); }
+    if (key !== app.lastKey && !app.hold) apply(s);
     app.lastKey = key;
-    $('conn').textContent = s.t === null ? 'waiting for the simulation' : 'live';
-    $('conn').className = s.t === null ? 'bad' : 'good';
+    showConnection(s);
   } catch (e) {
-    $('conn').textContent = 'no connection to the live view node';
+    // the run's own live view closes with the run: said as the end of the run when it had ended
+    const run = (app.snap && app.snap.run) || {};
+    $('conn').textContent = run.state === 'ended' ? `${run.source === 'replay' ? 'replay' : 'run'} ended; the live ` +
+      'view has closed' : app.snap ? 'no connection to the live view node: the run has ended or stopped' :
+      'no connection to the live view node';
     $('conn').className = 'bad';
+    $('conn').dataset.state = 'disconnected';
+    if (!app.disconnected) { app.disconnected = true; enableControls(); }
     period = 1.0;
   }
   setTimeout(poll, 1000 * period);
