@@ -93,11 +93,12 @@ class Orders:
         self.last_key = -1e9  # time.monotonic() of the last key that meant something
 
     def sync(self, engine: float, helm_deg: float) -> None:
-        """Start from the orders the vessel holds, as the screen shows them (engine to 0.01, helm
-        to 0.1 deg; within range): a held 0.05 stays 0.05, and a key steps from it."""
+        """Start from the orders the vessel holds, exactly (within range): a held 0.05 stays 0.05
+        and a key steps from it; a helm key then sends the held engine order unchanged, so the
+        runner does not count it as taking the engine (scenario_runner.order_owner)."""
         if math.isfinite(engine) and math.isfinite(helm_deg):
-            self.engine = round(_clamp(engine, -1.0, 1.0), 2)
-            self.helm_deg = round(_clamp(helm_deg, -self.max_helm_deg, self.max_helm_deg), 1)
+            self.engine = _clamp(engine, -1.0, 1.0)
+            self.helm_deg = _clamp(helm_deg, -self.max_helm_deg, self.max_helm_deg)
 
     def key(self, key: str) -> Optional[str]:
         """Apply one key; returns what changed ("vessel", "winch") or None for a key that
