@@ -39,6 +39,12 @@ def test_command_crosses_from_one_process_to_another(start_node, rclpy_context, 
     assert sent.returncode == 0, sent.stderr
     assert spin_until(node, lambda: abs(received[-1].engine_order - 0.5) < 1e-12, 20), vessel.log()
     assert received[-1].steering_angle_ordered == pytest.approx(math.radians(10.0))
+    # an order sets what it names: the helm alone leaves the engine where it is
+    sent = _send(ros_domain, "--steering-deg", "-5")
+    assert sent.returncode == 0, sent.stderr
+    assert "engine +0.50, steering -5.0 deg" in sent.stdout
+    assert spin_until(node, lambda: abs(received[-1].steering_angle_ordered - math.radians(-5.0)) < 1e-12, 20)
+    assert received[-1].engine_order == 0.5
 
     # Another domain: the same command finds no vessel there and is never delivered here.
     from domain_coordinator import domain_id

@@ -1,6 +1,7 @@
 """Send one order to a vessel from the terminal (ros2cli's `topic pub` is not available here).
 
     ros2 run scenario_runner send_command tug --engine 0.5 --steering-deg 10
+    ros2 run scenario_runner send_command tug --steering-deg -10     # the engine stays as it is
     ros2 run scenario_runner send_command s175 --anchor let_go
     ros2 run scenario_runner send_command tug --hand-back engine,helm
 
@@ -10,7 +11,9 @@ back (engine, helm, anchor, winch, or all; a winch is handed back with the rope'
 send_command towline --hand-back winch). A hand-back is a tug_msgs/ScenarioEvent of kind
 hand_back on /scenario/events, which the scenario runner answers with manual_handed_back.
 
-Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
+An order sets what it names: an engine or helm left out is sent as the vessel holds it (read
+from its /<vessel>/status, waited for up to --wait s), so `--steering-deg -10` alone moves the
+helm and leaves the engine. Publishes a tug_msgs/VesselCommand on /<vessel>/command once a subscriber is matched, then
 exits. The order is stamped with the simulation time (the newest /clock) whenever /clock is
 published, else with wall time (sim_plumbing.sim_time); it says which. A /clock publisher is
 looked for for up to CLOCK_DISCOVERY s (a new process sees a running one within 0.03-2.9 s here),
@@ -27,7 +30,7 @@ import time
 import rclpy
 from rclpy.duration import Duration
 from rclpy.node import Node
-from tug_msgs.msg import ScenarioEvent, VesselCommand
+from tug_msgs.msg import ScenarioEvent, VesselCommand, VesselStatus
 
 from scenario_runner.order_owner import HAND_BACK, VESSEL_CONTROLS, WINCH
 from sim_plumbing import ros_common as rc
@@ -48,10 +51,10 @@ ANCHOR_ORDERS = {"none": VesselCommand.ANCHOR_NO_CHANGE, "let_go": VesselCommand
 def parse_args(argv):
     p = argparse.ArgumentParser(prog="send_command", description=__doc__.split("\n\n")[0])
     p.add_argument("vessel", help="vessel name (its ROS namespace), e.g. tug")
-    p.add_argument("--engine", type=float, default=0.0,
-                   help="engine order, fraction of rated rpm: -1 full astern .. 1 full ahead (default 0)")
-    p.add_argument("--steering-deg", type=float, default=0.0,
-                   help="rudder or bucket angle in degrees, positive turns to port (default 0)")
+    p.add_argument("--engine", type=float, default=None,
+                   help="engine order, fraction of rated rpm: -1 full astern .. 1 full ahead (default: as held)")
+    p.add_argument("--steering-deg", type=float, default=None,
+                   help="rudder or bucket angle in degrees, positive turns to port (default: as held)")
     p.add_argument("--anchor", choices=sorted(ANCHOR_ORDERS), default="none", help="anchor order")
     p.add_argument("--hand-back", metavar="CONTROLS", nargs="?", const="all",
                    help="give controls back to the scenario's script instead of sending an order: comma-separated "
@@ -95,11 +98,24 @@ def _wait_for_readers(node, pub, topic: str, deadline: float, spin, wanted: str 
         spin(0.05)
 
 
+def _held_orders(node, name: str, spin, deadline: float):
+    """(engine order, steering angle in rad) the vessel holds, from its next status; False if none
+    comes by the deadline."""
+    seen = []
+    sub = node.create_subscription(VesselStatus, f"/{name}/status", seen.append, rc.STATE_QOS)
+    try:
+        while not seen and time.monotonic() < deadline:
+            spin(0.05)
+    finally:
+        node.destroy_subscription(sub)
+    return (seen[-1].engine_order, seen[-1].steering_angle_ordered) if seen else False
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(rclpy.utilities.remove_ros_args(argv))
     for name, value in (("--engine", args.engine), ("--steering-deg", args.steering_deg), ("--wait", args.wait)):
-        if not math.isfinite(value):
+        if value is not None and not math.isfinite(value):
             sys.stderr.write(f"send_command: {name} {value!r}: expected a finite number\n")
             return 2
     rc.init_rclpy(argv)
@@ -125,8 +141,17 @@ def main(argv=None) -> int:
             msg = ScenarioEvent(source=node.get_fully_qualified_name(), kind=HAND_BACK, target=name,
                                 detail=args.hand_back, value=math.nan)
         else:
-            msg = VesselCommand(engine_order=args.engine, steering_angle=math.radians(args.steering_deg),
-                                anchor=ANCHOR_ORDERS[args.anchor])
+            held = _held_orders(node, name, spin, time.monotonic() + args.wait) \
+                if args.engine is None or args.steering_deg is None else None
+            if held is False:
+                sys.stderr.write(f"send_command: no /{name}/status within {args.wait:g} s, so the orders it holds are "
+                                 "not known: give both --engine and --steering-deg\n")
+                return 1
+            if args.engine is None:
+                args.engine = held[0]
+            steering = math.radians(args.steering_deg) if args.steering_deg is not None else held[1]
+            args.steering_deg = math.degrees(steering)
+            msg = VesselCommand(engine_order=args.engine, steering_angle=steering, anchor=ANCHOR_ORDERS[args.anchor])
         spin(0.0)
         msg.header.stamp = clock.now()
         pub.publish(msg)
