@@ -23,6 +23,7 @@ from scipy import integrate
 
 from tug_dynamics.hull_interaction import HullPair, SectionalAreaCurve, pair_from_ship_configs
 
+pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")  # dblquad at 1e-9
 SHIPS = os.path.join(os.path.dirname(__file__), "..", "..", "ros_ws", "src", "tug_dynamics", "ships")
 RHO = 1025.0
 S175 = SectionalAreaCurve(175.0, 1.5 * 21648428.0 / RHO / 175.0, 25.4)
