@@ -3,9 +3,9 @@ theory for the surge force, sway force and yaw moment a passing ship induces on 
 or (by the method of images) finite depth. ROS-free; numba kernel, callable from Python.
 
 Wang, S. (1975) Dynamic effects of ship passage on moored vessels, J. Waterways, Harbors and
-Coastal Eng. Div., ASCE 101(WW3), 247-258; as restated (the original was not available here)
-by Varyani et al. and the NFESC reports (Seelig 2001, TR-6027-OCN). docs/confined-water.md gives
-the derivation. Ship 2 (speed U along ship 1's x axis, midship at stagger xi ahead of and
+Coastal Eng. Div., ASCE 101(WW3), 247-258; as restated in the passing-ship literature (the
+original was not available here; e.g. Seelig 2001, NFESC TR-6027-OCN). docs/confined-water.md
+gives the derivation. Ship 2 (speed U along ship 1's x axis, midship at stagger xi ahead of and
 separation eta to port of ship 1's midship) is a line of sources of strength U dS2/dx; the
 linearised unsteady pressure of its potential on ship 1 gives, with R^2 = (xi - x1 + x2)^2 +
 eta^2 + (2 n h)^2 summed over the bottom images n (n = 0 only in deep water):
@@ -16,14 +16,15 @@ eta^2 + (2 n h)^2 summed over the bottom images n (n = 0 only in deep water):
 
 S(x) is a hull's underwater sectional area: here Wang's parabola S = S_m (1 - (2x/L)^2), with
 S_m = 3 V / (2 L) so that it holds the ship file's displaced volume V. Forces on ship 1 in its
-body frame (REP-103: x forward, y port; N positive bow to port). The integrals are summed over
-composite Gauss-Legendre nodes fixed per hull pair, so a pair costs a few microseconds.
+body frame (REP-103: x forward, y port; N positive bow to port). S2' is linear, so the inner
+integral is in closed form (the bottom images beyond IMAGE_COUNT each side as their integral over
+depth); the outer one uses composite Gauss-Legendre nodes on ship 1 fixed per hull pair, so a
+pair costs about a microsecond in deep water.
 
 Limits: parallel courses (the formulas have no heading difference); potential flow at low
-Froude number (no waves, no viscous wake); slender hulls (length much larger than beam) and a
-separation of at least about a beam, where the node spacing resolves the kernel (default 32
-nodes per hull: within 0.5 % of adaptive quadrature down to eta = 0.06 L of the longer hull, see
-tests/physics/test_hull_interaction.py); Wang's moored-ship pressure: the force on ship 1 scales
+Froude number (no waves, no viscous wake); slender hulls (length much larger than beam); within
+0.1 % of adaptive quadrature of the integrals down to a separation of 0.1 L of ship 1
+(tests/physics/test_hull_interaction.py); Wang's moored-ship pressure: the force on ship 1 scales
 with the passing ship's speed squared, whatever ship 1's own speed (the cross terms of two
 moving hulls, Tuck & Newman 1974, are not in it). A tug beside a ship is two slender bodies and
 the same formulas apply (surge/sway/yaw on the tug from the ship and on the ship from the tug);
