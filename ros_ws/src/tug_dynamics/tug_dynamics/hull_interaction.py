@@ -34,6 +34,7 @@ ship's bow at close range it gives the suction's order of magnitude, not a valid
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Optional, Tuple
 
 import numpy as np
@@ -51,7 +52,8 @@ class SectionalAreaCurve:
 
     def __init__(self, length: float, midship_area: float, beam: float):
         for name, value in (("length", length), ("midship_area", midship_area), ("beam", beam)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (math.isfinite(value)
+                                                                                     and value > 0.0):
                 raise ValueError(f"sectional area curve: {name} must be finite and > 0, got {value!r}")
         self.length, self.midship_area, self.beam = float(length), float(midship_area), float(beam)
 
