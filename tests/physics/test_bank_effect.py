@@ -1,0 +1,71 @@
+"""Bank suction by the image method with Wang's kernel (tug_dynamics.bank_effect), without ROS.
+
+Truths used:
+- the image identity: the bank's force is Wang's integral for the ship's mirror image at twice
+  the distance, written here and integrated by scipy.integrate.dblquad;
+- the far field by hand: Y -> 3 rho U^2 V^2 / (16 pi d^4) for d >> L in deep water;
+- the bank line's geometry by hand (distance to a line, which side is port).
+"""
+import math
+
+import pytest
+from scipy import integrate
+
+from tug_dynamics.bank_effect import BankEffect, BankLine
+from tug_dynamics.hull_interaction import SectionalAreaCurve
+
+RHO = 1025.0
+S175 = SectionalAreaCurve(175.0, 1.5 * 21648428.0 / RHO / 175.0, 25.4)
+
+
+def image_sway(curve, distance, speed):
+    def slope(x):
+        return -8.0 * curve.midship_area * x / curve.length ** 2
+    eta = 2.0 * distance
+    half = curve.length / 2
+    value = integrate.dblquad(lambda x2, x1: slope(x1) * slope(x2) / ((x2 - x1) ** 2 + eta ** 2) ** 1.5,
+                              -half, half, -half, half, epsabs=0.0, epsrel=1e-10)[0]
+    return RHO * speed ** 2 * eta / math.pi * value
+
+
+@pytest.mark.parametrize("distance", [30.0, 60.0, 120.0])
+def test_bank_force_is_the_mirror_image_force(distance):
+    y, n = BankEffect(S175).loads(distance, 4.0)
+    assert y == pytest.approx(image_sway(S175, distance, 4.0), rel=1e-4)
+    assert y > 0.0                                   # toward the bank (port)
+    assert abs(n) < 1e-9 * y * S175.length            # Wang's parabola is fore-aft symmetric
+
+
+def test_bank_to_starboard_pulls_to_starboard_and_speed_squared():
+    bank = BankEffect(S175)
+    port = bank.loads(50.0, 3.0)[0]
+    assert bank.loads(50.0, 3.0, bank_to_port=False)[0] == pytest.approx(-port, rel=1e-12)
+    assert bank.loads(50.0, 6.0)[0] == pytest.approx(4.0 * port, rel=1e-12)
+    assert bank.loads(50.0, 3.0, depth=12.0)[0] > port          # shallow water strengthens it
+
+
+def test_far_field_by_hand():
+    d = 4.0 * S175.length
+    want = 3.0 * RHO * 4.0 ** 2 * S175.volume ** 2 / (16.0 * math.pi * d ** 4)
+    assert BankEffect(S175).loads(d, 4.0)[0] == pytest.approx(want, rel=0.02)
+
+
+def test_bank_line_geometry():
+    line = BankLine((0.0, 100.0), (1000.0, 100.0))
+    # left of start -> end (looking east) is north: the water lies north, the bank south of it
+    assert line.distance(500.0, 160.0) == pytest.approx(60.0)
+    assert line.side(0.0) == -1.0                   # heading east along it: the bank to starboard
+    assert line.side(math.pi) == 1.0                # heading west: the bank to port
+
+
+@pytest.mark.parametrize("start, end, word", [((0.0, 0.0), (0.0, 0.0), "same point"),
+                                              ((0.0, float("nan")), (1.0, 0.0), "finite")])
+def test_bad_bank_line(start, end, word):
+    with pytest.raises(ValueError, match=word):
+        BankLine(start, end)
+
+
+@pytest.mark.parametrize("distance", [5.0, float("nan"), -30.0])
+def test_distance_inside_the_hull_is_refused(distance):
+    with pytest.raises(ValueError, match="distance"):
+        BankEffect(S175).loads(distance, 3.0)
