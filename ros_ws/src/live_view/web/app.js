@@ -743,26 +743,36 @@ const send = (topic, obj) => sendRaw(topic, JSON.stringify(obj));
 app.send = send;
 app.sendRaw = sendRaw;
 
+// An order sets what the person touched: the other control goes out as the vessel holds it
+// (the sliders snap to 0.05 and 1 deg, so their value would change a held 0.075 and make the
+// runner count it as taken; docs/scenarios.md, "Who gives the orders").
+app.userSet = { engine: false, helm: false };
 function vesselOrder(anchor = 0) {
   if (!app.selected) return null;
-  return send(`/${app.selected}/command`, {
-    engine_order: Number($('engine').value), steering_angle: Number($('steering').value) * Math.PI / 180, anchor });
+  const v = targetVessel() || {};
+  const engine = app.userSet.engine || v.engine_order === undefined ? Number($('engine').value) : v.engine_order;
+  const helmDeg = app.userSet.helm || v.steering_ordered_deg === undefined ? Number($('steering').value)
+    : v.steering_ordered_deg;
+  return send(`/${app.selected}/command`, { engine_order: engine, steering_angle: helmDeg * Math.PI / 180, anchor });
 }
 app.vesselOrder = vesselOrder;
 let throttle = null;
-function touched() { app.touched = performance.now(); }
+function touched(id) {
+  app.touched = performance.now();
+  if (id) app.userSet[id === 'engine' ? 'engine' : 'helm'] = true;
+}
 function showSliders() {
   $('engine-out').textContent = Number($('engine').value).toFixed(2);
   $('steering-out').textContent = signed(Number($('steering').value), 0);
 }
 for (const id of ['engine', 'steering']) {
   $(id).addEventListener('input', () => {
-    touched(); showSliders();
+    touched(id); showSliders();
     if (!throttle) throttle = setTimeout(() => { throttle = null; vesselOrder(); }, 250);
   });
-  $(id).addEventListener('change', () => { touched(); showSliders(); vesselOrder(); });
+  $(id).addEventListener('change', () => { touched(id); showSliders(); vesselOrder(); });
 }
-const setAndSend = (id, value) => () => { touched(); $(id).value = String(value); showSliders(); vesselOrder(); };
+const setAndSend = (id, value) => () => { touched(id); $(id).value = String(value); showSliders(); vesselOrder(); };
 $('engine-stop').onclick = setAndSend('engine', 0);
 $('engine-half').onclick = setAndSend('engine', 0.5);
 $('engine-full').onclick = setAndSend('engine', 1);
@@ -810,6 +820,7 @@ function syncSliders(s) {
   if (!v || performance.now() - app.touched < 3000 || v.engine_order === undefined) return;
   $('engine').value = String(v.engine_order);
   $('steering').value = String(Math.round(v.steering_ordered_deg));
+  app.userSet = { engine: false, helm: false };   // the sliders show what is held again
   showSliders();
 }
 
