@@ -107,6 +107,13 @@ def ankudinov_factors(length: float, beam: float, draft: float, block: float,
 
 
 @njit(cache=True)
+def ufc_crossflow_factor(deep_drag: float, draft_over_depth: float) -> float:
+    """UFC 4-159-03 Eq 11 over its deep value: C_yc / C0 = (C0 + (C1 - C0) (T/d)^K) / C0 (not
+    faded: shallow_water_factors fades it with the rest)."""
+    return (deep_drag + (UFC_C1 - deep_drag) * draft_over_depth ** UFC_K) / deep_drag
+
+
+@njit(cache=True)
 def _effective_aspect_ratio(k: float, hr: float, q: float) -> float:
     """(S1): k_e = k / (h'/2 + ((pi h'/2) cot(pi h'/2))^q), h' = T/h; k at h' = 0."""
     if hr <= 0.0:
@@ -150,7 +157,7 @@ def shallow_water_factors(length: float, beam: float, draft: float, block: float
     out[SW_MY] = (f ** 0.82 + 0.413 + 0.032 * bt + 0.129 * bt * bt) / f ** 0.82
     out[SW_JZ] = (f ** 0.82 + 0.413 + 0.0192 * bt + 0.00554 * bt * bt) / f ** 0.82
     if crossflow_drag > 0.0:
-        out[SW_CROSSFLOW] = (crossflow_drag + (UFC_C1 - crossflow_drag) * hr ** UFC_K) / crossflow_drag
+        out[SW_CROSSFLOW] = ufc_crossflow_factor(crossflow_drag, hr)
     w = min(1.0, (DEEP_RATIO - ratio) / (DEEP_RATIO - FULL_SHALLOW_RATIO))
     for i in range(N_SW):
         out[i] = 1.0 + (out[i] - 1.0) * w
