@@ -821,7 +821,8 @@ def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, 
     """_integrate in the environment (env: a EnvironmentSampler's data) as sampled at the
     start state: its wind and the bottom's friction are the last two wrench rows (filled here);
     then the environment is sampled at the new state, its time advanced by dt, and its current and
-    Ankudinov's factors on the linear derivatives set for the next step. One compiled call: the same as Python calls cost twice the step (bench_vessels)."""
+    the shallow-water factors at its depth (_apply_depth) set for the next step. One compiled call: the same as
+    Python calls cost twice the step (bench_vessels)."""
     e = env[E0:E0 + N_SAMPLE]
     k = wrench_force.shape[0] - 2
     wrench_force[k, 0], wrench_force[k, 1], wrench_force[k, 2] = e[E_WIND_FX], e[E_WIND_FY], 0.0
