@@ -171,3 +171,17 @@ def test_stopped_s175_drifts_where_beam_wind_meets_crossflow_drag(depth_ratio):
     assert abs(tr.v[-1] - tr.v[-100]) < 1e-4 * abs(tr.v[-1])            # steady
     assert -tr.v[-1] == pytest.approx(v_hand, rel=0.005)
     assert abs(tr.u[-1]) < 1e-3 and abs(tr.r[-1]) < 1e-6
+
+
+def test_an_attached_environment_sets_the_same_factors_as_set_depth():
+    """The depth sampled every step (environment_loads, the vessel node's path) and set_depth give
+    the ship the same coefficients and mass matrix."""
+    from sea_environment.environment import Environment
+    from tug_dynamics.environment_loads import VesselInEnvironment
+    direct = load_ship("s175_003.yaml")
+    direct.set_depth(1.5 * T)
+    sampled = load_ship("s175_003.yaml")
+    VesselInEnvironment(sampled, Environment.from_mapping({"depth": 1.5 * T}))
+    assert np.array_equal(sampled.hp[mv.H_C0:mv.H_C0 + 16], direct.hp[mv.H_C0:mv.H_C0 + 16])
+    assert np.array_equal(sampled.hp[mv.H_SWF:mv.H_SWF + sw.N_SW], direct.hp[mv.H_SWF:mv.H_SWF + sw.N_SW])
+    assert np.allclose(sampled.minv, direct.minv, rtol=1e-14)
