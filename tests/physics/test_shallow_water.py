@@ -185,3 +185,16 @@ def test_an_attached_environment_sets_the_same_factors_as_set_depth():
     assert np.array_equal(sampled.hp[mv.H_C0:mv.H_C0 + 16], direct.hp[mv.H_C0:mv.H_C0 + 16])
     assert np.array_equal(sampled.hp[mv.H_SWF:mv.H_SWF + sw.N_SW], direct.hp[mv.H_SWF:mv.H_SWF + sw.N_SW])
     assert np.allclose(sampled.minv, direct.minv, rtol=1e-14)
+
+
+def test_ship_form_regressions_apply_to_ship_forms_only():
+    """(S4)'s X'vv, X'vr and (S8) (ship-form regressions) are 1 outside L/T >= 10, B/T <= 4 (the
+    box barge: S8 would give m_x x 95); the rest applies to every hull. The S-175 gets them."""
+    box = sw.shallow_water_factors(50.0, 15.0, 0.5, 0.9, 1.2 * 0.5, 1.0)     # box_barge_000, B/T 30
+    tug = sw.shallow_water_factors(24.0, 8.0, 3.0, 0.5, 1.2 * 3.0, 1.0)      # harbour_tug, L/T 8
+    for f in (box, tug):
+        assert [f[i] for i in (sw.SW_XVV, sw.SW_XVR, sw.SW_MX, sw.SW_MY, sw.SW_JZ)] == [1.0] * 5
+        assert f[sw.SW_NONLINEAR] == pytest.approx(1.0 + 6.0 / 1.2 ** 2.5, rel=1e-12)
+        assert f[sw.SW_CROSSFLOW] == pytest.approx(1.0 + 2.2 / 1.44, rel=1e-12)
+    s175 = sw.shallow_water_factors(L, B, T, CB, 1.2 * T, CD0)
+    assert s175[sw.SW_MY] > 1.0 and s175[sw.SW_XVR] == pytest.approx(1.0 + 1.3 / 1.44, rel=1e-12)

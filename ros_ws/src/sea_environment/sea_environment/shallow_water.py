@@ -40,6 +40,8 @@ README:
   (S8) with F = h/T - 1: m_x: x (F^1.3 + 3.77 + 1.14 B/T - 0.233 L/T - 3.43 Cb) / F^1.3,
        m_y: x (F^0.82 + 0.413 + 0.032 B/T + 0.129 (B/T)^2) / F^0.82,
        J_z: x (F^0.82 + 0.413 + 0.0192 B/T + 0.00554 (B/T)^2) / F^0.82
+       (S4)'s X'vv, X'vr and (S8) are regressions on ship forms: only for L/T >= 10 and B/T <= 4
+       (our bound); a barge or tug outside it keeps those deep values
   (S3') our extension: every other nonlinear hull term the set does not name (Y'vr, Y'r|r|,
        N'r|r|, N'v|v|, ...) takes (S3)'s growth too; X'rr keeps its deep value
   (S9) sway cross-flow drag (the hull's beam-on C_D and the Y'v|v| term that carries it), whose
@@ -73,6 +75,9 @@ G = 9.80665
 FNH_MAX = 0.7
 MIN_DEPTH_RATIO = 1.1   # h/T: the shallowest the MARAD regression covers
 FULL_SHALLOW_RATIO, DEEP_RATIO = 3.0, 4.0     # h/T: factors fade to 1 between these
+# a ship form (S4's X'vv, X'vr and S8 apply): L/T >= 10, B/T <= 4 (our bound: the container ships,
+# tankers and bulk carriers such regressions are fitted to; the S-175 has 20.6 and 3.0)
+SHIP_FORM_MIN_L_OVER_T, SHIP_FORM_MAX_B_OVER_T = 10.0, 4.0
 # shallow_water_factors' tuple: index of each factor
 (SW_YV, SW_YR, SW_NV, SW_NR, SW_NONLINEAR, SW_XVV, SW_XVR, SW_RESISTANCE, SW_ONE_MINUS_T, SW_ONE_MINUS_W,
  SW_GAMMA, SW_MX, SW_MY, SW_JZ, SW_CROSSFLOW) = range(15)
@@ -151,13 +156,24 @@ def shallow_water_factors(length: float, beam: float, draft: float, block: float
     out[SW_ONE_MINUS_T] = 1.0 / (1.0 - 0.2 * hr + 0.7295 * hr ** 2)
     out[SW_ONE_MINUS_W] = math.cos(1.4 * block * hr)
     out[SW_GAMMA] = 1.0 + 0.0161 * hr + 4.4222 * hr ** 2 - 4.9825 * hr ** 3
+    if crossflow_drag > 0.0:
+        out[SW_CROSSFLOW] = ufc_crossflow_factor(crossflow_drag, hr)
     f = ratio - 1.0
     bt, lt = beam / draft, length / draft
+    if not (lt >= SHIP_FORM_MIN_L_OVER_T and bt <= SHIP_FORM_MAX_B_OVER_T):
+        # (S4)'s X'vv, X'vr and (S8): regressions on ship forms; a barge or tug keeps its deep
+        # values (S8's m_x at h/T 1.2 would be x 95 for the box barge)
+        out[SW_XVV] = out[SW_XVR] = 1.0
+        return _faded(out, ratio)
     out[SW_MX] = (f ** 1.3 + 3.77 + 1.14 * bt - 0.233 * lt - 3.43 * block) / f ** 1.3
     out[SW_MY] = (f ** 0.82 + 0.413 + 0.032 * bt + 0.129 * bt * bt) / f ** 0.82
     out[SW_JZ] = (f ** 0.82 + 0.413 + 0.0192 * bt + 0.00554 * bt * bt) / f ** 0.82
-    if crossflow_drag > 0.0:
-        out[SW_CROSSFLOW] = ufc_crossflow_factor(crossflow_drag, hr)
+    return _faded(out, ratio)
+
+
+@njit(cache=True)
+def _faded(out, ratio):
+    """1 + (f - 1) w, w = 1 at h/T <= 3 falling linearly to 0 at h/T = 4."""
     w = min(1.0, (DEEP_RATIO - ratio) / (DEEP_RATIO - FULL_SHALLOW_RATIO))
     for i in range(N_SW):
         out[i] = 1.0 + (out[i] - 1.0) * w
