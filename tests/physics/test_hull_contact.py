@@ -164,11 +164,14 @@ def test_a_tug_pushing_a_free_ship_transfers_its_thrust():
         tug.step(dt, [ExternalWrench(-force, fender)])
         result = nxt
     u = tug.state.linear_velocity_body[0]
-    assert 0.5 < u < 1.0 and abs(ship.state.linear_velocity_body[1] - u) < 1e-3   # pushed sideways together
+    assert 0.3 < u < 1.0 and abs(ship.state.linear_velocity_body[1] - u) < 1e-3   # pushed sideways together
     thrust = sum(t.thrust * math.cos(t.azimuth) for t in tug.status().thrusters)
     table = yaml.safe_load(open(tug_file))["hull"]["resistance"]
     resistance = float(np.interp(u, table["speed"], table["force"]))
     assert result.normal_force == pytest.approx(thrust - resistance, rel=0.02)   # measured 0.02 %
+    # the ship's beam-on cross-flow drag 1/2 rho C_D L T u^2, C_D 0.761 (tug_dynamics README
+    # "Beam-on drag"), takes the push
+    assert result.normal_force == pytest.approx(0.5 * 1025.0 * 0.761 * 175.0 * 8.5 * u * u, rel=0.02)
     assert result.penetration == pytest.approx(result.normal_force / spec.stiffness, rel=0.01)
     assert result.friction_force < 1e-3 * result.normal_force                    # no sliding beam-on
 

@@ -8,7 +8,7 @@ The environment of a state acts over the step that follows it (sampled once per 
 - wind: the apparent wind (the air's velocity relative to the vessel's reference point, wind at
   10 m, the height Blendermann's coefficients refer to) -> Blendermann (1994) force and centre
   of pressure (sea_environment.wind_loads), one more external wrench on the model.
-- depth: sampled at the reference point; Ankudinov's factors on the linear derivatives and the
+- depth: sampled at the reference point; the shallow-water factors (README "Shallow water") and the
   anchor chain's holding (the model's set_depth effects); squat (ICORELS) and the under-keel
   clearance h - T - squat are reported; below zero the vessel is aground: the lost buoyancy
   rho g A_wp (T + squat - h) presses it on the bottom and Coulomb friction (GROUND_FRICTION)

@@ -39,9 +39,11 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 from numba import njit
 
-from sea_environment.sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_F_NR, E_F_NV, E_F_YR, E_F_YV,
-                                     E_GROUND_FX, E_GROUND_FY, E_WIND_FX, E_WIND_FY, E_WIND_X, E_WIND_Z,
+from sea_environment.sampler import (E0, E_CURRENT_X, E_CURRENT_Y, E_DEPTH, E_GROUND_FX, E_GROUND_FY, E_WIND_FX, E_WIND_FY, E_WIND_X, E_WIND_Z,
                                      N_SAMPLE, P_TIME, EnvironmentSampler, sample)
+from sea_environment.shallow_water import (N_SW, SW_CROSSFLOW, SW_GAMMA, SW_JZ, SW_MX, SW_MY, SW_NONLINEAR,
+                                           SW_NR, SW_NV, SW_ONE_MINUS_T, SW_ONE_MINUS_W, SW_RESISTANCE, SW_XVR,
+                                           SW_XVV, SW_YR, SW_YV, shallow_water_factors)
 from sim_math.integration import rk4_stage, rk4_update
 
 from .vessel import (ANCHOR_HEAVE_UP, ANCHOR_LET_GO, CPL_C, CPL_K, CPL_ON, CPL_P, CPL_V, NCPL, SPRING_SUBSTEP,
@@ -62,10 +64,17 @@ S_THR0 = NSTATE
  H_TOW_ON, H_TOW_F, H_TOW_X, H_TOW_DRIFT, H_TOW_RATE, H_TOW_MAX, H_ANC_LW, H_ANC_LA, H_ANC_UEPS,
  H_ANC_RON, H_ANC_VUCAP, H_NPROP, H_NRUD, H_MAXRATE, H_TE, H_TN, H_ANC_UREF, H_NTHR) = range(32)
 H_C0 = 32           # hull coefficients start here (16 slots)
-# the slots (in hp[H_C0:]) of Y'v, Y'r, N'v, N'r, then their deep-water values: what the
-# shallow-water factors multiply (slot -1: the hull form has no such derivatives)
-H_LIN = H_C0 + 16
-NHULL = H_LIN + 8
+# shallow water (sea_environment.shallow_water.shallow_water_factors): the 16 hull coefficients'
+# deep-water values, the factor (SW_*) each takes (-1: none), the hull's beam, block coefficient
+# and the depth the factors are set for, its deep-water beam-on cross-flow C_D, the factors in force, the deep (u, v, r, p) mass matrix
+# and the deep added masses m_x, m_y, J_z
+H_SW_DEEP = H_C0 + 16
+H_SW_KIND = H_SW_DEEP + 16
+H_SW_BEAM, H_SW_BLOCK, H_SW_DEPTH, H_SW_CD0 = H_SW_KIND + 16, H_SW_KIND + 17, H_SW_KIND + 18, H_SW_KIND + 19
+H_SWF = H_SW_KIND + 20
+H_M0 = H_SWF + N_SW
+H_ADD0 = H_M0 + 16
+NHULL = H_ADD0 + 3
 
 FORM_NONE, FORM_POLY, FORM_LOWSPEED, FORM_CROSSFLOW = 0, 1, 2, 3
 
@@ -148,11 +157,15 @@ def _hull_lowspeed(c, rho, L, T, ur, vr, rl, Ue, rv, rf):
     / 0.5 rho L d V^2, V = sqrt(u^2 + v^2). Y'v and N'r multiply |u|: hull lift and yaw damping
     oppose sway and yaw also astern (the paper covers ahead motion only; the Munk moment
     N'v u v changes sign, as it should).
-    c: X'uu X'vr, Y'v Y'r Y'vv Y'vr Y'rr, N'v N'r N'vvr N'vrr N'rr."""
+    c: X'uu X'vr, Y'v Y'r Y'vv Y'vr Y'rr, N'v N'r N'vvr N'vrr N'rr, dC_D.
+
+    Beam-on drag (README "Beam-on drag"): the captive-model Y'vv v|v| gives the hull a beam-on C_D
+    of -Y'vv only; dC_D = -(C_D + Y'vv) raises it to the file's beam_on_drag C_D at 90 deg drift,
+    weighted by sin^2(drift) = v^2 / V^2 (nil at the turn's small drift angles, whole at 90 deg)."""
     q = 0.5 * rho * L * T
     XH = q * (c[0] * ur * abs(ur) + c[1] * vr * rl)
     YH = q * (c[2] * abs(ur) * vr + c[3] * ur * rl + c[4] * vr * abs(vr) + c[5] * vr * abs(rl)
-              + c[6] * rl * abs(rl))
+              + c[6] * rl * abs(rl) + c[12] * vr * abs(vr) * (vr / Ue) ** 2)
     NH = q * L * (c[7] * ur * vr + c[8] * abs(ur) * rl + c[9] * vr * vr * rl / Ue
                   + c[10] * vr * rl * rl / Ue + c[11] * rl * abs(rl))
     XH += _interp_resistance(ur, rv, rf)
@@ -224,15 +237,19 @@ def _hull_forces(hp, rv, rf, ur, vr, r):
     rl = r * L
     c = hp[H_C0:H_C0 + 16]
     if form == FORM_POLY:
-        return _hull_polynomial(c, hp[H_RHO], L, ur, vr, rl, U, Ue, rv, rf)
-    if form == FORM_CROSSFLOW:
-        return _hull_crossflow(c, hp[H_RHO], L, hp[H_T], ur, vr, r, rv, rf)
-    return _hull_lowspeed(c, hp[H_RHO], L, hp[H_T], ur, vr, rl, Ue, rv, rf)
+        XH, YH, NH = _hull_polynomial(c, hp[H_RHO], L, ur, vr, rl, U, Ue, rv, rf)
+    elif form == FORM_CROSSFLOW:
+        XH, YH, NH = _hull_crossflow(c, hp[H_RHO], L, hp[H_T], ur, vr, r, rv, rf)
+    else:
+        XH, YH, NH = _hull_lowspeed(c, hp[H_RHO], L, hp[H_T], ur, vr, rl, Ue, rv, rf)
+    # shallow water's extra resistance (README "Shallow water" (S4)) on the resistance table
+    return XH + (hp[H_SWF + SW_RESISTANCE] - 1.0) * _interp_resistance(ur, rv, rf), YH, NH
 
 
 @njit(cache=True, inline="always")
-def _propeller_thrust(props, k, rho, n, ur, vr, r):
-    """S. D. Yoon Eq 4 (with Eq 8's wake): thrust of propeller row k at shaft speed n (rps).
+def _propeller_thrust(props, k, rho, n, ur, vr, r, one_minus_w):
+    """S. D. Yoon Eq 4 (with Eq 8's wake): thrust of propeller row k at shaft speed n (rps);
+    one_minus_w: the shallow-water factor on 1 - w_P0 (README "Shallow water" (S6)).
 
     Returns (thrust, advance speed u_A, wake fraction w_P); the rudder behind it needs both."""
     D = props[k, P_D]
@@ -240,7 +257,7 @@ def _propeller_thrust(props, k, rho, n, ur, vr, r):
     vp = vr + props[k, P_X] * r                # lateral speed at the propeller
     # w_P = w_P0 exp(-4 (beta - x_P' r')^2): the local drift angle at the propeller
     beta_p = math.atan2(vp, abs(up) + 1e-9)
-    wake = props[k, P_WP0] * math.exp(-4.0 * beta_p * beta_p)
+    wake = (1.0 - (1.0 - props[k, P_WP0]) * one_minus_w) * math.exp(-4.0 * beta_p * beta_p)
     ua = up * (1.0 - wake)
     # K_T = C1 + C2 J + C3 J^2 written as rho D^4 [C1 n|n| + C2 |n| ua / D + C3 ua|ua| / D^2]:
     # identical for n > 0, ua >= 0; finite at n = 0 (locked-propeller drag opposes motion);
@@ -277,9 +294,10 @@ def _rudder_inflow(wake_r0, kappa0, eta, wake_p0, pitch, wake_p, ua, n):
 
 
 @njit(cache=True, inline="always")
-def _rudder_force(ruds, k, uR, slip, rho, L, ur, vr, r, delta):
+def _rudder_force(ruds, k, uR, slip, rho, L, ur, vr, r, delta, gamma_factor):
     """S. D. Yoon Eq 7-8: X_R, Y_R, N_R of rudder k in the inflow u_R at propeller slip s
-    (Fujii normal force, flow straightening gamma = C_p C_s). The paper's frame has y to
+    (Fujii normal force, flow straightening gamma = C_p C_s, times gamma_factor: shallow water,
+    README "Shallow water" (S7)). The paper's frame has y to
     starboard and starboard rudder positive: v, r and delta are flipped going in and Y, N
     coming out."""
     delta_p = -delta                            # paper frame (suffix _p): y starboard
@@ -294,7 +312,7 @@ def _rudder_force(ruds, k, uR, slip, rho, L, ur, vr, r, delta):
     betaR = math.atan2(-(v_p + ruds[k, R_LR] * L * r_p), abs(ur) + 1e-9)
     abs_beta = abs(betaR)
     c_s = 0.45 * abs_beta if abs_beta <= 1.111 else 0.5
-    gamma_beta = c_p * c_s * betaR
+    gamma_beta = c_p * c_s * gamma_factor * betaR
     if gamma_beta > 1.5:
         gamma_beta = 1.5
     if gamma_beta < -1.5:
@@ -655,11 +673,11 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
     prop_advance = np.zeros(4)
     prop_wake = np.zeros(4)
     for k in range(int(hp[H_NPROP])):
-        thrust, ua, wake = _propeller_thrust(props, k, rho, n, ur, vr, r)
+        thrust, ua, wake = _propeller_thrust(props, k, rho, n, ur, vr, r, hp[H_SWF + SW_ONE_MINUS_W])
         prop_advance[k] = ua
         prop_wake[k] = wake
         thrust_total += thrust
-        fx = (1.0 - props[k, P_T]) * thrust
+        fx = (1.0 - props[k, P_T]) * hp[H_SWF + SW_ONE_MINUS_T] * thrust
         X += fx
         N += -props[k, P_Y] * fx
     out[O_THRUST] = thrust_total
@@ -669,9 +687,10 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
         if j < 0:                              # no propeller ahead of it: the hull's wake
             uR, slip = (1.0 - ruds[k, R_WR0]) * ur, 0.0
         else:
-            uR, slip = _rudder_inflow(ruds[k, R_WR0], ruds[k, R_KAPPA0], ruds[k, R_ETA], props[j, P_WP0],
+            wake_p0 = 1.0 - (1.0 - props[j, P_WP0]) * hp[H_SWF + SW_ONE_MINUS_W]
+            uR, slip = _rudder_inflow(ruds[k, R_WR0], ruds[k, R_KAPPA0], ruds[k, R_ETA], wake_p0,
                                       props[j, P_PITCH], prop_wake[j], prop_advance[j], n)
-        XR, YR, NR = _rudder_force(ruds, k, uR, slip, rho, hp[H_L], ur, vr, r, delta)
+        XR, YR, NR = _rudder_force(ruds, k, uR, slip, rho, hp[H_L], ur, vr, r, delta, hp[H_SWF + SW_GAMMA])
         X += XR
         Y += YR
         N += NR
@@ -802,7 +821,8 @@ def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, 
     """_integrate in the environment (env: a EnvironmentSampler's data) as sampled at the
     start state: its wind and the bottom's friction are the last two wrench rows (filled here);
     then the environment is sampled at the new state, its time advanced by dt, and its current and
-    Ankudinov's factors on the linear derivatives set for the next step. One compiled call: the same as Python calls cost twice the step (bench_vessels)."""
+    the shallow-water factors at its depth (_apply_depth) set for the next step. One compiled call: the same as
+    Python calls cost twice the step (bench_vessels)."""
     e = env[E0:E0 + N_SAMPLE]
     k = wrench_force.shape[0] - 2
     wrench_force[k, 0], wrench_force[k, 1], wrench_force[k, 2] = e[E_WIND_FX], e[E_WIND_FY], 0.0
@@ -816,20 +836,58 @@ def _integrate_in_environment(s, dt, hmax, hp, props, ruds, thrs, rv, rf, minv, 
                       wrench_moment, wrench_cpl, out)
     env[P_TIME] += dt
     sample(env, s[S_X], s[S_Y], s[S_PSI], s[S_U], s[S_V])
-    _apply_environment(e, ctrl, hp)
+    _apply_environment(e, ctrl, hp, minv)
     return work
 
 
 @njit(cache=True)
-def _apply_environment(e, ctrl, hp):
-    """The sampled current, and the shallow-water factors of Y'v, Y'r, N'v, N'r on their deep
-    values (hp[H_LIN:]), into ctrl and hp."""
+def _apply_environment(e, ctrl, hp, minv):
+    """The sampled current into ctrl, and the shallow-water factors at the sampled depth
+    (_apply_depth)."""
     ctrl[C_CUR_X], ctrl[C_CUR_Y] = e[E_CURRENT_X], e[E_CURRENT_Y]
-    if hp[H_LIN] >= 0.0:
-        hp[H_C0 + int(hp[H_LIN])] = hp[H_LIN + 4] * e[E_F_YV]
-        hp[H_C0 + int(hp[H_LIN + 1])] = hp[H_LIN + 5] * e[E_F_YR]
-        hp[H_C0 + int(hp[H_LIN + 2])] = hp[H_LIN + 6] * e[E_F_NV]
-        hp[H_C0 + int(hp[H_LIN + 3])] = hp[H_LIN + 7] * e[E_F_NR]
+    _apply_depth(hp, minv, e[E_DEPTH])
+
+
+@njit(cache=True)
+def _apply_depth(hp, minv, depth):
+    """Shallow-water factors (sea_environment.shallow_water.shallow_water_factors, README
+    "Shallow water") at water depth `depth` (m; inf = deep) on every hull coefficient that takes
+    one (hp[H_SW_KIND:]), on the resistance, wake, thrust deduction and flow straightening
+    (hp[H_SWF:], read by the kernels) and on the added masses (minv rebuilt). Nothing to do when
+    the depth is the one the factors are set for."""
+    if depth == hp[H_SW_DEPTH] or hp[H_FORM] == FORM_NONE or not hp[H_SW_BEAM] > 0.0:
+        return     # unchanged, no hull, or no particulars (a vessel not built by load_ship)
+    hp[H_SW_DEPTH] = depth
+    f = shallow_water_factors(hp[H_L], hp[H_SW_BEAM], hp[H_T], hp[H_SW_BLOCK], depth, hp[H_SW_CD0])
+    for i in range(N_SW):
+        hp[H_SWF + i] = f[i]
+    for i in range(16):
+        kind = int(hp[H_SW_KIND + i])
+        hp[H_C0 + i] = hp[H_SW_DEEP + i] * (f[kind] if kind >= 0 else 1.0)
+    mx, my, jz = hp[H_ADD0], hp[H_ADD0 + 1], hp[H_ADD0 + 2]
+    hp[H_MX], hp[H_MY] = mx * f[SW_MX], my * f[SW_MY]
+    m = np.empty((4, 4))
+    for i in range(16):
+        m[i // 4, i % 4] = hp[H_M0 + i]
+    m[0, 0] += mx * (f[SW_MX] - 1.0)
+    m[1, 1] += my * (f[SW_MY] - 1.0)
+    m[2, 2] += jz * (f[SW_JZ] - 1.0)
+    minv[:, :] = np.linalg.inv(m)
+
+
+# the shallow-water factor (SW_*) each hull coefficient takes, per form, in hp[H_C0:] order
+# (README "Shallow water"): the sway cross-flow drag (Y'v|v|, -C_D) the cross-flow growth (S9), every
+# other nonlinear term (S3)'s; X'rr none (not covered); -1 = none
+_SW_KINDS = {
+    # X'vv X'rr X'vr, Y'v Y'v|v| Y'r Y'r|r| Y'vrr Y'rvv, N'v N'v|v| N'r N'r|r| N'vrr N'rvv
+    FORM_POLY: (SW_XVV, -1, SW_XVR, SW_YV, SW_CROSSFLOW, SW_YR, SW_NONLINEAR, SW_NONLINEAR, SW_NONLINEAR,
+                SW_NV, SW_NONLINEAR, SW_NR, SW_NONLINEAR, SW_NONLINEAR, SW_NONLINEAR),
+    # X'uu X'vr, Y'v Y'r Y'vv Y'vr Y'rr, N'v N'r N'vvr N'vrr N'rr, dC_D (beam-on drag)
+    FORM_LOWSPEED: (SW_RESISTANCE, SW_XVR, SW_YV, SW_YR, SW_CROSSFLOW, SW_NONLINEAR, SW_NONLINEAR, SW_NV, SW_NR,
+                    SW_NONLINEAR, SW_NONLINEAR, SW_NONLINEAR, SW_CROSSFLOW),
+    # X'uu X'vr Y'v Y'r N'v N'r Y'vv(-C_D) x_aft x_fore
+    FORM_CROSSFLOW: (SW_RESISTANCE, SW_XVR, SW_YV, SW_YR, SW_NV, SW_NR, SW_CROSSFLOW, -1, -1),
+}
 
 
 def point_mobility_matrix(minv, point_body, roll: bool) -> float:
@@ -890,14 +948,19 @@ class ManeuveringVessel(Vessel):
         self.name = name
         self.source = source
         self.hp = np.ascontiguousarray(hp, float)
-        slots = self._LINEAR_SLOTS.get(int(self.hp[H_FORM]))     # deep-water linear derivatives (H_LIN)
-        self.hp[H_LIN:H_LIN + 8] = (*slots, *self.hp[H_C0 + np.array(slots)]) if slots else -1.0
+        kinds = _SW_KINDS.get(int(self.hp[H_FORM]), ())
+        self.hp[H_SW_DEEP:H_SW_DEEP + 16] = self.hp[H_C0:H_C0 + 16]       # deep-water coefficients
+        self.hp[H_SW_KIND:H_SW_KIND + 16] = -1.0
+        self.hp[H_SW_KIND:H_SW_KIND + len(kinds)] = kinds
+        self.hp[H_SWF:H_SWF + N_SW] = 1.0
+        self.hp[H_SW_DEPTH] = math.inf       # (deep added masses m_x, m_y, J_z: ship_file, H_ADD0)
         self.props = np.ascontiguousarray(props, float).reshape(-1, NPROP) if len(props) else np.zeros((1, NPROP))
         self.ruds = np.ascontiguousarray(ruds, float).reshape(-1, NRUD) if len(ruds) else np.zeros((1, NRUD))
         self.rv = np.ascontiguousarray(res_speed, float)
         self.rf = np.ascontiguousarray(res_force, float)
         self.mass_matrix = np.asarray(mass_matrix, float)
         self.minv = np.ascontiguousarray(np.linalg.inv(self.mass_matrix))
+        self.hp[H_M0:H_M0 + 16] = self.mass_matrix.ravel()
         self.limits = dict(limits)   # max_steering (rad), rated_rps
         self.attachments = {k: np.asarray(v, float) for k, v in attachments.items()}
         self.anchor_cfg = anchor
@@ -969,26 +1032,23 @@ class ManeuveringVessel(Vessel):
                              "must be 0")
         self.ctrl[C_CUR_X], self.ctrl[C_CUR_Y] = float(east), float(north)
 
-    # the linear derivatives Y'v, Y'r, N'v, N'r: their slots in hp[H_C0:] per hull form
-    _LINEAR_SLOTS = {FORM_POLY: (3, 5, 9, 11), FORM_LOWSPEED: (2, 3, 7, 8), FORM_CROSSFLOW: (2, 3, 4, 5)}
-
     def set_depth(self, depth: float) -> None:
-        """Water depth under the vessel (m; math.inf = deep / not given). The hull's linear
-        derivatives Y'v, Y'r, N'v, N'r become the file's (deep-water) values times Ankudinov's
-        shallow-water factors (sea_environment.shallow_water.ankudinov_factors; the added masses
-        and nonlinear terms keep theirs); with a chain in the ship file the depth also limits the
-        anchor's holding (anchor_holding_factor)."""
-        from sea_environment.shallow_water import ankudinov_factors
+        """Water depth under the vessel (m; math.inf = deep / not given). Every hull coefficient,
+        the added masses, wake, thrust deduction, rudder flow straightening and resistance take
+        their shallow-water factors (sea_environment.shallow_water.shallow_water_factors; README
+        "Shallow water"); with a chain in the ship file the depth also limits the anchor's
+        holding (anchor_holding_factor)."""
         depth = float(depth)
         if not depth > 0.0:
             raise ValueError(f"{self.name}: water depth {depth!r} m must be > 0")
-        slots = self._LINEAR_SLOTS.get(int(self.hp[H_FORM]))
-        if slots is not None:
-            block = self.volume / (self.length * self.beam * self.draft)
-            factors = ankudinov_factors(self.length, self.beam, self.draft, block, depth)[:4]
-            for i, deep, f in zip(slots, self.hp[H_LIN + 4:H_LIN + 8], factors):
-                self.hp[H_C0 + i] = deep * f
+        self._set_hull_particulars()
+        _apply_depth(self.hp, self.minv, depth)
         self._set_anchor_hold(depth)
+
+    def _set_hull_particulars(self) -> None:
+        """Beam and block coefficient (load_ship sets them after construction) for the factors."""
+        self.hp[H_SW_BEAM] = self.beam
+        self.hp[H_SW_BLOCK] = self.volume / (self.length * self.beam * self.draft)
 
     def _set_anchor_hold(self, depth: float) -> None:
         self._anchor_depth = depth
@@ -1003,6 +1063,7 @@ class ManeuveringVessel(Vessel):
         """From now on every step feels the sampler's environment (current, wind, depth and its
         factors, the bottom); sampled here on the present state at sampler.time."""
         self._environment = sampler
+        self._set_hull_particulars()
         self._env_rows = (np.empty((2, 3)), np.empty((2, 3)), np.empty((2, 3)))
         self._anchor_chain = self.anchor_cfg is not None and self.anchor_cfg.get("chain_out") is not None
         self._sample_environment()
@@ -1011,7 +1072,7 @@ class ManeuveringVessel(Vessel):
         """The attached environment at the present state (set_state keeps it so)."""
         env, s = self._environment, self.s
         env.sample(s[S_X], s[S_Y], s[S_PSI], s[S_U], s[S_V])
-        _apply_environment(env.out, self.ctrl, self.hp)
+        _apply_environment(env.out, self.ctrl, self.hp, self.minv)
         self._set_anchor_hold(max(float(env.out[E_DEPTH]), 1e-3))
 
     @property

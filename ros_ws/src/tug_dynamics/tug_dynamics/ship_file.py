@@ -255,6 +255,9 @@ def _hull_section(hp: np.ndarray, ship: schema.DisplacementShip):
         hp[mv.H_MMG_CORIOLIS] = 1.0
     for i, k in enumerate(keys):
         hp[mv.H_C0 + i] = getattr(d, k)
+    hp[mv.H_SW_CD0] = _deep_crossflow_drag(h, d)
+    if h.form == "lowspeed":
+        hp[mv.H_C0 + 12] = -hp[mv.H_SW_CD0] - d.Yvv     # dC_D (maneuvering._hull_lowspeed)
     if h.form == "crossflow":
         cf = h.crossflow
         hp[mv.H_C0 + 7] = cf.x_aft if cf is not None else -0.5 * L
@@ -271,7 +274,19 @@ def _hull_section(hp: np.ndarray, ship: schema.DisplacementShip):
         added = _NO_ADDED_MASS
         rv = rf = np.zeros(0)
     hp[mv.H_MX], hp[mv.H_MY] = added.mx, added.my
+    hp[mv.H_ADD0:mv.H_ADD0 + 3] = added.mx, added.my, added.jz     # deep water: the shallow factors' base
     return added, rv, rf, table_v, table_f
+
+
+def _deep_crossflow_drag(h, d) -> float:
+    """The hull's deep-water beam-on cross-flow C_D (force / 0.5 rho L T v^2): the base of the
+    shallow-water cross-flow factor (README "Shallow water" (S9)) and, on a lowspeed hull with
+    beam_on_drag, the drag at 90 deg drift."""
+    if h.form == "polynomial":
+        return -d.Yvav * h.length / h.draft      # Y'v|v| is on 0.5 rho L^2 v^2
+    if h.form == "lowspeed" and h.beam_on_drag is not None:
+        return h.beam_on_drag
+    return -d.Yvv
 
 
 def _mass_matrix_and_roll(hp: np.ndarray, ship: schema.DisplacementShip, added: _AddedMass):

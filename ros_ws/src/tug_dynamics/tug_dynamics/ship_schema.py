@@ -135,6 +135,9 @@ class LowSpeedHull(_Hull):
     form: Literal["lowspeed"]
     derivatives: LowSpeedDerivatives
     added_mass: AddedMass
+    # the hull's cross-flow drag coefficient at 90 deg drift (force / 0.5 rho L d v^2) in deep water;
+    # None: -Yvv, what the derivatives imply (README "Beam-on drag"); ships 0.5-1.2, a flat plate 2
+    beam_on_drag: Optional[Annotated[float, Field(gt=0.0, le=3.0)]] = None
 
 
 class CrossflowHull(_Hull):
