@@ -133,6 +133,7 @@ def test_bad_input_names_the_value(kwargs, word):
 
 @pytest.mark.parametrize("call, word", [
     (lambda j, s: j.wash_force(s, 0.0, 1.0), "offset"), (lambda j, s: j.wash_force(s, 10.0, float("nan")), "psi"),
+    (lambda j, s: j.wash_force(s, 10.0, 2.0), "psi"),
     (lambda j, s: j.push_delivered(s, 20.0, 0.0), "angle"), (lambda j, s: HullSide(5.0, 5.0, 8.0), "u_end"),
     (lambda j, s: HullSide(0.0, 5.0, -8.0), "draft")])
 def test_bad_geometry_names_the_value(call, word):
