@@ -96,7 +96,7 @@ def jet_velocity(x, r, v0, d0):
 
 
 @njit(cache=True)
-def _strip(u, offset, sin_psi, cos_psi, depth_top, depth_bottom, d0):
+def _strip(u, offset, sin_psi, cos_psi, axis_to_keel, image_to_keel, d0):
     """The intercepted fraction per metre of hull side at u: the depth integral in closed form."""
     x = u * cos_psi + offset * sin_psi
     if x <= 0.0:
@@ -107,7 +107,7 @@ def _strip(u, offset, sin_psi, cos_psi, depth_top, depth_bottom, d0):
         h2 = 0.0
     ra = math.sqrt(a)
     # mirror at the surface: the side from depth -draft to 0 and its image from 0 to +draft
-    depth = math.erf(ra * depth_bottom) - math.erf(-ra * depth_top)
+    depth = math.erf(ra * image_to_keel) - math.erf(-ra * axis_to_keel)
     return a / math.pi * math.exp(-a * h2) * 0.5 * math.sqrt(math.pi / a) * depth
 
 
@@ -126,7 +126,7 @@ def intercepted_fraction(offset, psi, u_start, u_end, propeller_depth, draft, d0
     """int over the hull side of (a/pi) exp(-a r^2) dA, composite Gauss-Legendre in u over where the
     jet reaches the side (found by a coarse scan), the depth in closed form."""
     s, c = math.sin(psi), math.cos(psi)
-    top, bottom = draft - propeller_depth, draft + propeller_depth   # propeller to keel, image to keel
+    axis_to_keel, image_to_keel = draft - propeller_depth, draft + propeller_depth
     step = (u_end - u_start) / (SCAN_POINTS - 1)
     scan = np.empty(SCAN_POINTS)
     peak = 0.0
@@ -147,7 +147,8 @@ def intercepted_fraction(offset, psi, u_start, u_end, propeller_depth, draft, d0
     for p in range(PANELS):
         mid = ua + (p + 0.5) * width
         for k in range(gx.shape[0]):
-            total += gw[k] * 0.5 * width * _strip(mid + 0.5 * width * gx[k], offset, s, c, top, bottom, d0)
+            u = mid + 0.5 * width * gx[k]
+            total += gw[k] * 0.5 * width * _strip(u, offset, s, c, axis_to_keel, image_to_keel, d0)
     return total
 
 
