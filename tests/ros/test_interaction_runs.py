@@ -1,7 +1,8 @@
 """Issue 33 item 3 in a run: an S-175 passing a stopped S-175 at 6 kn (passing_moored_s175_1p5B /
 _3B). The interaction node's recorded loads are tug_dynamics.hull_interaction's at the pair's
-recorded positions of the step before (recomputed here from the odometry by hand: stagger,
-separation and speed in the stopped ship's axes), the sway force is attraction abeam and repulsion
+recorded positions of the step before carried on to the middle of the step the load acts over
+(recomputed here from the odometry by hand: stagger, separation and speed in the stopped ship's
+axes), the sway force is attraction abeam and repulsion
 at a stagger of +-0.7 L and the surge force changes sign with the stagger, the stopped ship is
 moved by them, a run in one process is identical, the lowest exchange rate (1 Hz) moves it as
 10 Hz does, and a pair starting inside each other's hulls exits 2 before start."""
@@ -70,25 +71,30 @@ def runs(tmp_path_factory):
     return out
 
 
-def _wang(own, other):
-    """hull_interaction's (X, Y, N) on `own` from `other` (rows x, y, yaw, vx, vy), by hand."""
+def _wang(own, other, lead):
+    """hull_interaction's (X, Y, N) on `own` from `other` (rows x, y, yaw, vx, vy), both carried
+    on at their velocities for `lead` seconds, by hand."""
     from tug_dynamics.hull_interaction import pair_from_ship_configs
     from tug_dynamics.ship_file import ship_config
     cfg = ship_config("s175_003.yaml")[1]
     pair = pair_from_ship_configs(cfg, cfg)
     c, s = math.cos(own[2]), math.sin(own[2])
-    dx, dy = other[0] - own[0], other[1] - own[1]
+    dx = other[0] + other[3] * lead - own[0] - own[3] * lead
+    dy = other[1] + other[4] * lead - own[1] - own[4] * lead
     return pair.loads(c * dx + s * dy, -s * dx + c * dy, c * other[3] + s * other[4])
 
 
 @pytest.mark.parametrize("run", ["1p5B", "3B", "1p5B_1Hz"])
 def test_recorded_loads_are_wang_at_the_recorded_positions(runs, run):
     r = runs[run]
-    steps = int(DURATION * (1.0 if run.endswith("1Hz") else RATE))
+    rate = 1.0 if run.endswith("1Hz") else RATE
+    steps = int(DURATION * rate)
     assert len(r["on_a"]) == len(r["moored"]) == steps + 1
     for end, own, other in (("on_a", "moored", "passing"), ("on_b", "passing", "moored")):
-        # the load stamped k (k >= 1) is computed from the odometry of step k - 1; step 0's from step 0
-        expected = np.array([_wang(r[own][max(k - 1, 0)], r[other][max(k - 1, 0)]) for k in range(steps + 1)])
+        # the load stamped k (k >= 1) is computed from the odometry of step k - 1, carried on to the
+        # middle of the step it acts over (k -> k + 1: 1.5 steps on); step 0's from step 0, half a step on
+        expected = np.array([_wang(r[own][max(k - 1, 0)], r[other][max(k - 1, 0)], (1.5 if k else 0.5) / rate)
+                             for k in range(steps + 1)])
         scale = np.abs(expected).max(axis=0) + 1.0
         np.testing.assert_allclose(r[end] / scale, expected / scale, rtol=0, atol=1e-6, err_msg=f"{run} {end}")
     # the stopped ship barely moves, so the passing ship feels (Wang: the moored pressure) almost nothing

@@ -6,9 +6,10 @@
 Subscribes ``/<vessel_a>/odom`` and ``/<vessel_b>/odom`` and publishes ``on_a/wrench`` and
 ``on_b/wrench`` (geometry_msgs/WrenchStamped in ``<vessel>/base_link``, body axes, about midship):
 the surge and sway force and yaw moment of tug_dynamics.hull_interaction on each vessel from the
-other, computed from the pair's odometry of step k and applied by the vessel nodes (their
-``wrench_topics``) over step k+1 -> k+2 (docs/confined-water.md, "In a run"). The physics lives in
-tug_dynamics.hull_interaction; this node converts poses and messages.
+other, computed from the pair's odometry of step k, each position carried on at its velocity to
+the middle of the step the load acts over (k+1 -> k+2, 1.5 steps on), and applied by the vessel
+nodes (their ``wrench_topics``) over that step (docs/confined-water.md, "In a run"). The physics
+lives in tug_dynamics.hull_interaction; this node converts poses and messages.
 """
 from __future__ import annotations
 
@@ -48,6 +49,12 @@ def planar_state(msg: cdr.OdometryIn) -> PlanarState:
     u, v, _ = msg.linear        # twist in body axes (REP-105)
     c, s = math.cos(yaw), math.sin(yaw)
     return PlanarState(msg.position[0], msg.position[1], yaw, c * u - s * v, s * u + c * v)
+
+
+def ahead(state: PlanarState, seconds: float) -> PlanarState:
+    """The state carried on at its velocity (heading and velocity held): where the vessel is in
+    the middle of the step a load computed now acts over."""
+    return state._replace(x=state.x + state.vx * seconds, y=state.y + state.vy * seconds)
 
 
 def wang_arguments(own: PlanarState, other: PlanarState) -> Tuple[float, float, float]:
@@ -112,7 +119,7 @@ class InteractionNode(SteppedNode):
         if self.loads is None and self.step_of(spec, msg) == 0:
             self.states[self.topics[spec.topic]] = planar_state(msg)
             if len(self.states) == 2:
-                self._compute()           # step-0 output from the step-0 state: it acts over step 0 -> 1
+                self._compute(0.5 * self.dt)   # step-0 output from the step-0 state: it acts over step 0 -> 1
                 self.ready_to_step = True
                 self.publish_outputs()
         return True
@@ -122,10 +129,10 @@ class InteractionNode(SteppedNode):
             msg = inputs.get(topic)
             if msg is not None:
                 self.states[end] = planar_state(msg)
-        self._compute()                   # from the state of step k, for the step k+1 -> k+2
+        self._compute(1.5 * self.dt)      # from the state of step k, for the step k+1 -> k+2
 
-    def _compute(self) -> None:
-        a, b = self.states["a"], self.states["b"]
+    def _compute(self, lead: float) -> None:
+        a, b = ahead(self.states["a"], lead), ahead(self.states["b"], lead)
         loads = {"a": loads_on(self.pairs["a"], a, b, self.depth), "b": loads_on(self.pairs["b"], b, a, self.depth)}
         overlapping = loads["a"] is None or loads["b"] is None
         if overlapping != self._overlapping:
