@@ -143,9 +143,10 @@ def test_the_lowest_exchange_rate_moves_the_stopped_ship_as_10_hz_does(runs):
     drift_fast = fast[::every] - fast[0]
     drift_slow = slow - slow[0]
     peak = np.abs(drift_fast[:, 1]).max()
-    assert np.abs(drift_slow[:, 1] - drift_fast[:, 1]).max() < 0.05 * peak
+    assert peak > 1.0                 # m: the passage draws it 1.6 m towards the passing ship's track
+    assert np.abs(drift_slow[:, 1] - drift_fast[:, 1]).max() < 1e-3 * peak   # measured 1.3e-4
     energy = lambda s: 0.5 * (s[:, 3] ** 2 + s[:, 4] ** 2)   # noqa: E731  (per unit mass)
-    assert energy(slow).max() == pytest.approx(energy(fast[::every]).max(), rel=0.1)
+    assert energy(slow).max() == pytest.approx(energy(fast).max(), rel=0.01)   # measured 0.17 %
 
 
 @pytest.mark.parametrize("edit, message", [
