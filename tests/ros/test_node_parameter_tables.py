@@ -1,5 +1,5 @@
-"""Each node declares exactly its parameter table (sim_contract.node_params): a vessel, a rope
-and a contact node, started as processes as `ros2 run` starts them, are asked through the
+"""Each node declares exactly its parameter table (sim_contract.node_params): a vessel, a rope,
+a contact and an interaction node, started as processes as `ros2 run` starts them, are asked through the
 standard rcl_interfaces services (as `ros2 param list / describe / get` ask) for their
 parameters; the names, types, ranges and defaults are the table's, and only the live ones
 change while running."""
@@ -18,11 +18,13 @@ NODES = [
     ("hull_contact", "contact_node", "/push/contact", {
         "fender_vessel": "tug", "hull_vessel": "ship", "fender_ship_file": "asd_tug.yaml",
         "hull_ship_file": "s175_003.yaml"}),
+    ("hull_contact", "interaction_node", "/pass/interaction", {
+        "vessel_a": "ship", "vessel_b": "tug", "ship_file_a": "s175_003.yaml", "ship_file_b": "asd_tug.yaml"}),
     ("scenario_runner", "autopilot", "/pilot/autopilot", {"vessel": "tug"}),
     ("bridge_instruments", "nmea_out", "/bridge/nmea_out", {"vessels": ["tug"]}),
     ("live_view", "live_view", "/viewer/live_view", {"port": 0, "http_port": -1}),
 ]
-STEPPED = ("vessel_node", "rope_node", "contact_node", "autopilot")  # fixed parameters refused while running
+STEPPED = ("vessel_node", "rope_node", "contact_node", "interaction_node", "autopilot")  # fixed parameters refused while running
 
 
 def _ros_args(name, given):

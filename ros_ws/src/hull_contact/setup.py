@@ -17,5 +17,6 @@ setup(
     description="Contact between a tug's fender and another vessel's hull (pushing): the ROS-free "
                 "spring-dashpot-friction model and the node that couples two vessels through it.",
     license="Apache-2.0",
-    entry_points={"console_scripts": ["contact_node = hull_contact.contact_node:main"]},
+    entry_points={"console_scripts": ["contact_node = hull_contact.contact_node:main",
+                                     "interaction_node = hull_contact.interaction_node:main"]},
 )

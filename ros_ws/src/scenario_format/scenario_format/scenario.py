@@ -27,6 +27,8 @@ starts; every error names the file, the key and what was expected.
         fender: tug2/bow_fender # "<vessel>/<attachment>"
         hull: ship              # the vessel pushed on (outline from its ship file)
         # radius: 0.5  stiffness: 2.0e6  damping: 4.0e5  friction: 0.3   (m, N/m, N s/m, -)
+    interactions:               # passing-ship loads between two hulls (Wang 1975, hull_contact interaction_node)
+      - between: [ship, moored] # two vessels; name: optional (default <a>_<b>_interaction)
     events:
       - {time: 0.0, vessel: tug, engine_order: 0.8}
       - {time: 60.0, vessel: tug, steering_deg: 20.0}
@@ -216,6 +218,18 @@ class ContactSpec(_Strict):
     friction: float = _within(_C["friction"], _C["friction"].default)
 
 
+class InteractionSpec(_Strict):
+    """Wang's (1975) passing-ship loads between two vessels (tug_dynamics.hull_interaction),
+    computed every step from their odometry by a hull_contact interaction_node; deep water, or the
+    environment's depth when it is one number."""
+    between: List[str] = Field(min_length=2, max_length=2)   # the two vessels
+    name: Optional[str] = Field(None, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")   # default <a>_<b>_interaction
+
+    @property
+    def namespace(self) -> str:
+        return self.name or f"{self.between[0]}_{self.between[1]}_interaction"
+
+
 class Trigger(_Strict):
     """A vessel's state that fires an event (IMO trials: "when the heading has changed by 10 deg,
     put the rudder over"). Evaluated on the state at the start of each step (the step's
@@ -329,6 +343,7 @@ class Scenario(_Strict):
     vessels: List[VesselSpec] = Field(default_factory=list)
     ropes: List[RopeSpec] = Field(default_factory=list)
     contacts: List[ContactSpec] = Field(default_factory=list)
+    interactions: List[InteractionSpec] = Field(default_factory=list)
     autopilots: List[AutopilotSpec] = Field(default_factory=list)
     events: List[Event] = Field(default_factory=list)
     recording: Recording = Recording()
@@ -449,6 +464,7 @@ def _check_references(path: str, sc: Scenario) -> None:
     vessels = [v.name for v in sc.vessels]
     _check_names(path, sc, vessels)
     _check_contacts(path, sc, vessels)
+    _check_interaction_names(path, sc, vessels)
     _check_rope_ends(path, sc, vessels)
     _check_prescribed_starts(path, sc)
     driven = _check_autopilots(path, sc, vessels)
@@ -478,12 +494,23 @@ def _check_names(path: str, sc: Scenario, vessels: List[str]) -> None:
     pilots = [a.name for a in sc.autopilots]
     if len(set(pilots)) != len(pilots):
         raise ScenarioError(f"{path}: key 'autopilots': duplicate name(s)")
-    contacts = [c.name for c in sc.contacts]
+    contacts = [c.name for c in sc.contacts] + [i.namespace for i in sc.interactions]
     groups = [set(vessels), set(ropes), set(pilots), set(contacts)]
     clash = {n for i, a in enumerate(groups) for b in groups[i + 1:] for n in a & b}
     if clash or len(set(contacts)) != len(contacts):
         raise ScenarioError(f"{path}: names {sorted(clash or {n for n in contacts if contacts.count(n) > 1})} are "
                             "used twice among vessels, ropes, contacts and autopilots (namespaces must differ)")
+
+
+def _check_interaction_names(path: str, sc: Scenario, vessels: List[str]) -> None:
+    for i, pair in enumerate(sc.interactions):
+        for vessel in pair.between:
+            if vessel not in vessels:
+                raise ScenarioError(f"{path}: key 'interactions[{i}].between': vessel '{vessel}' is not in 'vessels' "
+                                    f"({vessels})")
+        if pair.between[0] == pair.between[1]:
+            raise ScenarioError(f"{path}: key 'interactions[{i}].between': '{pair.between[0]}' twice (a pair of two "
+                                "vessels)")
 
 
 def _check_contacts(path: str, sc: Scenario, vessels: List[str]) -> None:
@@ -717,6 +744,8 @@ def _check_files(path: str, sc: Scenario) -> None:
             _check_exchange_rate(path, sc, i, r, params, models)
     for i, c in enumerate(sc.contacts):
         _check_contact(path, sc, i, c)
+    for i, pair in enumerate(sc.interactions):
+        _check_interaction(path, sc, i, pair)
     depth = sc.environment.depth
     if isinstance(depth, DepthGridSpec):
         from sea_environment.bathymetry import DepthGrid
@@ -791,6 +820,32 @@ def _check_contact(path: str, sc: Scenario, i: int, c: ContactSpec) -> None:
                             f"of '{c.hull}' ({start.penetration - c.radius:.2f} m in, near {where}): move the "
                             "vessels apart")
     _check_contact_exchange(path, sc, i, c, contact.mobility)
+
+
+def interaction_depth(sc: Scenario) -> float:
+    """The depth of the interactions' bottom images: the environment's when it is one number,
+    else 0 (deep water; a depth grid is not sampled along the pair)."""
+    depth = sc.environment.depth
+    return float(depth) if isinstance(depth, (int, float)) and not isinstance(depth, bool) else 0.0
+
+
+def _check_interaction(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
+    """Both hulls are slender displacement hulls (Wang's parabola from their ship files) and do not
+    start inside each other (HullPair.check at the start positions, each seen from the other)."""
+    from tug_dynamics.hull_interaction import pair_from_ship_configs
+    from tug_dynamics.ship_file import ship_config
+    a, b = (next(v for v in sc.vessels if v.name == n) for n in pair.between)
+    key = f"{path}: key 'interactions[{i}].between'"
+    try:
+        configs = [ship_config(resolve("tug_dynamics", "ships", v.ship_file, path), v.ship_overrides or None)[1]
+                   for v in (a, b)]
+        for own, other, cfgs in ((a, b, configs), (b, a, configs[::-1])):
+            c, s = math.cos(heading_rad(own)), math.sin(heading_rad(own))
+            dx, dy = other.initial.x - own.initial.x, other.initial.y - own.initial.y
+            pair_from_ship_configs(*cfgs).check(c * dx + s * dy, -s * dx + c * dy, 0.0,
+                                                interaction_depth(sc) or math.inf)
+    except ValueError as exc:
+        raise ScenarioError(f"{key}: {a.name} and {b.name} at their initial positions: {exc}") from None
 
 
 def _round_in(value: float, up: bool) -> float:

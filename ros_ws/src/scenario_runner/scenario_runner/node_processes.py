@@ -117,17 +117,20 @@ LAYOUTS = ("processes", "one_process")
 # protocol on the wire only, and gets no channel: the runner takes its StepDone from the wire, with
 # the trust of an external node (docs/step-protocol.md).
 CHANNEL_EXECUTABLES = {("tug_dynamics", "vessel_node"), ("rope_model", "rope_node"),
-                       ("scenario_runner", "autopilot"), ("hull_contact", "contact_node")}
+                       ("scenario_runner", "autopilot"), ("hull_contact", "contact_node"),
+                       ("hull_contact", "interaction_node")}
 
 
 def in_process_nodes(specs: List[NodeSpec]) -> List[Node]:
     """The same nodes as the executables start, constructed in this process."""
     from hull_contact.contact_node import ContactNode
+    from hull_contact.interaction_node import InteractionNode
     from rope_model.rope_node import RopeNode
     from scenario_runner.autopilot import AutopilotNode
     from tug_dynamics.vessel_node import VesselNode
     classes = {("tug_dynamics", "vessel_node"): VesselNode, ("rope_model", "rope_node"): RopeNode,
-               ("scenario_runner", "autopilot"): AutopilotNode, ("hull_contact", "contact_node"): ContactNode}
+               ("scenario_runner", "autopilot"): AutopilotNode, ("hull_contact", "contact_node"): ContactNode,
+               ("hull_contact", "interaction_node"): InteractionNode}
     unknown = [s.name for s in specs if (s.package, s.executable) not in classes]
     if unknown:
         raise RunError(f"node(s) {unknown} can only run as their own process (--layout processes)")

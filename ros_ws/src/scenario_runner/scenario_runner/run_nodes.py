@@ -11,7 +11,7 @@ import os
 from typing import Dict, List, Sequence, Tuple
 
 from scenario_format.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
-                                     resolve)
+                                     interaction_depth, resolve)
 from sim_contract import topics as T
 from sim_contract.node_params import NODE_TABLES
 from sim_plumbing import ros_common as rc
@@ -56,7 +56,7 @@ def external_outputs(sc: Scenario, external: Sequence[str]) -> Tuple[Tuple[str, 
     that the recording loses none of them as the nodes' feed would not)."""
     outputs = tuple(t for t in _node_outputs(sc) if _published_by(t, external))
     names = ({f"/{v.name}" for v in sc.vessels} | {f"/{r.name}" for r in sc.ropes}
-             | {f"/{c.name}" for c in sc.contacts})
+             | {f"/{c.name}" for c in sc.contacts} | {f"/{i.namespace}" for i in sc.interactions})
     per_step = ("odom", "attachments", "status", "thrusters", "state", "wrench")  # the contract's "every step"
     every_step = tuple(t for t in outputs if t.split("/")[-1] in per_step and "/" + t.split("/")[1] in names)
     return outputs, every_step
@@ -159,6 +159,10 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         contacts = [T.contact_topic(c.name) for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
         if contacts:
             params["contact_topics"] = contacts
+        interactions = [T.interaction_wrench_topic(i.namespace, end) for i in sc.interactions
+                        for end, name in zip("ab", i.between) if name == v.name]
+        if interactions:
+            params["wrench_topics"] = interactions
         if v.ship_overrides:
             params["ship_overrides"] = json.dumps(v.ship_overrides)
         if v.motion is not None:
@@ -193,6 +197,7 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         specs.append(NodeSpec(f"/{c.name}", "contact", "hull_contact", "contact_node", {
             **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
             "run_id": run_id}))
+    specs += _interaction_specs(sc, scenario_path, run_id)
     for a in sc.autopilots:
         # YAML 90 is an int; ROS would refuse it for a double parameter: numbers go as floats.
         params = {k: (list(v) if isinstance(v, tuple) else
@@ -204,6 +209,22 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
     for spec in specs:  # the mapping sets only parameters the node's table holds (a rename fails here)
         if spec.executable in NODE_TABLES:
             NODE_TABLES[spec.executable].check_names(set(spec.params) - {"use_sim_time"})
+    return specs
+
+
+def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[NodeSpec]:
+    ships = {v.name: v for v in sc.vessels}
+    specs = []
+    for i in sc.interactions:
+        params = {"depth": interaction_depth(sc)}
+        for end, name in zip("ab", i.between):
+            params[f"vessel_{end}"] = name
+            params[f"ship_file_{end}"] = resolve("tug_dynamics", "ships", ships[name].ship_file, scenario_path)
+            if ships[name].ship_overrides:
+                params[f"ship_overrides_{end}"] = json.dumps(ships[name].ship_overrides)
+        specs.append(NodeSpec(f"/{i.namespace}", "interaction", "hull_contact", "interaction_node", {
+            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
+            "run_id": run_id}))
     return specs
 
 
@@ -244,4 +265,6 @@ def contract_topics(sc: Scenario) -> List[tuple]:
         if r.layout == "winch":
             named.append((T.rope_topic(r.name, T.WINCH), T.WINCH_TOPIC))
     named += [(T.contact_topic(c.name), t) for c in sc.contacts for t in T.CONTACT_TOPICS]
+    named += [(T.interaction_wrench_topic(i.namespace, end), t) for i in sc.interactions for end in "ab"
+              for t in T.INTERACTION_TOPICS]
     return [(name, rc.message_class(t.type), rc.QOS_BY_KIND[t.qos]) for name, t in named]

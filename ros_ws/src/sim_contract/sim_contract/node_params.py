@@ -195,6 +195,20 @@ CONTACT_NODE = ParamTable(
     P("friction", 0.3, "Coulomb friction coefficient, fender on hull", 0.0, 2.0),
 )
 
+# hull_contact interaction_node: Wang's (1975) passing-ship loads between two vessels
+# (tug_dynamics.hull_interaction); the scenario's `interactions` set them.
+INTERACTION_NODE = ParamTable(
+    "hull_contact/interaction_node",
+    P("vessel_a", "", "First vessel of the pair (its namespace)"),
+    P("vessel_b", "", "Second vessel of the pair (its namespace)"),
+    P("ship_file_a", "", "Ship file of vessel a (path or name in share/tug_dynamics/ships): its length and "
+                         "displaced volume give Wang's sectional-area parabola"),
+    P("ship_file_b", "", "Ship file of vessel b"),
+    P("ship_overrides_a", "", "JSON merged over vessel a's ship file (as the vessel node's)"),
+    P("ship_overrides_b", "", "JSON merged over vessel b's ship file"),
+    P("depth", 0.0, "Water depth for the bottom images (0: deep water)", 0.0, 1e4, "m"),
+)
+
 # bridge_instruments nmea_out: NMEA 0183 / AIS over UDP beside a run (the runner sets the lists
 # from the scenario's `nmea` key; the scenario's defaults and ranges are these).
 NMEA_OUT = ParamTable(
@@ -255,4 +269,5 @@ LIVE_VIEW = ParamTable(
 
 # Every node's table as it declares it (the stepped nodes: their own, then the stepping ones).
 NODE_TABLES = {"vessel_node": VESSEL_NODE + STEPPING, "rope_node": ROPE_NODE + STEPPING,
-               "contact_node": CONTACT_NODE + STEPPING, "nmea_out": NMEA_OUT, "live_view": LIVE_VIEW}
+               "contact_node": CONTACT_NODE + STEPPING,
+               "interaction_node": INTERACTION_NODE + STEPPING, "nmea_out": NMEA_OUT, "live_view": LIVE_VIEW}

@@ -63,6 +63,12 @@ WINCH_TOPIC = Topic(WINCH, "tug_msgs/msg/WinchCommand", "command", "-", "on dema
 CONTACT_TOPICS: Tuple[Topic, ...] = (
     Topic(STATE, "tug_msgs/msg/HullContact", "latched_state", "map", "every exchange step"),
 )
+# a hull interaction (one interaction_node per declared pair): the Wang (1975) passing-ship
+# load on each vessel of the pair, from the pair's odometry of the step before
+INTERACTION_TOPICS: Tuple[Topic, ...] = (
+    Topic("on_<a|b>/wrench", "geometry_msgs/msg/WrenchStamped", "latched_state", "<vessel>/base_link",
+          "every exchange step", note="surge and sway force and yaw moment on the pair's vessel a or b (body axes)"),
+)
 CLOCK, SIM_STEP, STEP_DONE, EVENTS, TF, TF_STATIC = (
     "/clock", "/sim/step", "/sim/step_done", "/scenario/events", "/tf", "/tf_static")
 GLOBAL_TOPICS: Tuple[Topic, ...] = (
@@ -110,3 +116,10 @@ def end_coupling_topic(rope: str, end: str) -> str:
 def contact_topic(contact: str) -> str:
     """The state of a hull contact: /<contact>/state."""
     return f"/{contact}/{STATE}"
+
+
+def interaction_wrench_topic(interaction: str, end: str) -> str:
+    """The interaction load on vessel `end` ('a' or 'b') of a pair: /<interaction>/on_<end>/wrench."""
+    if end not in ("a", "b"):
+        raise ValueError(f"interaction end '{end}': expected 'a' or 'b'")
+    return f"/{interaction}/on_{end}/wrench"
