@@ -10,7 +10,7 @@ SRC = os.path.join(os.path.dirname(__file__), "..", "..", "ros_ws", "src")
 ROS_MODULES = {"rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "geometry_msgs", "nav_msgs",
                "visualization_msgs", "rosgraph_msgs", "tug_msgs", "tf2_msgs", "sim_plumbing"}  # ament_index_python (a file lookup) is allowed
 # modules of a physics package that are allowed to be ROS shells (the nodes and their codecs)
-NODE_MODULES = {"vessel_node.py", "rope_node.py", "state_cdr.py", "contact_node.py"}
+NODE_MODULES = {"vessel_node.py", "rope_node.py", "state_cdr.py", "contact_node.py", "interaction_node.py"}
 
 
 def _imports(path):
