@@ -194,7 +194,9 @@ def test_an_injected_towline_wrench_stops_the_run_naming_the_stranger(clean, tmp
         s.node.create_subscription(WrenchStamped, topics[0], inject, s.rc.LATCHED_STATE_QOS)
         return s
     status, stdout, stderr, out, sent = attacked_run(tmp_path, ros_domain, rclpy_context, make)
-    assert sent > 0, (stdout, stderr)
+    # The runner may see the stranger's publisher in the graph and stop before its first copy
+    # goes out (seen in ci11); an exit 0 must have come through an attack that was made.
+    assert sent > 0 or status != 0, (stdout, stderr)
     assert_unchanged_or_named(clean, status, stdout, stderr, out)
     if status != 0:
         assert status == 5 and "end_b/wrench" in stderr, stderr  # untrusted, naming the topic
