@@ -126,3 +126,32 @@ def test_a_free_barge_drifts_down_wave_and_a_calm_sea_adds_nothing():
 def test_hydro_data_sits_beside_the_ship_file():
     assert hydro_data_path(_ship("asd_tug")) == os.path.join(ships_dir(), "hydro", "asd_tug.npz")
     assert os.path.isfile(hydro_data_path(_ship("s175_003")))
+
+
+def test_a_sea_alone_needs_no_environment_sampler_and_loses_nothing_without_it():
+    """A sea with no wind, depth or current gives a hull's environment sampler nothing to carry
+    (the vessel node then attaches none); stepping the S-175 with the still, deep sampler and
+    without it, under the same wrenches and orders, gives the same state to rounding."""
+    from sea_environment.environment import Environment
+    from tug_dynamics.environment_loads import VesselInEnvironment
+    from tug_dynamics.vessel import Command, ExternalWrench
+    waves = {"hs": 2.0, "tp": 7.0, "from_deg": 90.0}
+    assert not Environment.from_mapping({"waves": waves}).acts_on_hulls
+    assert Environment.from_mapping({"waves": waves, "current": [0.3, 0.0]}).acts_on_hulls
+    assert Environment.from_mapping({"waves": waves, "depth": 30.0}).acts_on_hulls
+    assert Environment.from_mapping({"waves": waves, "wind": {"speed_kn": 10.0, "from_deg": 0.0}}).acts_on_hulls
+    at_9_knots = VesselState(np.zeros(3), np.zeros(3), np.array([9.0 * 1852.0 / 3600.0, 0.0, 0.0]), np.zeros(3))
+    ships = [load_ship(_ship("s175_003"), initial_state=at_9_knots) for _ in range(2)]
+    VesselInEnvironment(ships[0], Environment.from_mapping({"waves": waves}))
+    for ship in ships:
+        ship.set_command(Command(engine_order=0.5, steering_angle=math.radians(20.0)))
+    pull = ExternalWrench(force_world=np.array([-2e5, 1e5, 0.0]), point_body=np.array([80.0, 0.0, 5.0]),
+                          moment_world=np.zeros(3))
+    for _ in range(500):
+        for ship in ships:
+            ship.step(0.1, [pull])
+    a, b = ships[0].state, ships[1].state
+    assert np.linalg.norm(a.position) > 100.0 and abs(a.rpy[2]) > 0.2   # it went somewhere, turning
+    for x, y in [(a.position, b.position), (a.rpy, b.rpy), (a.linear_velocity_body, b.linear_velocity_body),
+                 (a.angular_velocity_body, b.angular_velocity_body)]:
+        np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-9)

@@ -242,6 +242,18 @@ def test_ramp_starts_from_calm():
     assert f.elevation(3.0, 4.0, 27.0) == full.elevation(3.0, 4.0, 27.0)
 
 
+def test_one_time_ramp_is_the_arrays_ramp():
+    """The scalar path a vessel takes every step equals the array form, inside and outside the ramp."""
+    f = WaveField.irregular(HS, TP, components=10, seed=3, ramp_time=27.0)
+    times = [-1.0, 0.0, 1e-9, 5.0, 13.5, 26.999, 27.0, 40.0]
+    r_arr, dr_arr = f.ramp(np.array(times))
+    for t, r, dr in zip(times, r_arr, dr_arr):
+        r1, dr1 = f.ramp(t)
+        assert r1 == pytest.approx(r, rel=1e-14, abs=1e-300) and dr1 == pytest.approx(dr, rel=1e-14, abs=1e-300), t
+    assert f.ramp(13.5)[0] == pytest.approx(0.5, rel=1e-15)   # r(T/2) = 1/2
+    assert f.ramp(13.5)[1] == pytest.approx(math.pi / (2.0 * 27.0), rel=1e-15)   # its slope there, pi / 2T
+
+
 # ---- the compiled kernel ------------------------------------------------------------------------
 
 @pytest.mark.parametrize("depth", [math.inf, 25.0])

@@ -303,6 +303,14 @@ class Environment:
         # one sea for every node: the same spec and seed give the same components everywhere
         self.waves = wave_field(spec.waves, self.depth.representative, gravity) if spec.waves is not None else None
 
+    @property
+    def acts_on_hulls(self) -> bool:
+        """Whether a hull's environment sampler has anything to carry: wind, a depth, or a
+        current that is not still water. The waves act on hulls through their own response
+        (tug_dynamics.seakeeping), so a sea alone needs no sampler (which cost a waves-only run
+        a quarter of a vessel step, benchmarks/bench_waves.py)."""
+        return self.wind is not None or not self.depth.is_deep or self.current.uniform != (0.0, 0.0)
+
     @staticmethod
     def from_mapping(data: Optional[dict], source: str = "environment", base_dir: str = ".",
                      gravity: float = G) -> "Environment":

@@ -276,6 +276,9 @@ class WaveField:
 
     def ramp(self, t):
         """(r(t), r'(t)) of the half-cosine start-up ramp."""
+        if isinstance(t, float) and 0.0 < t < self.ramp_time:   # one time, inside the ramp: a vessel's every step
+            s = math.pi * t / self.ramp_time
+            return 0.5 * (1.0 - math.cos(s)), 0.5 * math.pi / self.ramp_time * math.sin(s)
         t = np.asarray(t, float)
         if self.ramp_time <= 0.0:
             return np.ones_like(t), np.zeros_like(t)

@@ -106,10 +106,12 @@ class VesselNode(SteppedNode):
             self.model.set_current(current)
         # attached to the model: from here on its steps feel the environment
         env = self._environment(self.get_parameter("environment").value, current)
-        self.surroundings = None if env is None else VesselInEnvironment(self.model, env[0], rho_water=env[1])
+        self.surroundings = (VesselInEnvironment(self.model, env[0], rho_water=env[1])
+                             if env is not None and env[0].acts_on_hulls else None)
         # the sea (wave-frequency motion superposed, drift force on the manoeuvring model)
         self.sea = self._sea(env[0] if env else None, path)
         self._wave = None   # the sea's part of the last published state (seakeeping.WaveStep)
+        self._feels_drift = not isinstance(self.model, PrescribedMotion)   # a prescribed track takes no force
         self._was_grounded = False
 
         self.rejected = 0
@@ -372,7 +374,7 @@ class VesselNode(SteppedNode):
                             else (-on_hull, np.array(msg.fender_point_body)))
             self._contacts[topic] = (force, point)
             wrenches.append(ExternalWrench(force_world=force, point_body=point))
-        if self._wave is not None and not isinstance(self.model, PrescribedMotion):
+        if self._wave is not None and self._feels_drift:
             wrenches.append(self._wave.drift)
         self.model.step(self.dt, wrenches)
         self._check_finite()
