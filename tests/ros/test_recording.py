@@ -62,7 +62,8 @@ def recordings(tmp_path_factory):
     base = tmp_path_factory.mktemp("rec")
     paths = {}
     with reserved_domain():
-        for name, extra in (("first", ()), ("second", ()), ("one_process", ("--layout", "one_process"))):
+        for name, extra in (("first", ()), ("second", ()), ("one_process", ("--layout", "one_process")),
+                            ("groups", ("--layout", "groups", "--groups", "2"))):
             paths[name] = base / f"{name}.mcap"
             run(paths[name], *extra)
     return paths
@@ -95,13 +96,24 @@ def test_mcap_ros2_support_decodes_every_message(recordings):
     assert [m.step for m in msgs["/towline/state"]] == list(range(STEPS + 1))
 
 
-def test_repeated_runs_and_both_layouts_give_identical_physics(recordings):
+def test_repeated_runs_and_every_layout_give_identical_physics(recordings):
+    """Every node its own process, all in the runner's, and the tow split over the runner and a
+    node group process (issue 34): the same messages, bit for bit."""
     first = physics(recordings["first"])
     assert np.all(first["rope_tensions"][-1] > 0)  # a real tow, not a trivial state
-    for other in ("second", "one_process"):
+    counts = {name: _topic_counts(recordings[name]) for name in ("first", "one_process", "groups")}
+    assert counts["groups"] == counts["first"] == counts["one_process"]
+    for other in ("second", "one_process", "groups"):
         again = physics(recordings[other])
         for key in first:
             np.testing.assert_array_equal(first[key], again[key], err_msg=f"{other}: {key}")
+
+
+def _topic_counts(path):
+    from mcap.reader import make_reader
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    return {summary.channels[c].topic: n for c, n in summary.statistics.channel_message_counts.items()}
 
 
 def _node_pid(pattern, domain):

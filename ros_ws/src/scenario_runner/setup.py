@@ -24,6 +24,7 @@ setup(
             "send_command = scenario_runner.send_command:main",
             "run_scenario = scenario_runner.run_scenario:main",
             "autopilot = scenario_runner.autopilot:main",
+            "node_group = scenario_runner.node_group:main",
         ],
     },
 )

@@ -42,7 +42,7 @@ from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import CONFLICT_MARK, MAX_LEAD_STEPS, RESCUE_AFTER, RateLimitedLog
 from scenario_runner.order_owner import (ANCHOR_LET_GO, ANCHOR_HEAVE_UP, ANCHOR_NO_CHANGE, HAND_BACK, WINCH,
                                          OrderOwners, VesselOrder, WinchOrder, describe)
-from scenario_runner.node_processes import LAYOUTS, NodeProcesses, in_process_nodes
+from scenario_runner.node_processes import LAYOUTS, NodeProcesses, cores, in_process_nodes, node_groups
 from scenario_runner.run_nodes import (NodeSpec, RunError, external_outputs, instrument_specs, node_specs,
                                       per_step_outputs)
 
@@ -641,7 +641,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
         on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes",
         on_finished: Optional[Callable[[int], Callable[[], bool]]] = None,
-        run_id: Optional[str] = None, external: Sequence[str] = ()) -> RunStats:
+        run_id: Optional[str] = None, external: Sequence[str] = (), groups: Optional[int] = None) -> RunStats:
     """Start the nodes (each its own process, or all in this process on one executor), run the
     scenario, stop everything. Raises RunError naming the node (DomainInUse before anything
     starts if another run is on the domain) and Interrupted on SIGINT / SIGTERM.
@@ -661,7 +661,7 @@ def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float 
     if unknown:
         raise ValueError(f"external node(s) {unknown} are not nodes of the scenario")
     session = _Session(sc, specs, log_dir, recorder, layout, run_id, instrument_specs(sc, scenario_path),
-                       external)
+                       external, groups)
     with StopSignals() as session.stop:
         try:
             session.start(extra_nodes or [], ready_timeout)
@@ -677,7 +677,7 @@ class _Session:
     """One run of run(): the conductor, its executor and the nodes, from start-up to shutdown."""
 
     def __init__(self, sc: Scenario, specs: List[NodeSpec], log_dir: str, recorder, layout: str, run_id: str,
-                 instruments: List[NodeSpec] = (), external: Sequence[str] = ()):
+                 instruments: List[NodeSpec] = (), external: Sequence[str] = (), group_count: Optional[int] = None):
         self.sc, self.specs, self.recorder, self.layout = sc, specs, recorder, layout
         self.external = set(external)
         self.seen_in_graph: set = set()  # external nodes seen in the ROS graph (gone_external)
@@ -686,7 +686,13 @@ class _Session:
         # the external nodes' per-step outputs, subscribed by the recorder: waited for every step
         self.awaited_outputs = external_outputs(sc, sorted(self.external))[1] if recorder and external else ()
         self.stop: Optional[StopSignals] = None  # set by run() for the time the run handles the signals
-        self.procs = NodeProcesses(self.own_specs if layout == "processes" else [], log_dir, recorder, channels=True)
+        # the nodes in this process (one_process: all; groups: the first group) and in node processes
+        if layout == "groups":
+            first, *others = node_groups(self.own_specs, group_count or cores())
+        else:
+            first, others = (self.own_specs, []) if layout == "one_process" else ([], [[s] for s in self.own_specs])
+        self.in_runner: List[NodeSpec] = first
+        self.procs = NodeProcesses([], log_dir, recorder, channels=True, groups=[g for g in others if g])
         # the per-step state topics of every node of the run: topic -> the node that publishes it
         self.state_owners = per_step_outputs(sc, [s.name for s in specs])
         # bridge equipment: own processes in either layout, outside the step protocol
@@ -707,15 +713,15 @@ class _Session:
         if dead:
             conductor.get_logger().info(f"removed {len(dead)} dead Fast DDS shared-memory file(s) of killed "
                                         f"processes from {shm_hygiene.SHM_DIR}")
-        if recorder is not None and self.layout == "one_process":
+        if recorder is not None and self.in_runner:
             record_feed.install(recorder.feed_in_process)
         local_channels = {}
-        if self.layout == "one_process":  # nodes in this process: a pair of queues each, no descriptor
-            pairs = {s.name: step_channel.local_pair() for s in self.own_specs}
+        if self.in_runner:  # nodes in this process: a pair of queues each, no descriptor
+            pairs = {s.name: step_channel.local_pair() for s in self.in_runner}
             local_channels = {name: pair[0] for name, pair in pairs.items()}
             step_channel.install(lambda name: pairs[name][1] if name in pairs else None)
         try:
-            self.local_nodes = in_process_nodes(self.own_specs) if self.layout == "one_process" else []
+            self.local_nodes = in_process_nodes(self.in_runner)
         finally:
             record_feed.install(None)
             step_channel.install(None)
@@ -766,8 +772,8 @@ class _Session:
         for k in range(n_steps):
             if sc.mode == "realtime":
                 target = t_start + k * period
-                while time.monotonic() < target:
-                    executor.spin_once(timeout_sec=max(0.0, min(0.001, target - time.monotonic())))
+                while time.monotonic() < target:   # asleep until a message comes or the step is due
+                    executor.spin_once(timeout_sec=max(0.0, target - time.monotonic()))
                 self.stop.check()
                 late = time.monotonic() - target
                 stats.lateness.append(late)

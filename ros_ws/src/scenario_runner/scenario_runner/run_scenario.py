@@ -33,7 +33,7 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
 from scenario_runner import run_nodes
-from scenario_runner.node_processes import LAYOUTS
+from scenario_runner.node_processes import DEFAULT_LAYOUT, LAYOUTS, cores
 from scenario_runner.run_summary import summary, write_runner_notes
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
 from recording.recorder import McapRecorder, OutputClaim, RecordingInUse, readable_extent
@@ -140,15 +140,24 @@ class RunPlan:
     external: List[str] = dataclasses.field(default_factory=list)  # node names the runner does not start
 
 
+def _group_count(text: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number of processes, at least 1, got {text!r}")
+    return int(text)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="run_scenario", description=__doc__.split("\n\n")[0])
     parser.add_argument("scenario", help="scenario file, or a name in share/scenario_runner/scenarios")
     parser.add_argument("--output", help="MCAP file to write (default: output/<scenario name>.mcap)")
     parser.add_argument("--duration", type=float, help="simulate only this many seconds (shortened run)")
     parser.add_argument("--log-dir", help="where node logs go (default: next to the recording)")
-    parser.add_argument("--layout", choices=LAYOUTS, default="processes",
+    parser.add_argument("--layout", choices=LAYOUTS, default=DEFAULT_LAYOUT,
                         help="processes: every node its own process (as `ros2 run` starts them); "
-                             "one_process: all nodes in this process on one executor")
+                             "one_process: all nodes in this process on one executor; "
+                             "groups: the nodes in --groups processes (this one the first), whole tows together")
+    parser.add_argument("--groups", type=_group_count, metavar="K",
+                        help=f"processes of --layout groups, this one included (default: the cores, {cores()} here)")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
     pace = parser.add_mutually_exclusive_group()
     pace.add_argument("--realtime", dest="mode", action="store_const", const="realtime",
@@ -389,7 +398,8 @@ def execute(plan: RunPlan, args, recorder: Optional[McapRecorder], mon: Monitor,
     try:
         stats = cd.run(plan.sc, plan.path, plan.log_dir, steps=plan.steps, extra_nodes=[mon] + ([live] if live else []),
                        recorder=recorder,
-                       layout=args.layout, on_step=(lambda k: progress.update(1)) if progress else None,
+                       layout=args.layout, groups=getattr(args, "groups", None),
+                       on_step=(lambda k: progress.update(1)) if progress else None,
                        on_finished=mon.finish, external=plan.external, run_id=getattr(args, "run_id", None),
                        stall_timeout=getattr(args, "stall_timeout", 30.0),
                        ready_timeout=getattr(args, "ready_timeout", 240.0))

@@ -267,6 +267,13 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
     Exit status: 0 stopped, 2 bad parameters or files (bad_input, message on stderr), 3 the
     model failed (failures, e.g. a diverged rope, or a state gone non-finite; message on stderr).
     Once the node has spun, the process ends in here (os._exit): a node's main() is its process."""
+    return run_nodes(lambda: [make_node()], program, args, bad_input, failures)
+
+
+def run_nodes(make_nodes, program: str, args=None, bad_input=(ValueError, KeyError, FileNotFoundError),
+              failures=()) -> int:
+    """run_node for several nodes composed in one process on one executor (make_nodes() returns
+    them; scenario_runner.node_group): the same exit statuses, the first failure ends them all."""
     import sys
 
     import rclpy
@@ -276,7 +283,7 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
     init_rclpy(args)
     die_with_parent()
     try:
-        node = make_node()
+        nodes = make_nodes()
     except (*bad_input, ParameterException) as exc:
         sys.stderr.write(f"{program}: {exc}\n")
         rclpy.try_shutdown()
@@ -285,10 +292,16 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
         rclpy.try_shutdown()
         return 0
     executor = make_executor()
-    executor.add_node(node)
+    for node in nodes:
+        executor.add_node(node)
+    polls = [node.poll for node in nodes if hasattr(node, "poll")]
+
+    def poll_all() -> None:
+        for poll in polls:
+            poll()
     status = 0
     try:
-        spin_forever(executor, getattr(node, "poll", None), lambda text: sys.stderr.write(f"{program}: {text}\n"))
+        spin_forever(executor, poll_all if polls else None, lambda text: sys.stderr.write(f"{program}: {text}\n"))
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
     except failures as exc:
@@ -296,7 +309,8 @@ def run_node(make_node, program: str, args=None, bad_input=(ValueError, KeyError
         status = 3
     finally:
         executor.shutdown()
-        node.destroy_node()
+        for node in nodes:
+            node.destroy_node()
         rclpy.try_shutdown()
     exit_process(status)
 

@@ -12,8 +12,10 @@ what comes out of it is the node's own word. /sim/step and /sim/step_done are st
 Channels:
 - a node process: one end of an AF_UNIX SOCK_SEQPACKET socketpair (message boundaries kept, so
   one send is one frame), inherited through pass_fds, its descriptor named by TUGSIM_STEP_CHANNEL_FD;
-- a node in the runner's process (--layout one_process): a pair of in-memory queues, found by
-  the node's name through install();
+- a node group process (several nodes on one executor, scenario_runner.node_group): one
+  socketpair per node, the descriptors named by TUGSIM_STEP_CHANNEL_FDS (JSON, by node name);
+- a node in the runner's process (--layout one_process, or the runner's own group): a pair of
+  in-memory queues, found by the node's name through install();
 - a node somebody else started (--external, other PCs): none; it steps on the DDS messages of the
   run (run id, step), with the trust docs/step-protocol.md states.
 
@@ -31,6 +33,7 @@ import struct
 from typing import Callable, Deque, Dict, List, NamedTuple, Optional, Tuple
 
 ENV_FD = "TUGSIM_STEP_CHANNEL_FD"
+ENV_FDS = "TUGSIM_STEP_CHANNEL_FDS"  # a node group process: {"/tug/vessel": fd, ...} as JSON
 _TRIGGER = struct.Struct("<cQ")
 _DONE = struct.Struct("<cQd?I")
 MAX_FRAME = 1 << 16  # an error text longer than this is cut (a frame is one datagram)
@@ -199,3 +202,12 @@ def for_node(name: str):
     if not fd:
         return None
     return NodeEnd(socket.socket(fileno=int(fd)))
+
+
+def group_channels() -> Dict[str, NodeEnd]:
+    """A node group process's channels by node name (TUGSIM_STEP_CHANNEL_FDS, taken once)."""
+    import json
+    text = os.environ.pop(ENV_FDS, None)
+    if not text:
+        return {}
+    return {name: NodeEnd(socket.socket(fileno=int(fd))) for name, fd in json.loads(text).items()}
