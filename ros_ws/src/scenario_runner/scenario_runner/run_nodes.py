@@ -141,7 +141,9 @@ def _yaml_value(value) -> str:
 
 def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeSpec]:
     """The nodes a scenario needs, with their parameters (run_id: the run they belong to)."""
-    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True, "run_id": run_id}
+    # No use_sim_time: a stepped node takes the time of each step from its trigger, and /clock
+    # would cost one more delivery per node per step (issue 34; an outside autopilot keeps it).
+    common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id}
     if sc.environment.is_uniform:
         common.update(current_east=float(sc.environment.current[0]), current_north=float(sc.environment.current[1]))
     else:
@@ -195,16 +197,16 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
             if v.ship_overrides:
                 params[f"{side}_ship_overrides"] = json.dumps(v.ship_overrides)
         specs.append(NodeSpec(f"/{c.name}", "contact", "hull_contact", "contact_node", {
-            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
-            "run_id": run_id}))
+            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id}))
     specs += _interaction_specs(sc, scenario_path, run_id)
     for a in sc.autopilots:
         # YAML 90 is an int; ROS would refuse it for a double parameter: numbers go as floats.
         params = {k: (list(v) if isinstance(v, tuple) else
                       float(v) if isinstance(v, int) and not isinstance(v, bool) else v)
                   for k, v in a.params.items()}
-        params.update(vessel=a.vessel, exchange_rate=float(sc.exchange_rate), lockstep=True, use_sim_time=True,
-                      run_id=run_id)
+        params.update(vessel=a.vessel, exchange_rate=float(sc.exchange_rate), lockstep=True, run_id=run_id)
+        if a.package != "scenario_runner":   # somebody else's autopilot may read the ROS clock
+            params["use_sim_time"] = True
         specs.append(NodeSpec(f"/{a.name}", "autopilot", a.package, a.executable, params))
     for spec in specs:  # the mapping sets only parameters the node's table holds (a rename fails here)
         if spec.executable in NODE_TABLES:
@@ -223,8 +225,7 @@ def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[No
             if ships[name].ship_overrides:
                 params[f"ship_overrides_{end}"] = json.dumps(ships[name].ship_overrides)
         specs.append(NodeSpec(f"/{i.namespace}", "interaction", "hull_contact", "interaction_node", {
-            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "use_sim_time": True,
-            "run_id": run_id}))
+            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id}))
     return specs
 
 
