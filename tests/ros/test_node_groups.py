@@ -68,3 +68,14 @@ def test_node_group_refuses_a_file_it_cannot_read(tmp_path, capsys):
     assert main([str(bad)]) == 2
     assert str(bad) in capsys.readouterr().err
     assert main([]) == 2
+
+
+def test_the_default_count_is_one_process_while_the_run_fits_half_a_core():
+    """(tows x 4.8 + 2) x 0.12 ms of work a step against half the exchange period."""
+    from scenario_runner.node_processes import default_group_count
+    demo = _specs("default_demo.yaml")            # one tow: 6.8 units, 0.8 ms a step
+    assert default_group_count(demo, 0.02, 2) == 1
+    assert default_group_count(demo * 8, 0.02, 2) == 1       # 8 tows, 4.8 ms: a quarter of 20 ms
+    assert default_group_count(demo * 8, 0.005, 2) == 2      # the same at 200 Hz: 97 % of 5 ms
+    assert default_group_count(demo * 40, 0.02, 8) == 3      # 22.9 ms of work: 1.15 periods, 3 halves
+    assert default_group_count(demo * 40, 0.02, 2) == 2      # no more than the cores

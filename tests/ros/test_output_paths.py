@@ -9,7 +9,7 @@ from conftest import executable_path
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(120)]
 
 
-ARGS = ["seed000_free_fall_air.yaml", "--duration", "0.1", "--quiet"]
+ARGS = ["seed000_free_fall_air.yaml", "--duration", "0.1", "--quiet", "--layout", "processes"]   # node logs
 
 
 def run(*args):

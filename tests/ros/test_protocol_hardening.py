@@ -34,7 +34,9 @@ def _long_scenario():
 
 def runner(out, *extra, duration=DURATION):
     scenario = SCENARIO if duration <= 120 else _long_scenario()
-    args = [executable_path("scenario_runner", "run_scenario"), scenario, "--duration", str(duration), "--quiet"]
+    # every node its own process: these tests kill, read and disturb the node processes
+    args = [executable_path("scenario_runner", "run_scenario"), scenario, "--duration", str(duration), "--quiet",
+            "--layout", "processes"]
     args += ["--output", str(out)] if out else ["--no-record", "--log-dir", "/tmp/tugsim-test-logs"]
     return args + list(extra)
 

@@ -21,7 +21,8 @@ STEPS = int(DURATION * RATE)
 
 def run(out, *extra):
     proc = subprocess.run([executable_path("scenario_runner", "run_scenario"), SCENARIO, "--duration", str(DURATION),
-                           "--output", str(out), "--quiet", *extra], capture_output=True, text=True, timeout=240)
+                           "--output", str(out), "--quiet", "--layout", "processes", *extra],   # a later --layout wins
+                          capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     return proc
 

@@ -42,7 +42,8 @@ from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import CONFLICT_MARK, MAX_LEAD_STEPS, RESCUE_AFTER, RateLimitedLog
 from scenario_runner.order_owner import (ANCHOR_LET_GO, ANCHOR_HEAVE_UP, ANCHOR_NO_CHANGE, HAND_BACK, WINCH,
                                          OrderOwners, VesselOrder, WinchOrder, describe)
-from scenario_runner.node_processes import LAYOUTS, NodeProcesses, cores, in_process_nodes, node_groups
+from scenario_runner.node_processes import (DEFAULT_LAYOUT, LAYOUTS, NodeProcesses, cores, default_group_count, in_process_nodes,
+                                            node_groups)
 from scenario_runner.run_nodes import (NodeSpec, RunError, external_outputs, instrument_specs, node_specs,
                                       per_step_outputs)
 
@@ -639,7 +640,7 @@ class StopSignals:
 
 def run(sc: Scenario, scenario_path: str, log_dir: str, *, ready_timeout: float = 240.0,
         stall_timeout: float = 30.0, steps: Optional[int] = None, extra_nodes: Optional[List[Node]] = None,
-        on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = "processes",
+        on_step: Optional[Callable[[int], None]] = None, recorder=None, layout: str = DEFAULT_LAYOUT,
         on_finished: Optional[Callable[[int], Callable[[], bool]]] = None,
         run_id: Optional[str] = None, external: Sequence[str] = (), groups: Optional[int] = None) -> RunStats:
     """Start the nodes (each its own process, or all in this process on one executor), run the
@@ -688,7 +689,8 @@ class _Session:
         self.stop: Optional[StopSignals] = None  # set by run() for the time the run handles the signals
         # the nodes in this process (one_process: all; groups: the first group) and in node processes
         if layout == "groups":
-            first, *others = node_groups(self.own_specs, group_count or cores())
+            count = group_count or default_group_count(self.own_specs, 1.0 / sc.exchange_rate, cores())
+            first, *others = node_groups(self.own_specs, count)
         else:
             first, others = (self.own_specs, []) if layout == "one_process" else ([], [[s] for s in self.own_specs])
         self.in_runner: List[NodeSpec] = first

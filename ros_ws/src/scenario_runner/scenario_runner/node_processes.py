@@ -4,6 +4,7 @@ process."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import subprocess
@@ -131,7 +132,7 @@ class NodeProcesses:
 
 
 LAYOUTS = ("processes", "one_process", "groups")
-DEFAULT_LAYOUT = "processes"
+DEFAULT_LAYOUT = "groups"
 
 
 def cores() -> int:
@@ -164,6 +165,21 @@ def _vessels_of(spec: NodeSpec) -> List[str]:
     names = [str(p[k]).split("/")[0] for k in ("end_a", "end_b") if p.get(k)]
     names += [str(p[k]) for k in ("fender_vessel", "hull_vessel", "vessel_a", "vessel_b", "vessel") if p.get(k)]
     return names
+
+
+# One weight unit's CPU per step with every node in one process (bench_scale: 0.53 ms per tow of
+# the default demo, 4.8 units), and the share of a core's exchange period a group may fill.
+UNIT_CPU_S = 0.12e-3
+CORE_SHARE = 0.5
+
+
+def default_group_count(specs: List[NodeSpec], period_s: float, n_cores: int) -> int:
+    """How many processes carry a run by default (--layout groups without --groups): one, the
+    runner's own, while the run's work fills at most CORE_SHARE of a core's exchange period (a
+    second process doubles the CPU of a step, its messages crossing processes: measured 3.2
+    against 1.5 ms for the default demo), else one more per CORE_SHARE, up to the cores."""
+    load = (sum(map(_weight, specs)) + RUNNER_WEIGHT) * UNIT_CPU_S / period_s
+    return max(1, min(n_cores, math.ceil(load / CORE_SHARE)))
 
 
 def node_groups(specs: List[NodeSpec], k: int, runner_weight: float = RUNNER_WEIGHT) -> List[List[NodeSpec]]:

@@ -3,7 +3,8 @@
     ros2 run scenario_runner run_scenario default_demo.yaml --output output/demo.mcap
 
 The scenario is validated before any node starts (errors name the file and the key); then
-every node is started as its own process, the run is stepped in lockstep (or paced real
+the nodes are started (--layout: by default in as few processes as the run's work needs, this
+one first; or every node its own process, as `ros2 run` starts them), the run is stepped in lockstep (or paced real
 time), progress is shown, everything is shut down, and a summary is printed. With --external the
 runner drives nodes somebody else started (other PCs; --print-nodes gives their commands): it
 waits for them to announce themselves and records their outputs by subscription. Exit status:
@@ -157,7 +158,8 @@ def build_parser() -> argparse.ArgumentParser:
                              "one_process: all nodes in this process on one executor; "
                              "groups: the nodes in --groups processes (this one the first), whole tows together")
     parser.add_argument("--groups", type=_group_count, metavar="K",
-                        help=f"processes of --layout groups, this one included (default: the cores, {cores()} here)")
+                        help=f"processes of --layout groups, this one included (default: one while the run's work "
+                             f"fills half a core's exchange period, else more, up to the cores: {cores()} here)")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
     pace = parser.add_mutually_exclusive_group()
     pace.add_argument("--realtime", dest="mode", action="store_const", const="realtime",
