@@ -149,7 +149,7 @@ def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
     from mcap.reader import make_reader
     out = tmp_path / "killed.mcap"
     proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), _long_tow(tmp_path), "--duration", "600",
-                             "--output", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             "--output", str(out), "--quiet", "--layout", "processes"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     victim = None
     deadline = time.monotonic() + 120
@@ -183,7 +183,7 @@ def test_ctrl_c_leaves_a_finalised_recording_and_no_nodes(tmp_path, ros_domain, 
     node.create_subscription(Clock, "/clock", lambda m: clock.__setitem__(0, m.clock.sec + m.clock.nanosec * 1e-9),
                              10)
     proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), _long_tow(tmp_path), "--duration", "600",
-                             "--output", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             "--output", str(out), "--quiet", "--layout", "processes"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     # interrupted once it steps (a cold numba cache can hold the start for many seconds)
     assert spin_until(node, lambda: clock[0] >= 1.0 or proc.poll() is not None, 180.0), "the run never stepped"

@@ -849,6 +849,9 @@ class _Session:
             except rclpy.executors.ExternalShutdownException:
                 raise  # the context was shut down: the caller finalises the recording
             except Exception as exc:  # an in-process node failed in its callback
+                conductor.take_answers()   # its failed answer names it, as a node process's does
+                if conductor.failures:
+                    self.raise_failure()
                 raise RunError(f"a node failed while {what}: {exc!r}") from exc
             conductor.take_answers()
             if conductor.failures:
