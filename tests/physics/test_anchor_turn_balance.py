@@ -131,3 +131,17 @@ def test_straight_dredging_surge_terms_cancel():
     for name in ("anchor", "hull", "propeller"):
         assert terms[name][0] == pytest.approx(hand[name], rel=1e-6), name
     assert abs(hand["anchor"] + hand["hull"] + hand["propeller"]) < 0.01 * hand["propeller"]
+
+
+@pytest.mark.parametrize("v", [-0.3, 0.3])
+def test_eq5_lateral_term_resists_the_sway_either_way(v):
+    """Y_A = X_A v/u (the text): whichever way the ship slides while it turns to port toward the
+    port anchor, the anchor's lateral force opposes the slide; the moment stays with the turn."""
+    from tug_dynamics import maneuvering as mv
+    s = load_ship("s175_003.yaml")
+    ctrl = s.ctrl.copy()
+    ctrl[mv.C_ANC_F], ctrl[mv.C_ANC_SIDE] = 1.0, 1.0        # dredging, port anchor
+    u, r = 2.0, 0.01                                        # r' = 0.875: fully Eq 5
+    xa, ya, na = mv._anchor_dredging(s.hp, ctrl, u, v, r)
+    assert (xa, ya, na) == pytest.approx(_anchor_by_hand(u, v, turning=True), rel=1e-12)
+    assert ya * v < 0.0 and na > 0.0
