@@ -100,7 +100,14 @@ C_THR0 = NCTRL      # thruster k: ordered shaft speed (rps) at C_THR0 + 2k, orde
 
 # ---- output (diagnostics of the last derivative evaluation) ------------------
 O_THRUST, O_ANC_X, O_HEEL_EXT, O_UR, O_VR = range(5)
-NOUT = 5
+# each force component's (X, Y, N) at O_TERM0 + 3 * TERM_*: the terms _deriv_c sums, so a steady
+# state's balance can be checked term by term (Vessel.force_terms); coriolis: the rigid-body and
+# added-mass Coriolis / centripetal terms moved to the right-hand side
+FORCE_TERMS = ("hull", "propeller", "rudder", "thruster", "anchor", "towline", "external", "coriolis")
+(TERM_HULL, TERM_PROPELLER, TERM_RUDDER, TERM_THRUSTER, TERM_ANCHOR, TERM_TOWLINE, TERM_EXTERNAL,
+ TERM_CORIOLIS) = range(len(FORCE_TERMS))
+O_TERM0 = 5
+NOUT = O_TERM0 + 3 * len(FORCE_TERMS)
 O_THR0 = NOUT       # thruster k: delivered force along its axis (N) at O_THR0 + 2k, open-water thrust + 1
 
 
@@ -334,8 +341,10 @@ def _rudder_force(ruds, k, uR, slip, rho, L, ur, vr, r, delta, gamma_factor):
 def _anchor_dredging(hp, ctrl, u, v, r):
     """S. D. Yoon Eq 5-6: a dredging anchor, ground-referenced (it drags over the bottom).
 
-    Eq 5 while turning (weight w != 0): lateral force toward the turning centre, moment with the
-    turn (the paper's reading); Eq 6 straight (w = 0)."""
+    X_A = -lambda_a W (against the headway). Eq 5 while turning (weight |w| -> 1): the text's
+    Y_A = X_A v/u, a resistance to the sway (centripetal in a steady turn, where the ship slides
+    outward), and N_A = lambda_a W l_a with the turn; Eq 6 straight (w = 0). README "Anchor
+    readings (issue 36)"."""
     lw = hp[H_ANC_LW] * ctrl[C_ANC_F]
     ueps = hp[H_ANC_UEPS]
     sat = u / ueps
@@ -358,10 +367,63 @@ def _anchor_dredging(hp, ctrl, u, v, r):
     # a dredging anchor does nothing without headway: fade Eq 5's turning terms below u_ref
     fade = abs(u) / hp[H_ANC_UREF]
     w *= fade if fade < 1.0 else 1.0
-    vu = abs(v) / (abs(u) if abs(u) > ueps else ueps)
-    if vu > hp[H_ANC_VUCAP]:
-        vu = hp[H_ANC_VUCAP]
-    return XA, vu * lw * w, lw * hp[H_ANC_LA] * w
+    vu = v / (abs(u) if abs(u) > ueps else ueps)
+    cap = hp[H_ANC_VUCAP]
+    vu = cap if vu > cap else (-cap if vu < -cap else vu)
+    return XA, -lw * vu * abs(w), lw * hp[H_ANC_LA] * w
+
+
+@njit(cache=True, inline="always")
+def _record_term(out, term, X, Y, N):
+    """One force component's (X, Y, N) into out (O_TERM0 + 3 term)."""
+    i = O_TERM0 + 3 * term
+    out[i] = X
+    out[i + 1] = Y
+    out[i + 2] = N
+
+
+@njit(cache=True, inline="always")
+def _propellers_and_rudders(hp, props, ruds, rho, n, delta, ur, vr, r, X, Y, N, K, out):
+    """Adds every propeller's (Eq 4) and rudder's (Eq 7-8) force to the running sums X, Y, N, K in
+    the model's fixed order and records the two terms; sets out[O_THRUST]."""
+    thrust_total = 0.0
+    XP = 0.0
+    NP = 0.0
+    prop_advance = np.zeros(4)
+    prop_wake = np.zeros(4)
+    for k in range(int(hp[H_NPROP])):
+        thrust, ua, wake = _propeller_thrust(props, k, rho, n, ur, vr, r, hp[H_SWF + SW_ONE_MINUS_W])
+        prop_advance[k] = ua
+        prop_wake[k] = wake
+        thrust_total += thrust
+        fx = (1.0 - props[k, P_T]) * hp[H_SWF + SW_ONE_MINUS_T] * thrust
+        X += fx
+        N += -props[k, P_Y] * fx
+        XP += fx
+        NP += -props[k, P_Y] * fx
+    out[O_THRUST] = thrust_total
+    _record_term(out, TERM_PROPELLER, XP, 0.0, NP)
+    XRs = 0.0
+    YRs = 0.0
+    NRs = 0.0
+    for k in range(int(hp[H_NRUD])):
+        j = int(ruds[k, R_PROP])
+        if j < 0:                              # no propeller ahead of it: the hull's wake
+            uR, slip = (1.0 - ruds[k, R_WR0]) * ur, 0.0
+        else:
+            wake_p0 = 1.0 - (1.0 - props[j, P_WP0]) * hp[H_SWF + SW_ONE_MINUS_W]
+            uR, slip = _rudder_inflow(ruds[k, R_WR0], ruds[k, R_KAPPA0], ruds[k, R_ETA], wake_p0,
+                                      props[j, P_PITCH], prop_wake[j], prop_advance[j], n)
+        XR, YR, NR = _rudder_force(ruds, k, uR, slip, rho, hp[H_L], ur, vr, r, delta, hp[H_SWF + SW_GAMMA])
+        X += XR
+        Y += YR
+        N += NR
+        K += -ruds[k, R_Z] * YR
+        XRs += XR
+        YRs += YR
+        NRs += NR
+    _record_term(out, TERM_RUDDER, XRs, YRs, NRs)
+    return X, Y, N, K
 
 
 @njit(cache=True, inline="always")
@@ -668,34 +730,10 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
     Y += YH
     N += NH
     K += -hp[H_ZH] * YH      # hull lateral force acts at z_H (below the waterline)
+    _record_term(out, TERM_HULL, XH, YH, NH)
+    X, Y, N, K = _propellers_and_rudders(hp, props, ruds, rho, n, delta, ur, vr, r, X, Y, N, K, out)
 
-    thrust_total = 0.0
-    prop_advance = np.zeros(4)
-    prop_wake = np.zeros(4)
-    for k in range(int(hp[H_NPROP])):
-        thrust, ua, wake = _propeller_thrust(props, k, rho, n, ur, vr, r, hp[H_SWF + SW_ONE_MINUS_W])
-        prop_advance[k] = ua
-        prop_wake[k] = wake
-        thrust_total += thrust
-        fx = (1.0 - props[k, P_T]) * hp[H_SWF + SW_ONE_MINUS_T] * thrust
-        X += fx
-        N += -props[k, P_Y] * fx
-    out[O_THRUST] = thrust_total
-
-    for k in range(int(hp[H_NRUD])):
-        j = int(ruds[k, R_PROP])
-        if j < 0:                              # no propeller ahead of it: the hull's wake
-            uR, slip = (1.0 - ruds[k, R_WR0]) * ur, 0.0
-        else:
-            wake_p0 = 1.0 - (1.0 - props[j, P_WP0]) * hp[H_SWF + SW_ONE_MINUS_W]
-            uR, slip = _rudder_inflow(ruds[k, R_WR0], ruds[k, R_KAPPA0], ruds[k, R_ETA], wake_p0,
-                                      props[j, P_PITCH], prop_wake[j], prop_advance[j], n)
-        XR, YR, NR = _rudder_force(ruds, k, uR, slip, rho, hp[H_L], ur, vr, r, delta, hp[H_SWF + SW_GAMMA])
-        X += XR
-        Y += YR
-        N += NR
-        K += -ruds[k, R_Z] * YR
-
+    XT, YT, NT = 0.0, 0.0, 0.0
     if thrs.shape[0] > 0:
         XT, YT, NT, KT = _thruster_forces(s, thrs, ctrl, rho, ur, vr, r, out, ds)
         X += XT
@@ -704,24 +742,28 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
         K += KT
         # status thrust: along body x, propellers and thrusters
         for k in range(thrs.shape[0]):
-            thrust_total += out[O_THR0 + 2 * k] * math.cos(s[S_THR0 + 2 * k + 1])
-        out[O_THRUST] = thrust_total
+            out[O_THRUST] += out[O_THR0 + 2 * k] * math.cos(s[S_THR0 + 2 * k + 1])
+    _record_term(out, TERM_THRUSTER, XT, YT, NT)
 
-    out[O_ANC_X] = 0.0
+    XA, YA, NA = 0.0, 0.0, 0.0
     if ctrl[C_ANC_F] > 0.0:
         XA, YA, NA = _anchor_dredging(hp, ctrl, u, v, r)
         X += XA
         Y += YA
         N += NA
-        out[O_ANC_X] = XA
+    out[O_ANC_X] = XA
+    _record_term(out, TERM_ANCHOR, XA, YA, NA)
 
+    XT, YT, NT = 0.0, 0.0, 0.0
     if hp[H_TOW_ON] > 0.0:
         XT, YT, NT = _simple_towline(hp, ctrl, ur, vr)
         X += XT
         Y += YT
         N += NT
+    _record_term(out, TERM_TOWLINE, XT, YT, NT)
 
     heel_external = 0.0
+    Xe, Ye, Ne = X, Y, N
     for k in range(wrench_force.shape[0]):
         force = _coupled_force(wrench_force[k], wrench_cpl[k], wrench_point[k], s[S_X], s[S_Y], u, v, r, p,
                                cpsi, spsi, cphi, sphi)
@@ -731,6 +773,7 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
         K += Kw
         N += Nw
         heel_external += Kw + hp[H_ZH] * Yw     # heeling couple against the hull's lateral resistance
+    _record_term(out, TERM_EXTERNAL, X - Xe, Y - Ye, N - Ne)
     out[O_HEEL_EXT] = heel_external
     out[O_UR] = ur
     out[O_VR] = vr
@@ -739,6 +782,7 @@ def _deriv_c(s, hp, props, ruds, thrs, rv, rf, minv, ctrl, wrench_force, wrench_
     X += Xc
     Y += Yc
     N += Nc
+    _record_term(out, TERM_CORIOLIS, Xc, Yc, Nc)
     roll = hp[H_ROLL] > 0.0
     if roll:
         K += _roll_moment(hp, ur, r, sphi, p)
@@ -1342,3 +1386,11 @@ class ManeuveringVessel(Vessel):
             towline_angle=self.towline_angle,
             thrusters=thr,
         )
+
+    def force_terms(self) -> Dict[str, Tuple[float, float, float]]:
+        """Each force component's body-frame (X N, Y N, N N m) at the state the last step ended on,
+        as _deriv_c summed them (FORCE_TERMS: hull, propeller, rudder, thruster, anchor, towline,
+        external, coriolis). Their sums are the right-hand sides of the equations of motion, so
+        a steady state's terms add up to zero (tests/physics/test_anchor_turn_balance.py)."""
+        return {name: (float(self.out[O_TERM0 + 3 * k]), float(self.out[O_TERM0 + 3 * k + 1]),
+                       float(self.out[O_TERM0 + 3 * k + 2])) for k, name in enumerate(FORCE_TERMS)}
