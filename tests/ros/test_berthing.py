@@ -70,7 +70,7 @@ def test_the_whole_network_works_from_the_first_step(run):
         assert len(run[topic]) == STEPS + 1, topic
     for c in CONTACTS:
         states = run[f"/{c}/state"]
-        # the fenders start 0.3 m off the hull and close within the first seconds, then stay on
+        # the fenders start 5 mm off the hull and close within the first seconds, then stay on
         first = next(k for k, m in enumerate(states) if m.in_contact)
         assert first < 5 * RATE, (c, first)
         assert all(m.in_contact for m in states[int(10 * RATE):]), c
@@ -130,7 +130,7 @@ def test_sway_impulse_balances_the_momentum_change(run):
     """Over 20-60 s: (m + m_y(h)) (v(t2) - v(t1)) = the impulse of fenders + wires + wind +
     beam-on drag, each summed by hand over the steps (force of state k acting over k -> k+1).
     The ship barely turns or surges (asserted), so the body's sway equation is the pure-sway one.
-    Measured: 0.12 % apart; the drag is 5.7 % of the impulse, the shallow water doubles it (C_D
+    Measured: 0.12 % apart; the drag is 5.3 % of the impulse, the shallow water doubles it (C_D
     0.761 -> 1.544) and triples the sway added mass, so either factor left out misses by far more."""
     t, x, y, yaw, u, v, r = _ship(run)
     k1, k2 = int(20 * RATE), STEPS
@@ -156,8 +156,8 @@ def test_sway_impulse_balances_the_momentum_change(run):
     momentum = _shallow_added_mass(DEPTH) * (v[k2] - v[k1])
     print(f"impulse parts (N s): {parts}; sum {impulse:.4g}; momentum change {momentum:.4g}")
     assert momentum == pytest.approx(impulse, rel=0.005)
-    # the drag is no rounding error in it: without it the balance misses by ten times the tolerance
-    assert abs(parts["drag"]) > 0.05 * abs(momentum)
+    # the drag is no rounding error in it: without it the balance misses by eight times the tolerance
+    assert abs(parts["drag"]) > 0.04 * abs(momentum)
 
 
 def test_a_pushing_tug_placed_inside_the_hull_is_refused(tmp_path):
