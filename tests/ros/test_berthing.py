@@ -1,11 +1,13 @@
 """Issue 34 item 4: the S-175 berthed by four tugs (harbour_berthing_s175.yaml), its first
-60 s in one process (the run test_startup_loads makes of it, shared in the session): the whole network works from the first step (5 vessels, 2 ropes, 2
-contacts), the ship comes sideways towards the quay while both wires carry tension and both
-fenders load, the depth grid puts it in 15 m (under-keel clearance, shallow-water factors), and
-the ship's sway obeys Newton's second law with every force computed by hand: the impulse of the
-fenders, the wires, the wind (Blendermann, from the status' apparent wind) and the beam-on
-cross-flow drag (UFC 4-159-03 with its shallow-water growth) equals the change of the sway momentum
-with the shallow-water added mass. A pushing tug placed inside the hull is refused (exit 2)."""
+60 s in one process (the run test_startup_loads makes of it, shared in the session): the whole
+network works from the first step (5 vessels, 2 ropes, 2 contacts), the ship comes sideways
+towards the quay while both wires carry tension and both fenders load, the depth grid puts it in
+15 m (under-keel clearance, shallow-water factors), and the ship's sway obeys Newton's second law
+with every force computed by hand: the impulse of the fenders, the wires, the wind (Blendermann,
+from the status' apparent wind) and the beam-on cross-flow drag (UFC 4-159-03 with its
+shallow-water growth) equals the change of the sway momentum with the shallow-water added mass.
+The grid file holds the harbour its header describes; a pushing tug placed inside the hull is
+refused (exit 2)."""
 import math
 import os
 
@@ -83,7 +85,7 @@ def test_the_whole_network_works_from_the_first_step(run):
 def test_ship_comes_sideways_towards_the_quay_on_lines_and_fenders(run):
     t, x, y, yaw, u, v, r = _ship(run)
     late = t > 40.0
-    # south (towards the quay face at y = -60 m), sideways: heading and x nearly unchanged
+    # south (towards the quay face at y = -52 m), sideways: heading and x nearly unchanged
     assert y[-1] < -2.0 and np.all(np.diff(y[int(5 * RATE):]) < 0.0)
     assert abs(x[-1]) < 0.5 and abs(math.degrees(yaw[-1])) < 1.0
     assert np.all(v[late] < -0.05) and np.all(np.abs(u[late]) < 0.02)
@@ -158,6 +160,20 @@ def test_sway_impulse_balances_the_momentum_change(run):
     assert momentum == pytest.approx(impulse, rel=0.005)
     # the drag is no rounding error in it: without it the balance misses by eight times the tolerance
     assert abs(parts["drag"]) > 0.04 * abs(momentum)
+
+
+def test_the_depth_grid_is_the_harbour_its_header_describes():
+    """The grid file's numbers, read by the scenario's own loader, against its header's words:
+    land behind the wall (y < -52 m), the 15 m pocket, the apron 8 m at the wall beside it, the
+    basin 15 m off the berth, 16 m in the fairway, 14 m at its ends."""
+    from sea_environment.bathymetry import DepthGrid
+    grid = DepthGrid.load(_library("harbour_berth_s175.asc"))
+    for (x, y), depth in {(0.0, -62.0): 0.0, (0.0, -52.0): 15.0, (120.0, -30.0): 15.0, (0.0, 0.0): 15.0,
+                          (200.0, -52.0): 8.0, (-200.0, -52.0): 8.0, (0.0, 160.0): 16.0, (400.0, 38.0): 14.0,
+                          (-400.0, 38.0): 14.0}.items():
+        assert grid.depth_at(x, y) == pytest.approx(depth, abs=1e-9), (x, y)
+    # the wall: from the pocket's depth to dry land within one 10 m cell
+    assert grid.depth_at(0.0, -57.0) == pytest.approx(7.5, abs=1e-9)
 
 
 def test_a_pushing_tug_placed_inside_the_hull_is_refused(tmp_path):
