@@ -69,3 +69,42 @@ def test_bad_bank_line(start, end, word):
 def test_distance_inside_the_hull_is_refused(distance):
     with pytest.raises(ValueError, match="distance"):
         BankEffect(S175).loads(distance, 3.0)
+
+
+def test_bank_polyline_nearest_point_and_water_side_by_hand():
+    from tug_dynamics.bank_effect import BankPolyline
+    # an L-shaped channel edge: east along y = 0, then north along x = 100; water to the left (north-west)
+    bank = BankPolyline([(0.0, 0.0), (100.0, 0.0), (100.0, 100.0)])
+    assert bank.nearest(50.0, 30.0) == pytest.approx((30.0, 50.0, 0.0))
+    assert bank.nearest(80.0, 60.0) == pytest.approx((20.0, 100.0, 60.0))
+    assert bank.nearest(130.0, -40.0) == pytest.approx((50.0, 100.0, 0.0))     # the corner
+    assert bank.water_side(50.0, 30.0) and bank.water_side(80.0, 60.0)
+    assert not bank.water_side(50.0, -30.0) and not bank.water_side(120.0, 60.0)
+
+
+@pytest.mark.parametrize("points, words", [
+    ([(0.0, 0.0), (100.0, 0.0), (100.0, 50.0), (50.0, -50.0)], "segment 0"),      # an 'alpha' loop
+    ([(0.0, 0.0), (100.0, 0.0), (100.0, 50.0), (0.0, 50.0), (0.0, 0.0)], "segment 0"),   # closed on itself
+    ([(0.0, 0.0), (100.0, 0.0), (40.0, 0.0)], "doubles back"),
+    ([(0.0, 0.0), (0.0, 0.0), (10.0, 0.0)], "same point"),
+    ([(0.0, 0.0)], "at least two points"),
+    ([(0.0, 0.0), (float("nan"), 1.0)], "point 1"),
+])
+def test_bank_polyline_refuses_a_line_crossing_itself(points, words):
+    from tug_dynamics.bank_effect import BankPolyline
+    with pytest.raises(ValueError, match=words):
+        BankPolyline(points)
+
+
+def test_loads_along_a_polyline_are_the_straight_bank_loads_at_the_nearest_point():
+    from tug_dynamics.bank_effect import BankPolyline
+    bank = BankPolyline([(-500.0, -40.0), (2000.0, -40.0)])
+    effect = BankEffect(S175)
+    # heading east (yaw 0): the bank 40 m to starboard; heading west: to port
+    east = effect.loads_along(bank, 100.0, 0.0, 0.0, 3.0, 12.75)
+    assert east == pytest.approx(effect.loads(40.0, 3.0, 12.75, bank_to_port=False), rel=1e-12)
+    assert east[0] < 0.0                                  # drawn to starboard, toward the bank
+    west = effect.loads_along(bank, 100.0, 0.0, math.pi, 3.0, 12.75)
+    assert west[0] == pytest.approx(-east[0], rel=1e-12)
+    with pytest.raises(ValueError, match="land side"):
+        effect.loads_along(bank, 100.0, -60.0, 0.0, 3.0, 12.75)
