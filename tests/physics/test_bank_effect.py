@@ -108,3 +108,25 @@ def test_loads_along_a_polyline_are_the_straight_bank_loads_at_the_nearest_point
     assert west[0] == pytest.approx(-east[0], rel=1e-12)
     with pytest.raises(ValueError, match="land side"):
         effect.loads_along(bank, 100.0, -60.0, 0.0, 3.0, 12.75)
+
+
+def test_the_image_method_against_the_published_vertical_wall_test():
+    """A published reference point: test H of the open data of Lataire, Vantorre & Eloot (2009),
+    "Systematic model tests on ship-bank interaction effects" (MASHCON, Antwerp; subset 2, the
+    8000 TEU container carrier model along bank I, a vertical surface-piercing wall 2.830 m from
+    the tank's centreline): lateral position 1.965 m (0.865 m from the wall), h 0.163 m, T 0.149 m
+    (10 % under-keel clearance), 0.4578 m/s, propeller not working; measured sway force -2.545 N,
+    yaw moment -6.959 N m (ship axes x forward, y starboard, z down). The model: B 0.530 m and
+    C_B 0.65 from the paper's Table 2, L_pp 4.01 m as the pi-BEM repository's scripts use for
+    this hull, fresh water. The image method is the wall's mirror and its bottom images: it
+    gives 1.60 N (63 % of the measured force) and no yaw moment; the measurement's -6.96 N m, a
+    couple of 2.7 m arm on 2.5 N, is the bow-away moment this model lacks (docs/confined-water.md)."""
+    length, beam, draft, block = 4.01, 0.530, 0.149, 0.65
+    volume = block * length * beam * draft
+    effect = BankEffect(SectionalAreaCurve(length, 1.5 * volume / length, beam), water_density=1000.0)
+    y, n = effect.loads(2.830 - 1.965, 0.4578, 0.163)
+    measured_y, measured_n = 2.545, 6.959
+    assert y / measured_y == pytest.approx(0.63, abs=0.01)
+    assert n == pytest.approx(0.0, abs=1e-9) and measured_n / measured_y > 0.5 * length   # a couple, not a force
+    # the tank's far wall, 5.465 m off, adds 1.5 % of it: the single-wall image is the test's set-up
+    assert effect.loads(3.5 + 1.965, 0.4578, 0.163)[0] < 0.02 * y
