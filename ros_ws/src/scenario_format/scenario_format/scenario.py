@@ -843,13 +843,13 @@ def _check_bank(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
     """The bank line is a polyline that does not cross itself (BankPolyline), and the vessel starts
     on its water side, clear of it by more than its half beam."""
     from tug_dynamics.bank_effect import BankPolyline
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
     from tug_dynamics.ship_file import ship_config
     key = f"{path}: key 'interactions[{i}].bank'"
     try:
         bank = BankPolyline(pair.bank)
     except ValueError as exc:
         raise ScenarioError(f"{key}: {exc}") from None
-    from tug_dynamics.hull_interaction import SectionalAreaCurve
     v = next(v for v in sc.vessels if v.name == pair.between[0])
     try:
         hull = SectionalAreaCurve.from_ship_config(
