@@ -165,3 +165,118 @@ def test_a_bad_interaction_exits_2_before_start(tmp_path, run_in_process, edit, 
     proc = run_in_process("run_scenario", path, "--no-record", "--quiet")
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in proc.stderr, proc.stderr
+
+
+# --- a ship along a channel bank, and a tug at a ship's bow (issue 33 items 2 and 6) ---------------
+
+BANK_DURATION = 60.0
+TUG_DURATION = 60.0
+BANK_TOPICS = ["/ship/odom", "/ship_bank/on_a/wrench"]
+TUG_TOPICS = ["/ship/odom", "/tug/odom", "/tug_ship_interaction/on_a/wrench", "/tug_ship_interaction/on_b/wrench"]
+
+
+def _loads(msgs, topic):
+    return np.array([[m.wrench.force.x, m.wrench.force.y, m.wrench.torque.z] for m in msgs[topic]])
+
+
+@pytest.fixture(scope="module")
+def confined_runs(tmp_path_factory):
+    base = tmp_path_factory.mktemp("confined")
+    out = {}
+    with reserved_domain():
+        for name, scenario, duration, topics in (("bank", "bank_s175_channel.yaml", BANK_DURATION, BANK_TOPICS),
+                                                 ("tug", "tug_bow_s175_6kn.yaml", TUG_DURATION, TUG_TOPICS)):
+            for layout in ("processes", "one_process"):
+                path = base / f"{name}_{layout}.mcap"
+                record_scenario(scenario, path, "--duration", duration, layout=layout, timeout=400)
+                msgs = decoded(path, topics)
+                run = {t.split("/")[1] if t.endswith("odom") else t: (
+                    _states(msgs, t.split("/")[1]) if t.endswith("odom") else _loads(msgs, t)) for t in topics}
+                out[f"{name}_{layout}"] = run
+    return out
+
+
+def _bank_by_hand(row, lead):
+    """bank_effect's (Y, N) on the S-175 at the row's state carried on `lead` s: the bank y = -40 m
+    runs east, so the distance is y + 40 and the bank lies to starboard while the ship heads east."""
+    from tug_dynamics.bank_effect import BankEffect
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
+    from tug_dynamics.ship_file import ship_config
+    effect = BankEffect(SectionalAreaCurve.from_ship_config(ship_config("s175_003.yaml")[1]))
+    x, y, yaw, vx, vy = row
+    y += vy * lead
+    return effect.loads(y + 40.0, math.cos(yaw) * vx + math.sin(yaw) * vy, 12.75,
+                        bank_to_port=math.cos(yaw) < 0.0)
+
+
+def test_bank_run_loads_are_the_bank_model_at_the_recorded_positions(confined_runs):
+    r = confined_runs["bank_processes"]
+    ship, loads = r["ship"], r["/ship_bank/on_a/wrench"]
+    steps = int(BANK_DURATION * RATE)
+    assert len(loads) == len(ship) == steps + 1
+    expected = np.array([[0.0, *_bank_by_hand(ship[max(k - 1, 0)], (1.5 if k else 0.5) / RATE)]
+                         for k in range(steps + 1)])
+    scale = np.abs(expected).max(axis=0) + 1.0
+    np.testing.assert_allclose(loads / scale, expected / scale, rtol=0, atol=1e-6)
+    # drawn toward the bank (starboard, -y) from the start: 40 m off at h/T 1.5, 6 kn
+    assert expected[0, 1] < -1e4 and np.all(loads[:, 1] < 0.0)
+    assert ship[-1, 1] < ship[0, 1] - 0.5          # the free ship is drawn toward the bank
+
+
+def test_tug_at_the_bow_loads_are_wang_at_the_recorded_positions(confined_runs):
+    from tug_dynamics.hull_interaction import pair_from_ship_configs
+    from tug_dynamics.ship_file import ship_config
+    r = confined_runs["tug_processes"]
+    tug, ship = r["tug"], r["ship"]
+    cfg = {n: ship_config(f)[1] for n, f in (("tug", "harbour_tug.yaml"), ("ship", "s175_003.yaml"))}
+    steps = int(TUG_DURATION * RATE)
+    for end, own, other in (("a", "tug", "ship"), ("b", "ship", "tug")):
+        pair = pair_from_ship_configs(cfg[own], cfg[other])
+        expected = []
+        for k in range(steps + 1):
+            o, p, lead = r[own][max(k - 1, 0)], r[other][max(k - 1, 0)], (1.5 if k else 0.5) / RATE
+            c, s = math.cos(o[2]), math.sin(o[2])
+            dx = p[0] + p[3] * lead - o[0] - o[3] * lead
+            dy = p[1] + p[4] * lead - o[1] - o[4] * lead
+            try:
+                expected.append(pair.loads(c * dx + s * dy, -s * dx + c * dy, c * p[3] + s * p[4]))
+            except ValueError:          # hulls overlapping: no Wang load until they part
+                expected.append((0.0, 0.0, 0.0))
+        expected = np.array(expected)
+        got = r[f"/tug_ship_interaction/on_{end}/wrench"]
+        scale = np.abs(expected).max(axis=0) + 1.0
+        np.testing.assert_allclose(got / scale, expected / scale, rtol=0, atol=1e-6, err_msg=end)
+    # at the start (stagger -75 m, 25 m off) the bow's field pushes the tug off to port and turns
+    # its bow to port (Wang at stagger -75 m, by hand with HullPair: Y 1.84 kN, N 6.6 kN m) ...
+    first = r["/tug_ship_interaction/on_a/wrench"][0]
+    assert first[1] == pytest.approx(1.84e3, rel=0.01) and first[2] == pytest.approx(6.64e3, rel=0.01)
+    # ... and then the free tug sheers in toward the ship (alone it runs straight at y = 25 m)
+    assert tug[-1, 1] < tug[0, 1] - 3.0 and tug[-1, 2] < -math.radians(4.0)   # measured 6.3 m, 8 deg
+
+
+@pytest.mark.parametrize("name", ["bank", "tug"])
+def test_confined_runs_identical_in_one_process(confined_runs, name):
+    first, again = confined_runs[f"{name}_processes"], confined_runs[f"{name}_one_process"]
+    for key in first:
+        np.testing.assert_array_equal(first[key], again[key], err_msg=key)
+
+
+@pytest.mark.parametrize("edit, message", [
+    ({"bank": [[0.0, -40.0], [1000.0, -40.0], [1000.0, 40.0], [500.0, -100.0]]},
+     "key 'interactions[0].bank': bank line crosses itself: segment 0"),
+    ({"bank": [[0.0, -40.0], [1000.0, -40.0], [300.0, -40.0]]},
+     "key 'interactions[0].bank': bank line crosses itself: segment 1"),
+    ({"bank": [[2000.0, -40.0], [-500.0, -40.0]]}, "key 'interactions[0].bank': ship starts at (0, 0) m, 40 m "
+                                                    "from the bank line on its land side"),
+    ({"bank": [[-500.0, -10.0], [2000.0, -10.0]]}, "key 'interactions[0].bank': ship starts at (0, 0) m, 10 m "
+                                                    "from the bank line: it must start on the water side"),
+    ({"between": ["ship", "ship"]}, "key 'interactions[0].between': ['ship', 'ship'] with a bank"),
+])
+def test_a_bad_bank_exits_2_before_start(tmp_path, run_in_process, edit, message):
+    sc = yaml.safe_load(open(_library("bank_s175_channel.yaml")))
+    sc["interactions"][0].update(edit)
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    proc = run_in_process("run_scenario", path, "--no-record", "--quiet")
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert message in proc.stderr, proc.stderr

@@ -29,6 +29,8 @@ starts; every error names the file, the key and what was expected.
         # radius: 0.5  stiffness: 2.0e6  damping: 4.0e5  friction: 0.3   (m, N/m, N s/m, -)
     interactions:               # passing-ship loads between two hulls (Wang 1975, hull_contact interaction_node)
       - between: [ship, moored] # two vessels; name: optional (default <a>_<b>_interaction)
+      - between: [ship]         # one vessel and a vertical bank: [x, y] points (m), the water on the left
+        bank: [[0.0, -60.0], [2000.0, -60.0]]
     events:
       - {time: 0.0, vessel: tug, engine_order: 0.8}
       - {time: 60.0, vessel: tug, steering_deg: 20.0}
@@ -219,15 +221,18 @@ class ContactSpec(_Strict):
 
 
 class InteractionSpec(_Strict):
-    """Wang's (1975) passing-ship loads between two vessels (tug_dynamics.hull_interaction),
-    computed every step from their odometry by a hull_contact interaction_node; deep water, or the
+    """Wang's (1975) passing-ship loads between two vessels (tug_dynamics.hull_interaction), or
+    with a `bank` the image-method bank suction on one vessel (tug_dynamics.bank_effect),
+    computed every step from the odometry by a hull_contact interaction_node; deep water, or the
     environment's depth when it is one number."""
-    between: List[str] = Field(min_length=2, max_length=2)   # the two vessels
+    between: List[str] = Field(min_length=1, max_length=2)   # the two vessels, or one with a bank
     name: Optional[str] = Field(None, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")   # default <a>_<b>_interaction
+    # a vertical bank (image method, tug_dynamics.bank_effect): polyline points [x, y] (m, world), water on the left
+    bank: Optional[List[List[float]]] = None
 
     @property
     def namespace(self) -> str:
-        return self.name or f"{self.between[0]}_{self.between[1]}_interaction"
+        return self.name or ("_".join(self.between) + ("_bank" if self.bank else "_interaction"))
 
 
 class Trigger(_Strict):
@@ -508,6 +513,11 @@ def _check_interaction_names(path: str, sc: Scenario, vessels: List[str]) -> Non
             if vessel not in vessels:
                 raise ScenarioError(f"{path}: key 'interactions[{i}].between': vessel '{vessel}' is not in 'vessels' "
                                     f"({vessels})")
+        if bool(pair.bank) != (len(pair.between) == 1):
+            raise ScenarioError(f"{path}: key 'interactions[{i}].between': {pair.between} with "
+                                f"{'a bank' if pair.bank else 'no bank'}: two vessels, or one vessel and a 'bank'")
+        if pair.bank:
+            continue
         if pair.between[0] == pair.between[1]:
             raise ScenarioError(f"{path}: key 'interactions[{i}].between': '{pair.between[0]}' twice (a pair of two "
                                 "vessels)")
@@ -829,11 +839,39 @@ def interaction_depth(sc: Scenario) -> float:
     return float(depth) if isinstance(depth, (int, float)) and not isinstance(depth, bool) else 0.0
 
 
+def _check_bank(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
+    """The bank line is a polyline that does not cross itself (BankPolyline), and the vessel starts
+    on its water side, clear of it by more than its half beam."""
+    from tug_dynamics.bank_effect import BankPolyline
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
+    from tug_dynamics.ship_file import ship_config
+    key = f"{path}: key 'interactions[{i}].bank'"
+    try:
+        bank = BankPolyline(pair.bank)
+    except ValueError as exc:
+        raise ScenarioError(f"{key}: {exc}") from None
+    v = next(v for v in sc.vessels if v.name == pair.between[0])
+    try:
+        hull = SectionalAreaCurve.from_ship_config(
+            ship_config(resolve("tug_dynamics", "ships", v.ship_file, path), v.ship_overrides or None)[1])
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: key 'interactions[{i}].between': {exc}") from None
+    distance = bank.nearest(v.initial.x, v.initial.y)[0]
+    land = not bank.water_side(v.initial.x, v.initial.y)
+    if land or distance <= 0.5 * hull.beam:
+        raise ScenarioError(f"{key}: {v.name} starts at ({v.initial.x:g}, {v.initial.y:g}) m, {distance:.3g} m "
+                            f"from the bank line{' on its land side' if land else ''}: it must start on the water "
+                            f"side (left of the line's direction), more than its half beam {0.5 * hull.beam:.3g} m off")
+
+
 def _check_interaction(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
     """Both hulls are slender displacement hulls (Wang's parabola from their ship files) and do not
     start inside each other (HullPair.check at the start positions, each seen from the other)."""
     from tug_dynamics.hull_interaction import pair_from_ship_configs
     from tug_dynamics.ship_file import ship_config
+    if pair.bank:
+        _check_bank(path, sc, i, pair)
+        return
     a, b = (next(v for v in sc.vessels if v.name == n) for n in pair.between)
     key = f"{path}: key 'interactions[{i}].between'"
     try:

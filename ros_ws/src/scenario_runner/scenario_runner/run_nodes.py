@@ -219,6 +219,8 @@ def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[No
     specs = []
     for i in sc.interactions:
         params = {"depth": interaction_depth(sc)}
+        if i.bank:
+            params["bank"] = [float(c) for point in i.bank for c in point]
         for end, name in zip("ab", i.between):
             params[f"vessel_{end}"] = name
             params[f"ship_file_{end}"] = resolve("tug_dynamics", "ships", ships[name].ship_file, scenario_path)
@@ -266,6 +268,6 @@ def contract_topics(sc: Scenario) -> List[tuple]:
         if r.layout == "winch":
             named.append((T.rope_topic(r.name, T.WINCH), T.WINCH_TOPIC))
     named += [(T.contact_topic(c.name), t) for c in sc.contacts for t in T.CONTACT_TOPICS]
-    named += [(T.interaction_wrench_topic(i.namespace, end), t) for i in sc.interactions for end in "ab"
-              for t in T.INTERACTION_TOPICS]
+    named += [(T.interaction_wrench_topic(i.namespace, end), t) for i in sc.interactions
+              for end in "ab"[:len(i.between)] for t in T.INTERACTION_TOPICS]
     return [(name, rc.message_class(t.type), rc.QOS_BY_KIND[t.qos]) for name, t in named]
