@@ -69,6 +69,9 @@ def paced(args, folder, env) -> None:
         other = ", ".join(f"{r['foreign_cores']:.2f}" for r in runs)
         cpu = statistics.median(r["cpu_ms"] for r in runs)
         print(f"| {name} | {layout} | {over} | {late} | {cpu:.2f} | {other} |", flush=True)
+        for r in runs:
+            if r["which"]:
+                print(f"  ({name}: overrun {r['which']})", file=sys.stderr, flush=True)
 
 
 def rtf(args, folder, env) -> None:

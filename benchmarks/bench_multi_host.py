@@ -27,7 +27,7 @@ import hosts_harness  # noqa: E402
 
 ROW = re.compile(r"simulated in (?P<wall>[\d.]+) s wall \((?P<rtf>[\d.]+)x real time, (?P<steps>\d+) steps")
 RT = re.compile(r"round trip: p50 (?P<p50>[\d.]+) ms, p99 (?P<p99>[\d.]+) ms")
-LATE = re.compile(r"realtime: (?P<over>\d+) overrun step\(s\); lateness p99 (?P<late>[\d.]+) ms")
+LATE = re.compile(r"realtime: (?P<over>\d+) overrun step\(s\)(?: \((?P<which>[^)]*)\))?; lateness p99 (?P<late>[\d.]+) ms")
 
 
 def parse(stdout: str) -> dict:

@@ -63,7 +63,7 @@ from bench_live_view import busy_cpu, descendants, wait_quiet  # noqa: E402 - th
 ROW = re.compile(r"simulated in (?P<wall>[\d.]+) s wall \((?P<rtf>[\d.]+)x real time, (?P<steps>\d+) steps")
 RT = re.compile(r"round trip: p50 (?P<p50>[\d.]+) ms, p99 (?P<p99>[\d.]+) ms")
 CPU = re.compile(r"CPU per step, all processes: (?P<cpu>[\d.]+) ms")
-LATE = re.compile(r"realtime: (?P<over>\d+) overrun step\(s\); lateness p99 (?P<late>[\d.]+) ms")
+LATE = re.compile(r"realtime: (?P<over>\d+) overrun step\(s\)(?: \((?P<which>[^)]*)\))?; lateness p99 (?P<late>[\d.]+) ms")
 COMPUTE = re.compile(r"compute per step: (?P<list>.*)")
 PROGRESS = re.compile(r"(\d+)/(\d+) \[")
 TICK = os.sysconf("SC_CLK_TCK")
@@ -256,7 +256,8 @@ def run(path: str, duration: float, tmp: str, record: bool, env: dict, pyspy=Non
     r, c, late = RT.search(out), CPU.search(out), LATE.search(out)
     res.update(rtf=float(m["rtf"]), wall=float(m["wall"]), steps=int(m["steps"]), p50=float(r["p50"]),
                p99=float(r["p99"]), cpu_ms=float(c["cpu"]),
-               over=int(late["over"]) if late else None, late=float(late["late"]) if late else None)
+               over=int(late["over"]) if late else None, late=float(late["late"]) if late else None,
+               which=(late["which"] or "") if late else "")
     comp = COMPUTE.search(out)
     if comp:  # "/tug_1 0.12 ms, /barge_1 0.10 ms, ..." -> role -> mean ms per node
         per = {}

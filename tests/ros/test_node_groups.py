@@ -71,11 +71,11 @@ def test_node_group_refuses_a_file_it_cannot_read(tmp_path, capsys):
 
 
 def test_the_default_count_is_one_process_while_the_run_fits_half_a_core():
-    """(tows x 4.8 + 2) x 0.12 ms of work a step against half the exchange period."""
+    """(tows x 4.8 + 2) x 0.25 ms of work a step against half the exchange period."""
     from scenario_runner.node_processes import default_group_count
-    demo = _specs("default_demo.yaml")            # one tow: 6.8 units, 0.8 ms a step
+    demo = _specs("default_demo.yaml")            # one tow: 6.8 units, 1.7 ms a step
     assert default_group_count(demo, 0.02, 2) == 1
-    assert default_group_count(demo * 8, 0.02, 2) == 1       # 8 tows, 4.8 ms: a quarter of 20 ms
-    assert default_group_count(demo * 8, 0.005, 2) == 2      # the same at 200 Hz: 97 % of 5 ms
-    assert default_group_count(demo * 40, 0.02, 8) == 3      # 22.9 ms of work: 1.15 periods, 3 halves
-    assert default_group_count(demo * 40, 0.02, 2) == 2      # no more than the cores
+    assert default_group_count(demo * 4, 0.02, 2) == 1       # 4 tows, 5.3 ms: a quarter of 20 ms
+    assert default_group_count(demo * 8, 0.02, 2) == 2       # 8 tows, 10.1 ms: just over half
+    assert default_group_count(demo * 20, 0.02, 8) == 3      # 24.5 ms: 1.2 periods, 3 halves
+    assert default_group_count(demo * 20, 0.02, 2) == 2      # no more than the cores

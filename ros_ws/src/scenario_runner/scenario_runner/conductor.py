@@ -104,6 +104,7 @@ class RunStats:
     steps_done: int = 0
     wall_time: float = 0.0
     overruns: int = 0  # realtime: steps finished after their wall-clock deadline
+    overrun_steps: List[Tuple[int, float]] = dataclasses.field(default_factory=list)  # the first: (step, s late)
     lateness: List[float] = dataclasses.field(default_factory=list)  # realtime: s behind schedule per step
     round_trips: List[float] = dataclasses.field(default_factory=list)  # s from SimStep to last StepDone
     compute_times: Dict[str, List[float]] = dataclasses.field(default_factory=dict)  # node -> s per step
@@ -792,8 +793,11 @@ class _Session:
             conductor.done.pop(k, None)
             stats.steps_done = k + 1
             self.stop.check()
-            if sc.mode == "realtime" and time.monotonic() > t_start + (k + 1) * period:
+            over = time.monotonic() - (t_start + (k + 1) * period)
+            if sc.mode == "realtime" and over > 0.0:
                 stats.overruns += 1
+                if len(stats.overrun_steps) < 5:
+                    stats.overrun_steps.append((k, over))
             if on_step:
                 on_step(k + 1)
         stats.wall_time = time.monotonic() - t_start

@@ -167,9 +167,10 @@ def _vessels_of(spec: NodeSpec) -> List[str]:
     return names
 
 
-# One weight unit's CPU per step with every node in one process (bench_scale: 0.53 ms per tow of
-# the default demo, 4.8 units), and the share of a core's exchange period a group may fill.
-UNIT_CPU_S = 0.12e-3
+# One weight unit's CPU per step with every node in one process, recorded (bench_harbour: 1.34 ms
+# a step for the default demo's 6.8 units, 10 ms for 8 tows' 40.4), and the share of a core's
+# exchange period a group may fill.
+UNIT_CPU_S = 0.25e-3
 CORE_SHARE = 0.5
 
 
@@ -177,7 +178,8 @@ def default_group_count(specs: List[NodeSpec], period_s: float, n_cores: int) ->
     """How many processes carry a run by default (--layout groups without --groups): one, the
     runner's own, while the run's work fills at most CORE_SHARE of a core's exchange period (a
     second process doubles the CPU of a step, its messages crossing processes: measured 3.2
-    against 1.5 ms for the default demo), else one more per CORE_SHARE, up to the cores."""
+    against 1.5 ms for the default demo), else one more per CORE_SHARE, up to the cores (8 tows
+    at 50 Hz: two)."""
     load = (sum(map(_weight, specs)) + RUNNER_WEIGHT) * UNIT_CPU_S / period_s
     return max(1, min(n_cores, math.ceil(load / CORE_SHARE)))
 

@@ -65,7 +65,9 @@ def _run_lines(sc, stats: cd.RunStats) -> List[str]:
     if stats.never_fired:
         lines.append(f"  never triggered (their condition did not hold before the end): {', '.join(stats.never_fired)}")
     if sc.mode == "realtime":
-        lines.append(f"  realtime: {stats.overruns} overrun step(s); lateness p99 "
+        which = (" (steps " + ", ".join(f"{k} by {1e3 * late:.1f} ms" for k, late in stats.overrun_steps[:5])
+                 + (", ..." if stats.overruns > 5 else "") + ")") if stats.overrun_steps else ""
+        lines.append(f"  realtime: {stats.overruns} overrun step(s){which}; lateness p99 "
                      f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
     return lines
 
