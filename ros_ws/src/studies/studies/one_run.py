@@ -36,6 +36,15 @@ def _die_with_parent() -> None:
         pass
 
 
+def _where() -> str:
+    """The Dask worker's address (the machine and worker that made the run), else the host name."""
+    try:
+        from distributed import get_worker
+        return get_worker().address
+    except (ImportError, ValueError):
+        return socket.gethostname()
+
+
 def _tail(text: str) -> str:
     text = text.strip()
     return text if len(text) <= MESSAGE_TAIL else "..." + text[-MESSAGE_TAIL:]
@@ -82,7 +91,7 @@ def execute_run(run: str, scenario: Dict[str, Any], folder: str, measures: Dict[
     recording = os.path.join(folder, "run.mcap")
     with open(scenario_file, "w", encoding="utf-8") as f:
         yaml.safe_dump(scenario, f, sort_keys=False)
-    row: Dict[str, Any] = {"status": "ok", "exit_status": 0, "message": "", "host": socket.gethostname(),
+    row: Dict[str, Any] = {"status": "ok", "exit_status": 0, "message": "", "host": _where(),
                            "recording": os.path.abspath(recording) if keep_recording else ""}
     row.update({name: math.nan for name in measures})
     with domain_id() as domain:

@@ -15,7 +15,7 @@ is run again on another (Dask reschedules it).
 Writes to the output folder (default output/studies/<study name>):
   results.parquet     one row per run: run, configuration, sample, the axes' values (a column per
                       key), status (ok / failed), exit_status, message, the measures, wall_time,
-                      host, recording (with --keep-recordings: runs/<run>/run.mcap beside it)
+                      host (the Dask worker's address), recording (with --keep-recordings: runs/<run>/run.mcap beside it)
   statistics.parquet  one row per configuration: the measures' count, mean, std, min, max over
   statistics.csv      its seeds and, with `extremes`, the Gumbel fit and most probable maximum
   figures/<measure>.png   each measure against the axes
@@ -67,8 +67,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, help="workers of the embedded LocalCluster (default: one per core)")
     p.add_argument("--keep-recordings", action="store_true", help="keep each run's MCAP recording and analysis")
     p.add_argument("--timeout", type=float, help="s after which a run is stopped and recorded as failed")
+    p.add_argument("--plan", action="store_true", help="check the study and list its runs; run nothing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
+
+
+def print_plan(path: str) -> None:
+    """The study checked and its runs listed, one line each (what --plan prints)."""
+    with tempfile.TemporaryDirectory(prefix="study-check-") as scratch:
+        plan = plan_study(path, scratch)
+    print(f"study {plan.study.name}: {len(plan.runs)} runs of {plan.study.scenario}, "
+          f"{plan.study.duration or plan.runs[0].scenario['duration']} s each")
+    for r in plan.runs:
+        values = ", ".join(f"{k} = {v!r}" for k, v in r.values.items())
+        print(f"  {r.run}  configuration {r.configuration} sample {r.sample}: {values}")
 
 
 def study_path(name: str) -> str:
@@ -209,6 +221,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         sys.stderr.write(f"study: --timeout {args.timeout!r}: expected a positive number of seconds\n")
         return EXIT_INVALID
     try:
+        if args.plan:
+            print_plan(study_path(args.study))
+            return EXIT_OK
         result = run_study(study_path(args.study), args.output, args.scheduler, args.workers, args.keep_recordings,
                            args.timeout, progress=not args.quiet)
     except StudyError as exc:
