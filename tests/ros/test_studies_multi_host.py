@@ -13,6 +13,8 @@ import time
 import pandas as pd
 import pytest
 
+from conftest import executable_path
+
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "scripts"))
 import hosts_harness  # noqa: E402
 
@@ -47,6 +49,20 @@ def _run_on(hosts, host: str):
     return None
 
 
+def _kill_host(hosts, host: str) -> None:
+    """The host dies: its Dask processes first (had the run's process died first, the worker would
+    have lived to report it as a failed run, which a machine that dies never does), then the rest."""
+    r = subprocess.run(["ip", "netns", "pids", hosts.ns(host)], capture_output=True, text=True)
+    for pid in r.stdout.split():
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                if b"dask" in f.read():
+                    os.kill(int(pid), signal.SIGKILL)
+        except OSError:
+            pass
+    hosts_harness.kill_namespace_processes(hosts.ns(host))
+
+
 def _wait(condition, timeout, what):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -74,11 +90,11 @@ def test_a_worker_killed_mid_study_has_its_run_made_elsewhere(tmp_path):
                             "--no-dashboard", "--name", w], env=env, stdout=logs[w], stderr=subprocess.STDOUT)
         for w in ("w1", "w2"):  # both workers with the scheduler before the study starts
             _wait(lambda: b"Registered to" in (tmp_path / f"{w}.log").read_bytes(), 60, f"{w} registered")
-        study_cmd = [shutil.which("study"), str(study), "-o", str(out), "--scheduler", address, "--quiet"]
+        study_cmd = [executable_path("studies", "study"), str(study), "-o", str(out), "--scheduler", address, "--quiet"]
         proc = hosts.popen("sched", study_cmd, env=env, stdout=logs["study"], stderr=subprocess.STDOUT)
         pid, killed_run = _wait(lambda: _run_on(hosts, "w1"), 120, "run on w1")
         time.sleep(1.0)  # well into the run
-        hosts_harness.kill_namespace_processes(hosts.ns("w1"))  # the machine dies
+        _kill_host(hosts, "w1")
         status = proc.wait(240)
         text = (tmp_path / "study.log").read_text()
         assert status == 0, text + (tmp_path / "sched.log").read_text()[-3000:]
