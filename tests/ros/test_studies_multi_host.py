@@ -51,12 +51,12 @@ def _run_on(hosts, host: str):
 
 def _kill_host(hosts, host: str) -> None:
     """The host dies: its Dask processes first (had the run's process died first, the worker would
-    have lived to report it as a failed run, which a machine that dies never does), then the rest."""
+    have lived to report it as a failed run, which a machine that dies never does), then the run."""
     r = subprocess.run(["ip", "netns", "pids", hosts.ns(host)], capture_output=True, text=True)
     for pid in r.stdout.split():
         try:
             with open(f"/proc/{pid}/cmdline", "rb") as f:
-                if b"dask" in f.read():
+                if b"run_scenario" not in f.read():
                     os.kill(int(pid), signal.SIGKILL)
         except OSError:
             pass
@@ -85,9 +85,12 @@ def test_a_worker_killed_mid_study_has_its_run_made_elsewhere(tmp_path):
         logs = {name: open(tmp_path / f"{name}.log", "wb") for name in ("sched", "w1", "w2", "study")}
         hosts.popen("sched", [dask, "scheduler", "--host", hosts.addresses["sched"], "--port", "8786",
                               "--no-dashboard"], env=env, stdout=logs["sched"], stderr=subprocess.STDOUT)
-        for w in ("w1", "w2"):
+        # the namespaces share /dev/shm (Fast DDS discovers over it) and this machine's other ROS
+        # work takes domains 1-100: each worker's runs a range of their own
+        for w, domains in (("w1", "150-169"), ("w2", "170-189")):
             hosts.popen(w, [dask, "worker", address, "--host", hosts.addresses[w], "--nthreads", "1",
-                            "--no-dashboard", "--name", w], env=env, stdout=logs[w], stderr=subprocess.STDOUT)
+                            "--no-dashboard", "--name", w], env=dict(env, TUGSIM_STUDY_DOMAINS=domains),
+                        stdout=logs[w], stderr=subprocess.STDOUT)
         for w in ("w1", "w2"):  # both workers with the scheduler before the study starts
             _wait(lambda: b"Registered to" in (tmp_path / f"{w}.log").read_bytes(), 60, f"{w} registered")
         study_cmd = [executable_path("studies", "study"), str(study), "-o", str(out), "--scheduler", address, "--quiet"]

@@ -26,6 +26,27 @@ from studies.study_file import get_value
 # 3 s look for another run on the domain shortened (scenario_runner.conductor)
 DOMAIN_CHECK_WAIT = "0.5"
 MESSAGE_TAIL = 2000  # characters of a failed run's output kept in the table
+# a worker's runs take their domains from this range ("LO-HI", reserved with the domain coordinator
+# on its machine) instead of the coordinator's 1-100: workers sharing a machine's shared memory
+# (network namespaces) or other ROS work on it keep apart
+DOMAIN_RANGE_VARIABLE = "TUGSIM_STUDY_DOMAINS"
+
+
+def domain_selector():
+    """The domain coordinator's selector of DOMAIN_RANGE_VARIABLE's range; None (its own 1-100)
+    without it. ValueError naming a bad value."""
+    text = os.environ.get(DOMAIN_RANGE_VARIABLE)
+    if not text:
+        return None
+    lo, _, hi = text.partition("-")
+    try:
+        lo, hi = int(lo), int(hi)
+    except ValueError:
+        lo = hi = -1
+    if not 0 <= lo <= hi <= 232:
+        raise ValueError(f"{DOMAIN_RANGE_VARIABLE}={text!r}: expected LO-HI, ROS domain ids 0 <= LO <= HI <= 232")
+    count = iter(range(10 ** 9))
+    return lambda: lo + next(count) % (hi - lo + 1)
 
 
 def _die_with_parent() -> None:
@@ -94,7 +115,7 @@ def execute_run(run: str, scenario: Dict[str, Any], folder: str, measures: Dict[
     row: Dict[str, Any] = {"status": "ok", "exit_status": 0, "message": "", "host": _where(),
                            "recording": os.path.abspath(recording) if keep_recording else ""}
     row.update({name: math.nan for name in measures})
-    with domain_id() as domain:
+    with domain_id(domain_selector()) as domain:
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
                    TUGSIM_DOMAIN_CHECK_WAIT=DOMAIN_CHECK_WAIT, PYTHONUNBUFFERED="1")
         env.pop("ROS_STATIC_PEERS", None)
