@@ -4,6 +4,7 @@ run again it runs nothing (resumed from its table); a run that fails is a row wi
 and message, and the study goes on to the end (exit status 1)."""
 import json
 import math
+import os
 import subprocess
 
 import pandas as pd
@@ -38,7 +39,8 @@ def study_run(tmp_path_factory):
     path = folder / "acceptance.yaml"
     path.write_text(STUDY)
     lines = []
-    result = run_study(str(path), str(folder / "out"), workers=2, say=lines.append, progress=False)
+    result = run_study(str(path), str(folder / "out"), workers=2, keep_recordings=True, say=lines.append,
+                       progress=False)
     return path, folder, result, lines
 
 
@@ -61,6 +63,8 @@ def test_study_table_equals_the_runs_made_one_by_one(study_run, ros_domain, tmp_
     assert len(table) == 6 and list(table["status"]) == ["ok"] * 6, table[["status", "message"]]
     assert any("dashboard http" in line for line in lines), lines
     assert pd.read_parquet(result.folder + "/results.parquet").equals(table)
+    for row in table.itertuples():  # --keep-recordings: each run's recording beside the table
+        assert row.recording == f"{result.folder}/runs/{row.run}/run.mcap" and os.path.getsize(row.recording) > 0
     measures = result.plan.study.measures
     for run in result.plan.runs:
         row = table[table["run"] == run.run].iloc[0]
@@ -94,4 +98,5 @@ def test_failed_runs_are_recorded_and_the_study_goes_on(tmp_path, capsys):
     assert list(table["exit_status"]) == [-1, -1]
     assert all("no end after 0.5 s" in m for m in table["message"])
     assert all(math.isnan(v) for v in table["peak_tension"])
+    assert not (tmp_path / "out" / "runs").exists()  # without --keep-recordings nothing of the runs is left
     assert "failed run" in capsys.readouterr().out

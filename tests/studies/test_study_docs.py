@@ -33,12 +33,12 @@ def test_the_pages_study_file_is_the_example():
     assert shown["measures"].items() <= example["measures"].items()
 
 
-def test_the_pages_error_message(tmp_path, capsys):
+def test_the_pages_error_message(tmp_path, capsys, monkeypatch):
     block = next(b for b in _blocks() if b.startswith("$ ros2 run studies study bad.yaml"))
     example = open(study.study_path("tow_length_engine_order.yaml"), encoding="utf-8").read()
     bad = tmp_path / "bad.yaml"
     bad.write_text(example.replace("ropes[towline].deployed_length", "ropes[towline].lenght"))
-    os.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)
     assert study.main(["bad.yaml"]) == 2
     printed = capsys.readouterr().err.splitlines()
     shown = block.splitlines()[1:]

@@ -41,12 +41,12 @@ def test_gumbel_confidence_intervals_cover_the_truth_as_often_as_stated():
 
 
 def test_gumbel_covariance_is_the_spread_of_the_estimates():
-    """The asymptotic covariance against the spread of 2000 maximum-likelihood fits of 200 samples."""
+    """The asymptotic covariance against the spread of 1000 maximum-likelihood fits of 200 samples."""
     rng = np.random.default_rng(3)
-    est = np.array([stats.gumbel_r.fit(stats.gumbel_r.rvs(5.0, 1.5, size=200, random_state=rng)) for _ in range(2000)])
+    est = np.array([stats.gumbel_r.fit(stats.gumbel_r.rvs(5.0, 1.5, size=200, random_state=rng)) for _ in range(1000)])
     measured = np.cov(est.T)
     model = gumbel_covariance(1.5, 200)
-    assert np.allclose(measured, model, rtol=0.12)
+    assert np.allclose(measured, model, rtol=0.15)
 
 
 def _rayleigh_mpm(n: int, sigma: float = 1.0) -> float:

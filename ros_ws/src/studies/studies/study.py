@@ -196,6 +196,10 @@ def run_study(path: str, output: Optional[str] = None, scheduler: Optional[str] 
 
 
 def _finish(plan: StudyPlan, rows: list, folder: str, table_path: str, ran: int, say) -> StudyResult:
+    try:
+        os.rmdir(os.path.join(folder, "runs"))  # left empty when no recording was kept
+    except OSError:
+        pass
     table = _write_table(rows, plan, table_path)
     stats = configuration_statistics(table, plan.axis_keys, list(plan.study.measures), plan.study.extremes,
                                      plan.run_duration)
