@@ -160,9 +160,10 @@ def run_study(path: str, output: Optional[str] = None, scheduler: Optional[str] 
               workers: Optional[int] = None, keep_recordings: bool = False, timeout: Optional[float] = None,
               say: Callable[[str], None] = print, progress: bool = True) -> StudyResult:
     """The Python API of `study`: checks the study (StudyError before anything runs), runs what
-    the table in `output` does not hold yet, writes table, statistics and figures."""
+    the table in `output` does not hold yet, writes table, statistics and figures. `path`: a
+    study file, or the name of an installed example."""
     with tempfile.TemporaryDirectory(prefix="study-check-") as scratch:
-        plan = plan_study(path, scratch)
+        plan = plan_study(study_path(path), scratch)
     folder = os.path.abspath(output or os.path.join("output", "studies", plan.study.name))
     try:
         os.makedirs(folder, exist_ok=True)
@@ -228,7 +229,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         if args.plan:
             print_plan(study_path(args.study))
             return EXIT_OK
-        result = run_study(study_path(args.study), args.output, args.scheduler, args.workers, args.keep_recordings,
+        result = run_study(args.study, args.output, args.scheduler, args.workers, args.keep_recordings,
                            args.timeout, progress=not args.quiet)
     except StudyError as exc:
         sys.stderr.write(f"study: invalid study:\n{exc}\n")
