@@ -59,6 +59,7 @@ LAYERS = [
     {"scenario_format"},                            # the scenario format, a run's particulars (ROS-free)
     {"bridge_instruments", "live_view", "recording"},  # the human edge; a run's recording, replay, analysis
     {"scenario_runner"},                            # runs a scenario
+    {"studies"},                                    # runs many: sweeps and seeds on Dask
 ]
 _LAYER = {p: i for i, layer in enumerate(LAYERS) for p in layer}
 

@@ -8,7 +8,7 @@ import pytest
 from conftest import executable_path
 
 PACKAGES = {"sim_math", "sim_contract", "tug_msgs", "tf2_msgs", "sim_plumbing", "ros2cli_standin", "tug_dynamics", "rope_model",
-            "scenario_format", "recording", "scenario_runner", "live_view", "sea_environment", "bridge_instruments", "hull_contact"}
+            "scenario_format", "recording", "scenario_runner", "live_view", "sea_environment", "bridge_instruments", "hull_contact", "studies"}
 
 
 def test_colcon_lists_the_packages(repo_root):
