@@ -769,6 +769,8 @@ class _Session:
         conductor.event(0, "scenario_started", "", f"scenario '{sc.name}' (run {stats.run_id}): {n_steps} steps "
                         f"at {sc.exchange_rate:g} Hz, {sc.mode}")
         conductor.announce_manned(0)
+        if recorder:
+            recorder.flush()   # the start-up's messages (every node's step 0, latched), before the clock starts
         t_start = time.monotonic()
         cpu_start = time.process_time() + self.procs.cpu_seconds()
         period = conductor.period_ns * 1e-9
