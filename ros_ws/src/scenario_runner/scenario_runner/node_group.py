@@ -11,7 +11,6 @@ the group). Exit status as a node's (sim_plumbing.ros_common.run_nodes): 0 stopp
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 import sys
 from typing import List, Optional
@@ -19,11 +18,6 @@ from typing import List, Optional
 from scenario_runner.run_nodes import NodeSpec
 from sim_plumbing import ros_common as rc
 from sim_plumbing import step_channel
-
-
-def write_group(path: str, specs: List[NodeSpec]) -> None:
-    with open(path, "w") as f:
-        json.dump([dataclasses.asdict(s) for s in specs], f)
 
 
 def read_group(path: str) -> List[NodeSpec]:

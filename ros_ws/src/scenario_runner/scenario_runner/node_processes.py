@@ -13,7 +13,6 @@ from typing import Dict, List, Optional
 
 from rclpy.node import Node
 
-from scenario_runner.node_group import write_group
 from scenario_runner.run_nodes import NodeSpec, RunError, executable_path
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
@@ -27,6 +26,13 @@ def _grow_pipe(fd: int, size: int = 1 << 20) -> None:
         fcntl.fcntl(fd, getattr(fcntl, "F_SETPIPE_SZ", 1031), size)
     except OSError:
         pass  # above /proc/sys/fs/pipe-max-size: the default size still works, the runner drains every step
+
+
+def write_group(path: str, specs: List[NodeSpec]) -> None:
+    """The node group file a node_group process reads (scenario_runner.node_group.read_group)."""
+    import dataclasses
+    with open(path, "w") as f:
+        json.dump([dataclasses.asdict(s) for s in specs], f)
 
 
 class NodeProcesses:
