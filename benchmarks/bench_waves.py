@@ -48,9 +48,9 @@ def _variant(folder: str, hs: float, elements: int) -> str:
     return path
 
 
-def _compute_times(path: str, seconds: float, folder: str) -> dict:
+def _compute_times(path: str, seconds: float, folder: str, layout: str) -> dict:
     proc = subprocess.run(["ros2", "run", "scenario_runner", "run_scenario", path, "--duration", str(seconds),
-                           "--layout", "one_process", "--quiet", "--no-record"],
+                           "--layout", layout, "--quiet", "--no-record"],
                           capture_output=True, text=True, timeout=3600, cwd=folder)
     if proc.returncode != 0:
         sys.exit(f"run_scenario {path} failed (exit {proc.returncode}):\n{proc.stdout[-2000:]}{proc.stderr[-2000:]}")
@@ -65,6 +65,8 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=60.0, help="simulated seconds per run (default 60)")
     ap.add_argument("--repeat", type=int, default=2, help="runs of each, in turn (default 2)")
     ap.add_argument("--elements", default="10,50", help="towline n_elements to time (default 10,50)")
+    ap.add_argument("--layout", default="one_process", choices=("one_process", "groups", "processes"),
+                    help="run_scenario's node layout (default one_process)")
     args = ap.parse_args()
     print(f"| towline elements | node | calm ms/step | waves ms/step | waves / calm |\n|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:
@@ -73,7 +75,7 @@ def main() -> int:
             times = {"calm": [], "waves": []}
             for _ in range(args.repeat):
                 for kind in ("calm", "waves"):
-                    times[kind].append(_compute_times(paths[kind], args.seconds, folder))
+                    times[kind].append(_compute_times(paths[kind], args.seconds, folder, args.layout))
             for node in sorted(times["calm"][0]):
                 calm = statistics.median(t[node] for t in times["calm"])
                 waves = statistics.median(t[node] for t in times["waves"])

@@ -34,6 +34,23 @@ def test_compiled_response_equals_its_numpy_oracle(t):
         assert fast.elevation == pytest.approx(float(field.elevation(x, y, t)), rel=1e-11, abs=1e-12)
 
 
+
+def test_compiled_response_follows_a_turning_hull_through_every_heading_cell():
+    """The compiled response keeps each component's two table rows until its heading cell
+    changes (wave_response._evaluate's working rows): a hull turning a full circle one way and
+    back, in steps smaller and larger than a cell and across 0 / 2 pi, against the numpy
+    oracle, which gathers from the table every time."""
+    field = WaveField.irregular(2.0, 7.0, 0.3, spreading_s=10.0, components=150, seed=11, ramp_time=0.0)
+    resp = _sea("harbour_tug", field).response
+    cell = 2.0 * math.pi / resp.table.shape[1]
+    psis = np.concatenate([np.arange(0.0, 2.0 * math.pi + cell, 0.3 * cell),
+                           np.arange(2.0 * math.pi, -2.0 * math.pi, -1.7 * cell), [1e-15, -1e-15, 0.5 * cell]])
+    for n, psi in enumerate(psis):
+        t = 0.05 * n
+        fast, ref = resp.evaluate(10.0, -3.0, float(psi), 2.0, t), resp.evaluate_numpy(10.0, -3.0, float(psi), 2.0, t)
+        for a, b in zip(fast, ref):
+            np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-12)
+
 def test_one_compiled_step_equals_its_numpy_steps():
     """VesselInWaves.step (the vessel node's per-step path, one compiled call) against sample,
     total, point_offsets, drift_wrench and status in numpy, and BodyPoints.world of the total

@@ -51,7 +51,7 @@ def _run_lines(sc, stats: cd.RunStats) -> List[str]:
                         if stats.external else ""))
     if stats.compute_times:
         lines.append("  compute per step: " + ", ".join(
-            f"{n} {1e3 * float(np.mean(t)):.2f} ms" for n, t in sorted(stats.compute_times.items()) if t))
+            f"{n} {1e3 * float(np.mean(t)):.3f} ms" for n, t in sorted(stats.compute_times.items()) if t))
     if stats.refused or any(stats.node_refused.values()):
         lines.append("  refused protocol messages (logged, not used): " + ", ".join(
             [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +

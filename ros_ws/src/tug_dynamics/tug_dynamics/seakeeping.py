@@ -119,7 +119,8 @@ class VesselInWaves:
         low12 = np.concatenate((low.position, low.rpy, low.linear_velocity_body, low.angular_velocity_body))
         total, motion, extras, drift = self._total, self._motion, self._extras, self._drift
         r, rdot = self.response.ramp(t)
-        _step(self.response.table, self.response.comp, low12, float(t), r, rdot, points.body, self._sea,
+        resp = self.response
+        _step(resp.table, resp.comp, resp.work, resp.work_j, low12, float(t), r, rdot, points.body, self._sea,
               self._sample, total, motion, extras)
         drift.force_world[0], drift.force_world[1], drift.moment_world[2] = extras[0], extras[1], extras[2]
         return WaveStep(VesselState(total[0:3], total[3:6], total[6:9], total[9:12]), motion[:, 0:3],
@@ -165,10 +166,10 @@ def _points_world(state, points, out, col):
 
 
 @njit(cache=True)
-def _step(table, comp, low, t, r, rdot, points, sea, sample, total, motion, extras):
+def _step(table, comp, work, work_j, low, t, r, rdot, points, sea, sample, total, motion, extras):
     """The response at the manoeuvring state low (12,) at t (wave_response._evaluate, into
     sample (16,)), then `_superpose`: one call per published state."""
-    _evaluate(table, comp, low[0], low[1], low[5], low[6], t, r, rdot, sample)
+    _evaluate(table, comp, work, work_j, low[0], low[1], low[5], low[6], t, r, rdot, sample)
     _superpose(sample, low, points, sea, total, motion, extras)
 
 

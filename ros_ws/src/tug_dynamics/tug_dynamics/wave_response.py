@@ -183,16 +183,25 @@ class WaveSample(NamedTuple):
 
 
 @njit(cache=True)
-def _evaluate(table, comp, x, y, psi, u, t, r, rdot, out):
+def _evaluate(table, comp, work, work_j, x, y, psi, u, t, r, rdot, out):
     """The compiled `WaveResponse.evaluate` (the numpy `_interp` / `_motion` are its oracle in
     tests/physics/test_wave_response.py): out[0:6] displacement, [6:12] velocity, [12:15] drift,
     [15] elevation. One pass over the components, no temporaries (the vessel node calls it every
-    step: 150 components cost about a tenth of the numpy version). comp (7, N): the components'
-    a, kx, ky, omega, k, phase and direction (WaveResponse.comp: one argument, not seven, as
-    numba's call costs per argument)."""
+    step: 150 components cost about a tenth of the numpy version). comp (9, N): the components'
+    a, kx, ky, omega, k, phase, direction and its cosine and sine (WaveResponse.comp: one
+    argument, not nine, as numba's call costs per argument).
+
+    work (N, 30), work_j (N,): each component's two table rows around its heading, copied when
+    its heading cell changes (work_j holds the cell). The same numbers as gathering from the
+    table every step, but the step reads 36 kB in order instead of scattered rows of a
+    0.4 MB table: in the vessel node, where the other nodes' steps evict the caches between
+    two of its own, that halved the call (benchmarks/bench_waves.py, docs/benchmarks.md)."""
     a, kx, ky, omega, k, phase, psi_w = comp[0], comp[1], comp[2], comp[3], comp[4], comp[5], comp[6]
+    cos_w, sin_w = comp[7], comp[8]
     nb = table.shape[1]
+    nv = table.shape[2]
     two_pi = 2.0 * math.pi
+    cos_psi, sin_psi = math.cos(psi), math.sin(psi)
     out[:] = 0.0
     eta = 0.0
     for i in range(a.size):
@@ -201,19 +210,24 @@ def _evaluate(table, comp, x, y, psi, u, t, r, rdot, out):
         j = int(pos)
         f = pos - j
         j %= nb
-        j1 = (j + 1) % nb
+        if work_j[i] != j:
+            j1 = (j + 1) % nb
+            for d in range(nv):
+                work[i, d] = table[i, j, d]
+                work[i, nv + d] = table[i, j1, d]
+            work_j[i] = j
         theta = kx[i] * x + ky[i] * y - omega[i] * t + phase[i]
         c, s = math.cos(theta), math.sin(theta)
-        we = omega[i] - k[i] * u * math.cos(beta)
+        we = omega[i] - k[i] * u * (cos_w[i] * cos_psi + sin_w[i] * sin_psi)   # cos(beta)
         eta += a[i] * c
         for d in range(6):
-            re = table[i, j, d] + f * (table[i, j1, d] - table[i, j, d])
-            im = table[i, j, 6 + d] + f * (table[i, j1, 6 + d] - table[i, j, 6 + d])
+            re = work[i, d] + f * (work[i, nv + d] - work[i, d])
+            im = work[i, 6 + d] + f * (work[i, nv + 6 + d] - work[i, 6 + d])
             disp = c * re - s * im
             out[d] += disp
             out[6 + d] += we * (s * re + c * im)
         for d in range(3):
-            out[12 + d] += table[i, j, 12 + d] + f * (table[i, j1, 12 + d] - table[i, j, 12 + d])
+            out[12 + d] += work[i, 12 + d] + f * (work[i, nv + 12 + d] - work[i, 12 + d])
     for d in range(6):
         out[6 + d] = r * out[6 + d] + rdot * out[d]
         out[d] *= r
@@ -246,7 +260,10 @@ class WaveResponse:
         self._rows = np.arange(len(self.a))
         self._ramp_time = float(getattr(wave_field, "ramp_time", math.inf))
         self.comp = np.ascontiguousarray(np.stack([self.a, self.kx, self.ky, self.omega, self.k, self.phase,
-                                                   self.psi_w]))
+                                                   self.psi_w, np.cos(self.psi_w), np.sin(self.psi_w)]))
+        # _evaluate's working rows: none yet (cell -1)
+        self.work = np.zeros((len(self.a), 2 * self.table.shape[2]))
+        self.work_j = np.full(len(self.a), -1, np.int64)
         self._out = np.zeros(16)
 
     def ramp(self, t: float):
@@ -296,7 +313,7 @@ class WaveResponse:
         """Displacement, velocity, drift and the elevation at (x, y) at once (compiled)."""
         r, rdot = self._ramp(t)
         out = self._out
-        _evaluate(self.table, self.comp, float(x), float(y), float(psi), float(u), float(t), r, rdot, out)
+        _evaluate(self.table, self.comp, self.work, self.work_j, float(x), float(y), float(psi), float(u), float(t), r, rdot, out)
         return WaveSample(out[0:6].copy(), out[6:12].copy(), out[12:15].copy(), float(out[15]))
 
     def evaluate_numpy(self, x: float, y: float, psi: float, u: float, t: float) -> WaveSample:
