@@ -99,3 +99,34 @@ def test_slack_steel_towline_lies_on_the_seabed_until_dragged_clear(ros_domain, 
     assert on_bottom[t > 140.0].min() < on_bottom[early].min()
     st = msgs["/tug/status"][-1]
     assert st.water_depth == pytest.approx(7.0) and st.under_keel_clearance > 0.0 and not st.grounded
+
+
+@pytest.mark.timeout(600)
+def test_analyze_reports_the_least_under_keel_clearance(ros_domain, tmp_path):
+    """analyze's ukc_min and squat_max (a study's measures) against ICORELS by hand (PIANC 2014):
+    S = 2.4 V / L^2 Fnh^2 / sqrt(1 - Fnh^2), Fnh = U / sqrt(g h), UKC = h - T - S, with V the ship
+    file's mass over its water density and U each recorded status' speed through the water, in
+    the 7 m of the slack-towline run."""
+    import json
+
+    from recording.analysis import main as analyze
+    from test_startup_loads import _ship_file
+
+    recording = _recorded(_scenario("env_slack_towline_seabed"), tmp_path)
+    statuses = _read(recording, ["/tug/status"])["/tug/status"]
+    ship = _ship_file("harbour_tug.yaml")
+    length, draft = ship["hull"]["length"], ship["hull"]["draft"]
+    volume = ship["hull"]["mass"] / ship["water_density"]
+    depth, g = 7.0, 9.80665
+
+    def squat(speed):
+        fnh2 = speed * speed / (g * depth)
+        return 2.4 * volume / length ** 2 * fnh2 / math.sqrt(1.0 - fnh2)
+
+    squats = np.array([squat(m.speed_through_water) for m in statuses])
+    out = tmp_path / "analysis"
+    assert analyze([str(recording), "-o", str(out), "--no-figures", "--quiet"]) == 0
+    tug = json.loads((out / "summary.json").read_text())["vessels"]["tug"]
+    assert squats.max() > 0.01, "the tug never made way: nothing to check"
+    assert tug["squat_max"] == pytest.approx(squats.max(), rel=1e-9)
+    assert tug["ukc_min"] == pytest.approx(depth - draft - squats.max(), abs=1e-9)

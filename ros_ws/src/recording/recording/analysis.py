@@ -235,6 +235,9 @@ def report(say, recording: str, f: McapFile, summary: dict) -> None:
     for name, v in summary["vessels"].items():
         say(f"  vessel {name}: {v['samples']} states, {v['t_start']:.1f} .. {v['t_end']:.1f} s, distance "
             f"{v['distance_run']:.1f} m, max speed over ground {v['speed_max'] / KN:.2f} kn")
+        if "ukc_min" in v:
+            say(f"    least under-keel clearance {v['ukc_min']:.2f} m at {v['ukc_min_at']:.1f} s, largest squat "
+                f"{v['squat_max']:.2f} m")
         t = v.get("turn")
         if t:
             fmt = lambda k, scale=1.0: "-" if t.get(k) is None else f"{t[k] * scale:.1f}"  # noqa: E731

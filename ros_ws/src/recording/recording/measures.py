@@ -222,6 +222,14 @@ def summarise(rec: Recording, turns: Dict[str, dict], manoeuvres: Optional[Dict[
         if "status" in v:
             vs["girting_ratio_max"] = status_column(v["status"], "girting_ratio").max()
             vs["rise_max"] = status_column(v["status"], "rise").max()
+            # in shallow water (a finite depth under the hull at some time): the least under-keel
+            # clearance (depth - draft - squat, as the vessel reported it) and the largest squat
+            ukc = status_column(v["status"], "under_keel_clearance")
+            shallow = np.isfinite(ukc)
+            if shallow.any():
+                vs["ukc_min"] = float(ukc[shallow].min())
+                vs["ukc_min_at"] = float(v["status"]["t"][shallow][np.argmin(ukc[shallow])])
+                vs["squat_max"] = float(status_column(v["status"], "squat")[shallow].max())
         if name in turns:
             vs["turn"] = turns[name]
         vs.update((manoeuvres or {}).get(name, {}))

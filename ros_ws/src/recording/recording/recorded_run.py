@@ -58,7 +58,8 @@ class _Series:
 
 # VesselStatus fields kept per sample, in column order (read by name with status_column)
 STATUS_FIELDS = ("engine_order", "steering_angle_ordered", "steering_angle", "shaft_speed", "thrust",
-                 "speed_through_water", "heel", "trim", "rise", "girting_ratio", "girting_threshold")
+                 "speed_through_water", "heel", "trim", "rise", "girting_ratio", "girting_threshold",
+                 "water_depth", "squat", "under_keel_clearance")
 
 
 def status_column(status: dict, field: str) -> np.ndarray:

@@ -771,6 +771,7 @@ class _Session:
         conductor.announce_manned(0)
         if recorder:
             recorder.flush()   # the start-up's messages (every node's step 0, latched), before the clock starts
+        rc.settle_heap()       # the start-up's objects out of the collector's way (and the in-runner nodes')
         t_start = time.monotonic()
         cpu_start = time.process_time() + self.procs.cpu_seconds()
         period = conductor.period_ns * 1e-9

@@ -6,6 +6,7 @@ a stamp names its step without rounding doubt.
 """
 from __future__ import annotations
 
+import gc
 import os
 import time
 from typing import Callable, Optional
@@ -219,6 +220,16 @@ def take_missed(subscription, callback, limit: int = 10_000) -> int:
 
 
 PARENT_PID_ENV = "TUGSIM_PARENT_PID"
+
+
+def settle_heap() -> None:
+    """Collect once and freeze what is left (gc.freeze): called when a node is ready and by the
+    runner before its clock starts. The start-up's objects (numba, LLVM, DDS, the models) then
+    sit outside the collector, whose later passes walk only what the run itself makes: in the
+    berthing run, paced, the older-generation passes took 0.6-1.7 ms and a full one 14-66 ms,
+    enough to make a step late (issue 34, docs/benchmarks.md)."""
+    gc.collect()
+    gc.freeze()
 
 
 def die_with_parent() -> None:

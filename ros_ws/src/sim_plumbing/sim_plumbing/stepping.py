@@ -139,6 +139,7 @@ class SteppedNode(Node):
         self.complaints = RateLimitedLog(self.get_logger())  # refused protocol messages and inputs
         self.step_index = 0
         self.ready_to_step = ready
+        self._heap_settled = False
         self.inputs = inputs
         self._buffer: Dict[str, Dict[int, Any]] = {i.topic: {} for i in inputs}
         # the serialized state input held or used for each step (the last KEPT_STEPS): a second,
@@ -409,6 +410,9 @@ class SteppedNode(Node):
         if self._triggered:
             self._ready_timer.cancel()
         elif self.ready_to_step:
+            if not self._heap_settled:   # before the run's clock starts (it waits for every node's ready)
+                self._heap_settled = True
+                rc.settle_heap()
             self._send_done(0, 0.0)
 
     def _ready(self, k: int) -> bool:
