@@ -5,13 +5,40 @@ from __future__ import annotations
 
 import math
 import os
-from typing import List
+from typing import Dict, List
 
 import numpy as np
 
 
+KNOT = 1852.0 / 3600.0
+
+
 def _label(key: str) -> str:
     return key.split(".")[-1].replace("_", " ")
+
+
+def display_unit(key: str):
+    """(unit, factor) a figure shows a value of this scenario or summary key in (SI inside, the
+    units a towing study is read in on the axes): tensions and loads in kN, speeds in knots,
+    lengths in m, periods in s; a ratio or a count without one."""
+    tail = key.split(".")[-1].split("]")[-1]
+    if "over" in tail or tail.endswith(("_events", "ratio")) or "order" in tail or tail in ("seed", "broken"):
+        return "", 1.0
+    if "tension" in tail or "load" in tail or tail.startswith("wrench") or "snatch" in tail:
+        return "kN", 1e-3
+    if "speed" in tail:
+        return "kn", 1.0 / KNOT
+    if tail in ("tp", "period") or tail.endswith(("_at", "time", "duration")):
+        return "s", 1.0
+    if tail in ("hs", "depth", "distance_run", "advance", "transfer", "tactical_diameter", "steady_diameter",
+                "ukc_min", "squat_max", "min_element_height") or tail.endswith(("length", "_height", "_x", "_y")):
+        return "m", 1.0
+    return "", 1.0
+
+
+def _axis_label(name: str, key: str) -> str:
+    unit = display_unit(key)[0]
+    return f"{name} ({unit})" if unit else name
 
 
 def _lines(table, axis_keys: List[str]):
@@ -26,36 +53,40 @@ def _lines(table, axis_keys: List[str]):
                         for k, v in zip(rest, values)), rows
 
 
-def measure_figures(table, statistics, axis_keys: List[str], measures: List[str], folder: str, extremes=None,
+def measure_figures(table, statistics, axis_keys: List[str], measures: Dict[str, str], folder: str, extremes=None,
                     dpi: int = 110) -> List[str]:
-    """One PNG per measure in folder; their paths. Nothing without an axis (a pure Monte Carlo
-    study: a histogram per measure instead)."""
+    """One PNG per measure (name -> summary key) in folder; their paths. Nothing without an axis
+    (a pure Monte Carlo study: a histogram per measure instead). Values in display_unit's units."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     os.makedirs(folder, exist_ok=True)
     ok = table[table["status"] == "ok"]
     paths = []
-    for m in measures:
+    for m, key in measures.items():
+        fy = display_unit(key)[1]
         fig, ax = plt.subplots(figsize=(7, 4.5))
         if not axis_keys:
-            values = ok[m].astype(float)
+            values = ok[m].astype(float) * fy
             ax.hist(values[np.isfinite(values)], bins=max(5, int(math.sqrt(len(values) or 1))))
-            ax.set_xlabel(m)
+            ax.set_xlabel(_axis_label(m, key))
             ax.set_ylabel("runs")
         else:
             x = axis_keys[0]
+            fx = display_unit(x)[1]
             for label, rows in _lines(ok, axis_keys):
                 stats = rows.groupby(x, sort=True)[m].mean()
-                line, = ax.plot(stats.index, stats.values, "o-", label=label or None)
+                line, = ax.plot(stats.index * fx, stats.values * fy, "o-", label=label or None)
                 if len(rows) > len(stats):  # seeds: every run as a dot
-                    ax.plot(rows[x], rows[m], ".", color=line.get_color(), alpha=0.4)
+                    ax.plot(rows[x] * fx, rows[m] * fy, ".", color=line.get_color(), alpha=0.4)
             if extremes is not None and extremes.measure == m and len(axis_keys) == 1:
                 mpm = statistics.sort_values(x)
-                ax.plot(mpm[x], mpm[f"{m}_gumbel_mpm"], "k--", label=f"MPM in {extremes.duration:g} s (Gumbel)")
-                ax.fill_between(mpm[x], mpm[f"{m}_gumbel_mpm_low"], mpm[f"{m}_gumbel_mpm_high"], color="k", alpha=0.1)
-            ax.set_xlabel(x)
-            ax.set_ylabel(m)
+                ax.plot(mpm[x] * fx, mpm[f"{m}_gumbel_mpm"] * fy, "k--",
+                        label=f"MPM in {extremes.duration:g} s (Gumbel)")
+                ax.fill_between(mpm[x] * fx, mpm[f"{m}_gumbel_mpm_low"] * fy, mpm[f"{m}_gumbel_mpm_high"] * fy,
+                                color="k", alpha=0.1)
+            ax.set_xlabel(_axis_label(x, x))
+            ax.set_ylabel(_axis_label(m, key))
             if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=8)
         ax.grid(True, alpha=0.3)

@@ -206,7 +206,7 @@ def _finish(plan: StudyPlan, rows: list, folder: str, table_path: str, ran: int,
                                      plan.run_duration)
     stats.to_parquet(os.path.join(folder, STATISTICS), index=False)
     stats.to_csv(os.path.join(folder, "statistics.csv"), index=False)
-    figures = measure_figures(table, stats, plan.axis_keys, list(plan.study.measures), os.path.join(folder, "figures"),
+    figures = measure_figures(table, stats, plan.axis_keys, dict(plan.study.measures), os.path.join(folder, "figures"),
                               plan.study.extremes)
     result = StudyResult(plan, table, stats, folder, ran, figures)
     say(f"study {plan.study.name}: {len(table)} runs in {table_path} ({result.failed} failed); statistics of "
