@@ -172,6 +172,33 @@ def test_killed_node_stops_the_run_naming_it(tmp_path, ros_domain):
     assert summary.statistics.message_count > 0
 
 
+
+def test_killed_group_process_stops_the_run_naming_every_node_it_carried(tmp_path, ros_domain):
+    """--layout groups --groups 2 puts the barge and the towline in one node_group process (the
+    tug in the runner's own): killed mid-run, the run ends with exit 3 naming both its nodes."""
+    from mcap.reader import make_reader
+    out = tmp_path / "killed_group.mcap"
+    proc = subprocess.Popen([executable_path("scenario_runner", "run_scenario"), _long_tow(tmp_path), "--duration", "600",
+                             "--output", str(out), "--quiet", "--layout", "groups", "--groups", "2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    victim = None
+    deadline = time.monotonic() + 120
+    while victim is None and time.monotonic() < deadline and proc.poll() is None:
+        victim = _node_pid("node_group", os.environ["ROS_DOMAIN_ID"])
+        time.sleep(0.2)
+    assert victim, "the node group process never started"
+    group_log = tmp_path / "killed_group_logs" / "node_group_0.log"   # the first group started
+    while time.monotonic() < deadline and not (group_log.exists() and "laid out" in group_log.read_text()):
+        time.sleep(0.2)
+    time.sleep(1.0)
+    os.kill(victim, signal.SIGKILL)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 3, stderr
+    assert "died" in stderr and "/barge/vessel" in stderr and "/towline/rope" in stderr, stderr
+    with open(out, "rb") as f:  # the partial recording is finalised and readable
+        summary = make_reader(f).get_summary()
+    assert summary.statistics.message_count > 0
+
 def test_ctrl_c_leaves_a_finalised_recording_and_no_nodes(tmp_path, ros_domain, rclpy_context):
     from mcap.reader import make_reader
     from rclpy.node import Node
