@@ -53,6 +53,21 @@ def _lines(table, axis_keys: List[str]):
                         for k, v in zip(rest, values)), rows
 
 
+def _gumbel_overlay(ax, row, m: str, factor: float, n: int, bin_width: float, duration: float) -> None:
+    """On a histogram of n runs' maxima (display units: value x factor): the fitted Gumbel density
+    as expected runs per bin, and the most probable maximum in `duration` s with its band."""
+    from scipy.stats import gumbel_r
+    loc, scale = row[f"{m}_gumbel_loc"], row[f"{m}_gumbel_scale"]
+    if not (np.isfinite(loc) and np.isfinite(scale) and scale > 0.0):
+        return
+    mpm, low, high = row[f"{m}_gumbel_mpm"], row[f"{m}_gumbel_mpm_low"], row[f"{m}_gumbel_mpm_high"]
+    x = np.linspace(loc - 3.0 * scale, max(loc + 5.0 * scale, high), 300)
+    ax.plot(x * factor, n * bin_width / factor * gumbel_r.pdf(x, loc, scale), "k-",
+            label=f"Gumbel fit (loc {loc * factor:.4g}, scale {scale * factor:.3g})")
+    ax.axvline(mpm * factor, color="C3", ls="--", label=f"MPM in {duration:g} s: {mpm * factor:.4g}")
+    ax.axvspan(low * factor, high * factor, color="C3", alpha=0.12)
+
+
 def measure_figures(table, statistics, axis_keys: List[str], measures: Dict[str, str], folder: str, extremes=None,
                     dpi: int = 110) -> List[str]:
     """One PNG per measure (name -> summary key) in folder; their paths. Nothing without an axis
@@ -68,7 +83,11 @@ def measure_figures(table, statistics, axis_keys: List[str], measures: Dict[str,
         fig, ax = plt.subplots(figsize=(7, 4.5))
         if not axis_keys:
             values = ok[m].astype(float) * fy
-            ax.hist(values[np.isfinite(values)], bins=max(5, int(math.sqrt(len(values) or 1))))
+            values = values[np.isfinite(values)]
+            _, edges, _ = ax.hist(values, bins=max(5, int(math.sqrt(len(values) or 1))), label="runs")
+            if extremes is not None and extremes.measure == m and statistics is not None and len(statistics):
+                _gumbel_overlay(ax, statistics.iloc[0], m, fy, len(values), edges[1] - edges[0], extremes.duration)
+                ax.legend(fontsize=8)
             ax.set_xlabel(_axis_label(m, key))
             ax.set_ylabel("runs")
         else:
