@@ -7,7 +7,7 @@ with every force computed by hand: the impulse of the fenders, the wires, the wi
 from the status' apparent wind) and the beam-on cross-flow drag (UFC 4-159-03 with its
 shallow-water growth) equals the change of the sway momentum with the shallow-water added mass.
 The grid file holds the harbour its header describes; a pushing tug placed inside the hull is
-refused (exit 2)."""
+refused (exit 2). Its first 4 s, and the default demo's, record the same physics in every layout."""
 import math
 import os
 
@@ -186,3 +186,34 @@ def test_a_pushing_tug_placed_inside_the_hull_is_refused(tmp_path):
     path.write_text(yaml.safe_dump(sc, sort_keys=False))
     proc = record_scenario(path, tmp_path / "never.mcap", returncode=2)
     assert "key 'contacts[0]'" in proc.stderr and "starts inside the hull of 'ship'" in proc.stderr, proc.stderr
+
+
+@pytest.mark.timeout(600)
+@pytest.mark.parametrize("scenario, min_topics", [(SCENARIO, 5 + 5 + 2 + 2), ("default_demo.yaml", 2 + 2 + 1)])
+def test_identical_in_every_layout(tmp_path, ros_domain, scenario, min_topics):
+    """Issue 34's identity: the berthing's and the default demo's first 4 s with every node its
+    own process, all in the runner's, and split over the runner and a node group process record
+    the same physics, bit for bit: every state, rope, contact and wrench message at the same step."""
+    from mcap.reader import make_reader
+
+    def physics(path):
+        out = {}
+        with open(path, "rb") as f:
+            for _schema, channel, message in make_reader(f).iter_messages():
+                topic = channel.topic
+                if topic.endswith(("/odom", "/attachments", "/state", "/wrench", "/coupling")):
+                    out[(topic, message.log_time)] = bytes(message.data)
+        return out
+
+    runs = {}
+    for layout, extra in (("processes", ()), ("one_process", ()), ("groups", ("--groups", "2"))):
+        out = tmp_path / f"{layout}.mcap"
+        record_scenario(_library(scenario), out, "--duration", "4", *extra, layout=layout)
+        runs[layout] = physics(out)
+    first = runs["processes"]
+    topics = {topic for topic, _ in first}
+    assert len(topics) >= min_topics and len(first) > 200 * min_topics, sorted(topics)
+    for layout in ("one_process", "groups"):
+        assert runs[layout].keys() == first.keys(), layout
+        different = [key for key in first if runs[layout][key] != first[key]]
+        assert not different, f"{layout}: {len(different)} messages differ, e.g. {different[:3]}"
