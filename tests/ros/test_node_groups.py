@@ -70,12 +70,13 @@ def test_node_group_refuses_a_file_it_cannot_read(tmp_path, capsys):
     assert main([]) == 2
 
 
-def test_the_default_count_is_one_process_while_the_run_fits_half_a_core():
-    """(tows x 4.8 + 2) x 0.25 ms of work a step against half the exchange period."""
+def test_the_default_count_is_one_process_while_the_run_fits_six_tenths_of_a_core():
+    """(tows x 4.8 + 2) x 0.25 ms of work a step against 0.6 of the exchange period."""
     from scenario_runner.node_processes import default_group_count
     demo = _specs("default_demo.yaml")            # one tow: 6.8 units, 1.7 ms a step
     assert default_group_count(demo, 0.02, 2) == 1
     assert default_group_count(demo * 4, 0.02, 2) == 1       # 4 tows, 5.3 ms: a quarter of 20 ms
-    assert default_group_count(demo * 8, 0.02, 2) == 2       # 8 tows, 10.1 ms: just over half
-    assert default_group_count(demo * 20, 0.02, 8) == 3      # 24.5 ms: 1.2 periods, 3 halves
+    assert default_group_count(demo * 8, 0.02, 2) == 1       # 8 tows, 10.1 ms: half, under 0.6
+    assert default_group_count(demo * 10, 0.02, 2) == 2      # 10 tows, 12.6 ms: over 0.6 of 20 ms
+    assert default_group_count(demo * 20, 0.02, 8) == 3      # 24.5 ms: 1.2 periods, 3 shares of 0.6
     assert default_group_count(demo * 20, 0.02, 2) == 2      # no more than the cores

@@ -175,9 +175,11 @@ def _vessels_of(spec: NodeSpec) -> List[str]:
 
 # One weight unit's CPU per step with every node in one process, recorded (bench_harbour: 1.34 ms
 # a step for the default demo's 6.8 units, 10 ms for 8 tows' 40.4), and the share of a core's
-# exchange period a group may fill.
+# exchange period a group may fill: 8 tows in one process (10.3-11.0 ms a step, 55 % of 20 ms)
+# held 50 Hz paced with 0 overruns in 3 runs of 1500 steps once the collector's pauses were gone
+# (ros_common.settle_heap), where two processes took 17 ms a step (docs/benchmarks.md).
 UNIT_CPU_S = 0.25e-3
-CORE_SHARE = 0.5
+CORE_SHARE = 0.6
 
 
 def default_group_count(specs: List[NodeSpec], period_s: float, n_cores: int) -> int:
@@ -185,7 +187,7 @@ def default_group_count(specs: List[NodeSpec], period_s: float, n_cores: int) ->
     runner's own, while the run's work fills at most CORE_SHARE of a core's exchange period (a
     second process doubles the CPU of a step, its messages crossing processes: measured 3.2
     against 1.5 ms for the default demo), else one more per CORE_SHARE, up to the cores (8 tows
-    at 50 Hz: two)."""
+    at 50 Hz: one; 10: two)."""
     load = (sum(map(_weight, specs)) + RUNNER_WEIGHT) * UNIT_CPU_S / period_s
     return max(1, min(n_cores, math.ceil(load / CORE_SHARE)))
 

@@ -34,7 +34,7 @@ from tug_msgs.msg import RopeState, ScenarioEvent
 
 from scenario_runner import conductor as cd
 from scenario_runner import run_nodes
-from scenario_runner.node_processes import DEFAULT_LAYOUT, LAYOUTS, cores
+from scenario_runner.node_processes import CORE_SHARE, DEFAULT_LAYOUT, LAYOUTS, cores
 from scenario_runner.run_summary import summary, write_runner_notes
 from scenario_runner.autopilot_law import check_scenario_params as check_autopilot_params
 from recording.recorder import McapRecorder, OutputClaim, RecordingInUse, readable_extent
@@ -159,7 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
                              "groups: the nodes in --groups processes (this one the first), whole tows together")
     parser.add_argument("--groups", type=_group_count, metavar="K",
                         help=f"processes of --layout groups, this one included (default: one while the run's work "
-                             f"fills half a core's exchange period, else more, up to the cores: {cores()} here)")
+                             f"fills {CORE_SHARE:g} of a core's exchange period, else more, up to the cores: {cores()} here)")
     parser.add_argument("--no-record", action="store_true", help="do not record (overrides the scenario)")
     pace = parser.add_mutually_exclusive_group()
     pace.add_argument("--realtime", dest="mode", action="store_const", const="realtime",
