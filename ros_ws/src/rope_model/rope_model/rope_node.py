@@ -331,7 +331,7 @@ class RopeNode(SteppedNode):
             publisher.publish(encoder.encode(stamp_ns, self.step_index, c.force, c.reference_position,
                                              c.reference_velocity, c.stiffness, c.damping), stamp_ns)
 
-        if self.step_index % self.marker_every == 0:
+        if rc.marker_step(self.get_fully_qualified_name(), self.step_index, self.marker_every):
             self.marker_pub.publish(self._markers(line, out["tensions"], stamp_ns), stamp_ns)
 
     def _markers(self, joints: np.ndarray, tensions: np.ndarray, stamp_ns: int) -> bytes:

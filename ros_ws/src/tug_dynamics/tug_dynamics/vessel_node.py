@@ -448,7 +448,7 @@ class VesselNode(SteppedNode):
             units = st.thrusters
             self.thrusters_pub.publish(self._thrusters_cdr.encode(stamp_ns, self.step_index, [
                 [getattr(u, field) for u in units] for field in cdr.ThrusterStatusEncoder.FIELDS]), stamp_ns)
-        if self.step_index % self.marker_every == 0:
+        if rc.marker_step(self.get_fully_qualified_name(), self.step_index, self.marker_every):
             rot_t = rotation_body_to_world(self.model.state.rpy).T   # hull contacts as force arrows too
             arrows = list(self._rope_forces.values()) + [(p, rot_t @ f) for f, p in self._contacts.values()]
             self.marker_pub.publish(self.scene.markers(stamp_ns, st.thrust, arrows, self.force_scale), stamp_ns)
