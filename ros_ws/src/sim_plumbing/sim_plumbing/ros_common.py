@@ -226,8 +226,7 @@ PARENT_PID_ENV = "TUGSIM_PARENT_PID"
 def marker_step(node_name: str, step: int, every: int) -> bool:
     """Whether a node draws its markers at this step: every `every`-th step, at a phase of its
     own (its full name's CRC-32 modulo `every`), so the nodes of a run spread their drawing over
-    the steps. All on the same step, eight tows in one process were late on every marker step
-    and only on those (every 13th in that run: 24 nodes' markers at once)."""
+    the steps instead of all drawing on the same one (eight tows in one process: 24 nodes)."""
     return (step - zlib.crc32(node_name.encode()) % every) % every == 0
 
 
