@@ -8,10 +8,10 @@ markdown table of docs/benchmarks.md:
 
 - model: the physics of one simulation step without ROS: the six vessels' Vessel.step (with the
   environment attached, as the vessel node does) against the interaction node's work for the 15
-  pairs (each state carried on, the Wang arguments, HullPair.loads for both vessels), timed side
-  by side in blocks, interleaved, median of the blocks;
-- run: run_scenario on the generated scenario without and with the 15 `interactions` entries,
-  both layouts, no recording: CPU ms per step of all processes as the runner measures it (median
+  pairs (InteractionSet.loads: each state carried on, the Wang arguments and both vessels' loads
+  in one compiled call), timed side by side in blocks, interleaved, median of the blocks;
+- run: run_scenario on the generated scenario without and with the 15 `interactions` entries
+  (one interaction node for all of them), both layouts, no recording: CPU ms per step of all processes as the runner measures it (median
   of --repeats runs, interleaved).
 
 Timings are not asserted anywhere (the machine's speed drifts by a factor of two); the ratios of
@@ -64,8 +64,8 @@ def _block(fn, n):
 
 def model_costs(dt: float, n: int = 200, repeats: int = 7):
     """us per step: the six vessels, the 15 pairs' interaction work in deep water, and at h = 20 m."""
-    from hull_contact.interaction_node import PlanarState, ahead, loads_on
-    from tug_dynamics.hull_interaction import pair_from_ship_configs
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
+    from tug_dynamics.interaction_set import InteractionSet, PairEntry, PlanarState
     from tug_dynamics.ship_file import load_ship, ship_config
     from tug_dynamics.environment_loads import VesselInEnvironment
     from sea_environment.environment import Environment
@@ -79,22 +79,19 @@ def model_costs(dt: float, n: int = 200, repeats: int = 7):
         v = load_ship(f, initial_state=state)
         VesselInEnvironment(v, env)         # from now on every step feels the environment
         vessels.append(v)
-    configs = {f: ship_config(f)[1] for f in {f for _, f, *_ in FLEET}}
-    pairs = [((i, j), pair_from_ship_configs(configs[FLEET[i][1]], configs[FLEET[j][1]]),
-              pair_from_ship_configs(configs[FLEET[j][1]], configs[FLEET[i][1]]))
-             for i, j in itertools.combinations(range(len(FLEET)), 2)]
-    states = [PlanarState(x, y, 0.0, KNOTS_6, 0.0) for _, _, x, y, _ in FLEET]
+    hulls = {n: SectionalAreaCurve.from_ship_config(ship_config(f)[1]) for n, f, *_ in FLEET}
+    pairs = [PairEntry(f"{a[0]}_{b[0]}", a[0], b[0]) for a, b in itertools.combinations(FLEET, 2)]
+    states = {n: PlanarState(x, y, 0.0, KNOTS_6, 0.0) for n, _, x, y, _ in FLEET}
 
     def vessel_step():
         for v in vessels:
             v.step(dt, [])
 
     def interactions_at(depth):
+        interactions = InteractionSet(hulls, pairs, depth=depth)
+
         def interaction_step():
-            carried = [ahead(s, 1.5 * dt) for s in states]
-            for (i, j), on_i, on_j in pairs:
-                loads_on(on_i, carried[i], carried[j], depth)
-                loads_on(on_j, carried[j], carried[i], depth)
+            interactions.loads(states, 1.5 * dt)
         return interaction_step
 
     fns = (vessel_step, interactions_at(math.inf), interactions_at(20.0))

@@ -388,7 +388,8 @@ def render_topics() -> str:
                 ("Per rope", "/<rope>/", TOPICS.ROPE_TOPICS + (TOPICS.END_WRENCH, TOPICS.END_COUPLING,
                                                                   TOPICS.WINCH_TOPIC)),
                 ("Per hull contact", "/<contact>/", TOPICS.CONTACT_TOPICS),
-                ("Per hull interaction", "/<interaction>/", TOPICS.INTERACTION_TOPICS)]
+                ("Hull interactions (one node for a run's pairs and banks)",
+                 f"/{TOPICS.INTERACTIONS}/", TOPICS.INTERACTION_TOPICS)]
     for title, prefix, table in sections:
         lines += [f"## {title}" + (f" ({_code(prefix)})" if prefix else ""), "",
                   "| topic | type | QoS | frame | rate | direction | note |", "|---|---|---|---|---|---|---|"]

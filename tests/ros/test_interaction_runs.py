@@ -19,8 +19,9 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 
 DURATION = 80.0
 RATE = 10.0
-TOPICS = ["/passing/odom", "/moored/odom", "/moored_passing_interaction/on_a/wrench",
-          "/moored_passing_interaction/on_b/wrench"]
+# the pair (moored, passing): each vessel's summed interaction load (here its one pair's)
+ON = {"a": "/interactions/on_moored/wrench", "b": "/interactions/on_passing/wrench"}
+TOPICS = ["/passing/odom", "/moored/odom", ON["a"], ON["b"]]
 
 
 def _yaw(odom):
@@ -40,7 +41,7 @@ def _states(msgs, vessel):
 
 def _wrenches(msgs, end):
     return np.array([[m.wrench.force.x, m.wrench.force.y, m.wrench.torque.z]
-                     for m in msgs[f"/moored_passing_interaction/on_{end}/wrench"]])
+                     for m in msgs[ON[end]]])
 
 
 def _physics(msgs):
@@ -171,8 +172,8 @@ def test_a_bad_interaction_exits_2_before_start(tmp_path, run_in_process, edit, 
 
 BANK_DURATION = 60.0
 TUG_DURATION = 60.0
-BANK_TOPICS = ["/ship/odom", "/ship_bank/on_a/wrench"]
-TUG_TOPICS = ["/ship/odom", "/tug/odom", "/tug_ship_interaction/on_a/wrench", "/tug_ship_interaction/on_b/wrench"]
+BANK_TOPICS = ["/ship/odom", "/interactions/on_ship/wrench"]
+TUG_TOPICS = ["/ship/odom", "/tug/odom", "/interactions/on_tug/wrench", "/interactions/on_ship/wrench"]
 
 
 def _loads(msgs, topic):
@@ -211,7 +212,7 @@ def _bank_by_hand(row, lead):
 
 def test_bank_run_loads_are_the_bank_model_at_the_recorded_positions(confined_runs):
     r = confined_runs["bank_processes"]
-    ship, loads = r["ship"], r["/ship_bank/on_a/wrench"]
+    ship, loads = r["ship"], r["/interactions/on_ship/wrench"]
     steps = int(BANK_DURATION * RATE)
     assert len(loads) == len(ship) == steps + 1
     expected = np.array([[0.0, *_bank_by_hand(ship[max(k - 1, 0)], (1.5 if k else 0.5) / RATE)]
@@ -230,7 +231,7 @@ def test_tug_at_the_bow_loads_are_wang_at_the_recorded_positions(confined_runs):
     tug, ship = r["tug"], r["ship"]
     cfg = {n: ship_config(f)[1] for n, f in (("tug", "harbour_tug.yaml"), ("ship", "s175_003.yaml"))}
     steps = int(TUG_DURATION * RATE)
-    for end, own, other in (("a", "tug", "ship"), ("b", "ship", "tug")):
+    for own, other in (("tug", "ship"), ("ship", "tug")):
         pair = pair_from_ship_configs(cfg[own], cfg[other])
         expected = []
         for k in range(steps + 1):
@@ -243,12 +244,12 @@ def test_tug_at_the_bow_loads_are_wang_at_the_recorded_positions(confined_runs):
             except ValueError:          # hulls overlapping: no Wang load until they part
                 expected.append((0.0, 0.0, 0.0))
         expected = np.array(expected)
-        got = r[f"/tug_ship_interaction/on_{end}/wrench"]
+        got = r[f"/interactions/on_{own}/wrench"]
         scale = np.abs(expected).max(axis=0) + 1.0
-        np.testing.assert_allclose(got / scale, expected / scale, rtol=0, atol=1e-6, err_msg=end)
+        np.testing.assert_allclose(got / scale, expected / scale, rtol=0, atol=1e-6, err_msg=own)
     # at the start (stagger -75 m, 25 m off) the bow's field pushes the tug off to port and turns
     # its bow to port (Wang at stagger -75 m, by hand with HullPair: Y 1.84 kN, N 6.6 kN m) ...
-    first = r["/tug_ship_interaction/on_a/wrench"][0]
+    first = r["/interactions/on_tug/wrench"][0]
     assert first[1] == pytest.approx(1.84e3, rel=0.01) and first[2] == pytest.approx(6.64e3, rel=0.01)
     # ... and then the free tug sheers in toward the ship (alone it runs straight at y = 25 m)
     assert tug[-1, 1] < tug[0, 1] - 3.0 and tug[-1, 2] < -math.radians(4.0)   # measured 6.3 m, 8 deg

@@ -18,8 +18,8 @@ NODES = [
     ("hull_contact", "contact_node", "/push/contact", {
         "fender_vessel": "tug", "hull_vessel": "ship", "fender_ship_file": "asd_tug.yaml",
         "hull_ship_file": "s175_003.yaml"}),
-    ("hull_contact", "interaction_node", "/pass/interaction", {
-        "vessel_a": "ship", "vessel_b": "tug", "ship_file_a": "s175_003.yaml", "ship_file_b": "asd_tug.yaml"}),
+    ("hull_contact", "interaction_node", "/interactions/interaction", {
+        "vessels": ["ship", "tug"], "ship_files": ["s175_003.yaml", "asd_tug.yaml"], "pairs": ["pass=ship,tug"]}),
     ("scenario_runner", "autopilot", "/pilot/autopilot", {"vessel": "tug"}),
     ("bridge_instruments", "nmea_out", "/bridge/nmea_out", {"vessels": ["tug"]}),
     ("live_view", "live_view", "/viewer/live_view", {"port": 0, "http_port": -1}),

@@ -1,25 +1,26 @@
-"""The hull interaction node: Wang's (1975) passing-ship loads between two vessels, or the bank
-suction on one vessel from a declared vertical bank, every step.
+"""The hull interaction node: every interaction of a run in one node, every step: Wang's (1975)
+passing-ship loads between the declared pairs and the bank suction on a vessel from a declared
+vertical bank (tug_dynamics.interaction_set).
 
-    ros2 run hull_contact interaction_node --ros-args -r __ns:=/passing \
-        -p vessel_a:=ship -p ship_file_a:=s175_003.yaml -p vessel_b:=moored -p ship_file_b:=s175_003.yaml
+    ros2 run hull_contact interaction_node --ros-args -r __ns:=/interactions \
+        -p vessels:="[ship, moored]" -p ship_files:="[s175_003.yaml, s175_003.yaml]" \
+        -p pairs:="[passing=ship,moored]"
 
-Subscribes ``/<vessel_a>/odom`` and ``/<vessel_b>/odom`` and publishes ``on_a/wrench`` and
-``on_b/wrench`` (geometry_msgs/WrenchStamped in ``<vessel>/base_link``, body axes, about midship):
-the surge and sway force and yaw moment of tug_dynamics.hull_interaction on each vessel from the
-other, computed from the pair's odometry of step k, each position carried on at its velocity to
-the middle of the step the load acts over (k+1 -> k+2, 1.5 steps on), and applied by the vessel
-nodes (their ``wrench_topics``) over that step (docs/confined-water.md, "In a run"). With
-``bank`` (a polyline, the water on its left) and no ``vessel_b`` the node publishes only
-``on_a/wrench``: tug_dynamics.bank_effect's image-method suction on vessel a. The physics lives in
-tug_dynamics.hull_interaction and bank_effect; this node converts poses and messages.
+Subscribes ``/<vessel>/odom`` of each of ``vessels`` and publishes ``on_<vessel>/wrench``
+(geometry_msgs/WrenchStamped in ``<vessel>/base_link``, body axes, about midship): the sum of the
+surge and sway forces and yaw moments of its pairs and banks, computed from the odometry of step
+k, each position carried on at its velocity to the middle of the step the load acts over
+(k+1 -> k+2, 1.5 steps on), and applied by the vessel nodes (their ``wrench_topics``) over that
+step (docs/confined-water.md, "In a run"). ``interaction_off`` / ``interaction_on`` events name
+the entry whose hulls overlap (or whose ship is at or over its bank) and part again. The
+physics lives in tug_dynamics.interaction_set; this node converts poses and messages.
 """
 from __future__ import annotations
 
 import json
 import math
 import sys
-from typing import List, NamedTuple, Optional, Tuple
+from typing import Dict, List, Optional
 
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
@@ -32,73 +33,77 @@ from sim_math.rotations import yaw_from_quaternion
 from sim_plumbing import cdr
 from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
-from tug_dynamics.bank_effect import BankEffect, BankPolyline
-from tug_dynamics.hull_interaction import HullPair, SectionalAreaCurve, pair_from_ship_configs
+from tug_dynamics.bank_effect import BankPolyline
+from tug_dynamics.hull_interaction import SectionalAreaCurve
+from tug_dynamics.interaction_set import BankEntry, InteractionSet, PairEntry, PlanarState
 from tug_dynamics.ship_file import ship_config
-
-ZERO_LOADS = (0.0, 0.0, 0.0)
-
-
-class PlanarState(NamedTuple):
-    """A vessel's horizontal position, heading and velocity over ground (world, REP-103)."""
-    x: float
-    y: float
-    yaw: float
-    vx: float
-    vy: float
 
 
 def planar_state(msg: cdr.OdometryIn) -> PlanarState:
-    yaw = yaw_from_quaternion(*msg.orientation)
     u, v, _ = msg.linear        # twist in body axes (REP-105)
-    c, s = math.cos(yaw), math.sin(yaw)
-    return PlanarState(msg.position[0], msg.position[1], yaw, c * u - s * v, s * u + c * v)
+    return PlanarState.from_body(msg.position[0], msg.position[1], yaw_from_quaternion(*msg.orientation), u, v)
 
 
-def ahead(state: PlanarState, seconds: float) -> PlanarState:
-    """The state carried on at its velocity (heading and velocity held): where the vessel is in
-    the middle of the step a load computed now acts over."""
-    return state._replace(x=state.x + state.vx * seconds, y=state.y + state.vy * seconds)
+def _listed(values) -> List[str]:
+    return [v for v in values if v]
 
 
-def wang_arguments(own: PlanarState, other: PlanarState) -> Tuple[float, float, float]:
-    """(stagger, separation, speed) of `other` seen from `own`: its midship ahead and to port in
-    own's body axes, and its velocity over ground along own's x axis (Wang's parallel courses)."""
-    c, s = math.cos(own.yaw), math.sin(own.yaw)
-    dx, dy = other.x - own.x, other.y - own.y
-    return c * dx + s * dy, -s * dx + c * dy, c * other.vx + s * other.vy
+def _named(param: str, text: str):
+    name, sep, rest = text.partition("=")
+    if not sep or not name or not rest:
+        raise ValueError(f"parameter {param}: expected \"<name>=...\", got {text!r}")
+    return name, rest
 
 
-def loads_on(pair: HullPair, own: PlanarState, other: PlanarState, depth: float) -> Optional[Tuple[float, ...]]:
-    """(X, Y, N) on `own` from `other` (body axes), or None while the hulls overlap (the theory's
-    limit: HullPair.check)."""
-    try:
-        return pair.loads(*wang_arguments(own, other), depth)
-    except ValueError:
-        return None
+def parse_pairs(values: List[str]) -> List[PairEntry]:
+    out = []
+    for text in _listed(values):
+        name, rest = _named("pairs", text)
+        vessels = rest.split(",")
+        if len(vessels) != 2 or not all(vessels):
+            raise ValueError(f"parameter pairs: \"{name}\" needs two vessels \"<a>,<b>\", got {rest!r}")
+        out.append(PairEntry(name, *vessels))
+    return out
 
 
-def ship_configs(gp, ends: str) -> dict:
-    """The ship files' mappings of the given ends, with their overrides."""
-    configs = {}
-    for end in ends:
-        text = gp(f"ship_overrides_{end}")
+def parse_banks(values: List[str]) -> List[BankEntry]:
+    out = []
+    for text in _listed(values):
+        name, rest = _named("banks", text)
+        vessel, sep, coords = rest.partition(":")
         try:
-            overrides = json.loads(text) if text else None
+            flat = [float(c) for c in coords.split(",")]
+        except ValueError:
+            flat = []
+        if not sep or not vessel or len(flat) < 4 or len(flat) % 2:
+            raise ValueError(f"parameter banks: \"{name}\" needs \"<vessel>:x0,y0,x1,y1,...\", got {rest!r}")
+        try:
+            bank = BankPolyline([flat[i:i + 2] for i in range(0, len(flat), 2)])
+        except ValueError as exc:
+            raise ValueError(f"parameter banks: \"{name}\": {exc}") from None
+        out.append(BankEntry(name, vessel, bank))
+    return out
+
+
+def hulls_of(vessels: List[str], ship_files: List[str], overrides: List[str]) -> Dict[str, dict]:
+    """Each vessel's ship file mapping, with its overrides."""
+    if len(ship_files) != len(vessels):
+        raise ValueError(f"parameters vessels and ship_files: {len(vessels)} vessels, {len(ship_files)} ship files")
+    if overrides == [""]:
+        overrides = [""] * len(vessels)
+    if len(overrides) != len(vessels):
+        raise ValueError(f"parameters vessels and ship_overrides: {len(vessels)} vessels, {len(overrides)} "
+                         "overrides (one each, or none)")
+    if len(set(vessels)) != len(vessels):
+        raise ValueError(f"parameter vessels: a vessel twice in {vessels}")
+    configs = {}
+    for vessel, file, text in zip(vessels, ship_files, overrides):
+        try:
+            extra = json.loads(text) if text else None
         except json.JSONDecodeError as exc:
-            raise ValueError(f"parameter ship_overrides_{end}: not JSON ({exc})") from None
-        path = resolve_data_file("tug_dynamics", "ships", gp(f"ship_file_{end}"))
-        configs[end] = ship_config(path, overrides)[1]
+            raise ValueError(f"parameter ship_overrides of '{vessel}': not JSON ({exc})") from None
+        configs[vessel] = ship_config(resolve_data_file("tug_dynamics", "ships", file), extra)[1]
     return configs
-
-
-def bank_polyline(flat: List[float]) -> BankPolyline:
-    if len(flat) % 2:
-        raise ValueError(f"parameter bank: x, y pairs expected, got {len(flat)} numbers")
-    try:
-        return BankPolyline([flat[i:i + 2] for i in range(0, len(flat), 2)])
-    except ValueError as exc:
-        raise ValueError(f"parameter bank: {exc}") from None
 
 
 class InteractionNode(SteppedNode):
@@ -106,41 +111,28 @@ class InteractionNode(SteppedNode):
         super().__init__(node_name, **kwargs)
         rc.declare_table(self, INTERACTION_NODE)
         gp = lambda name: self.get_parameter(name).value  # noqa: E731
-        flat = [float(c) for c in gp("bank")]
-        self.bank = bank_polyline(flat) if flat != [0.0] else None
-        ends = "a" if self.bank else "ab"
-        for key in [f"{k}_{e}" for e in ends for k in ("vessel", "ship_file")]:
-            if not gp(key):
-                raise ValueError(f"parameter {key}: required")
-        if self.bank and gp("vessel_b"):
-            raise ValueError(f"parameters bank and vessel_b: a bank acts on vessel_a alone, got vessel_b "
-                             f"'{gp('vessel_b')}'")
-        self.vessels = {e: gp(f"vessel_{e}") for e in ends}
-        if self.vessels.get("b") == self.vessels["a"]:
-            raise ValueError(f"parameters vessel_a and vessel_b: both '{self.vessels['a']}' (a pair of two vessels)")
-        configs = ship_configs(gp, ends)
-        if self.bank:
-            self.bank_effect = BankEffect(SectionalAreaCurve.from_ship_config(configs["a"]),
-                                          water_density=float(configs["a"].get("water_density", 1025.0)))
-        else:   # "a" feels b's passage, "b" feels a's
-            self.pairs = {"a": pair_from_ship_configs(configs["a"], configs["b"]),
-                          "b": pair_from_ship_configs(configs["b"], configs["a"])}
-        self.depth = gp("depth") or math.inf
-        self.name_ = self.get_namespace().strip("/").split("/")[-1] or "interaction"
-        self.topics = {T.vessel_topic(self.vessels[e], T.ODOM): e for e in ends}
-        self.states = {}
+        vessels = _listed(gp("vessels"))
+        configs = hulls_of(vessels, _listed(gp("ship_files")), list(gp("ship_overrides")))
+        pairs, banks = parse_pairs(gp("pairs")), parse_banks(gp("banks"))
+        if not pairs and not banks:
+            raise ValueError("parameters pairs and banks: no interaction declared")
+        depth = gp("depth") or math.inf
+        self.interactions = InteractionSet(
+            {n: SectionalAreaCurve.from_ship_config(c) for n, c in configs.items()}, pairs, banks, depth,
+            {n: float(c.get("water_density", 1025.0)) for n, c in configs.items()})
+        self.topics = {T.vessel_topic(n, T.ODOM): n for n in self.interactions.vessels}
+        self.states: Dict[str, PlanarState] = {}
         self.loads = None
-        self._overlapping = False
-        self.outputs = {e: (self.create_fed_publisher(WrenchStamped, f"on_{e}/wrench", rc.LATCHED_STATE_QOS),
-                            cdr.WrenchStampedEncoder(f"{self.vessels[e]}/base_link")) for e in ends}
+        self._off = {name: False for name in [p.name for p in pairs] + [b.name for b in banks]}
+        self.outputs = {n: (self.create_fed_publisher(WrenchStamped, f"on_{n}/wrench", rc.LATCHED_STATE_QOS),
+                            cdr.WrenchStampedEncoder(f"{n}/base_link")) for n in self.interactions.vessels}
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
         self.init_stepping([StepInput(t, Odometry, decode=cdr.decode_odometry) for t in self.topics], ready=False)
-        what = (f"bank suction (image method) on {self.vessels['a']}" if self.bank else
-                f"Wang (1975) between {self.vessels['a']} and {self.vessels['b']}")
+        what = [f"{p.name}: Wang (1975) between {p.a} and {p.b}" for p in pairs] + \
+               [f"{b.name}: bank suction (image method) on {b.vessel}" for b in banks]
         self.get_logger().info(
-            f"interaction '{self.name_}': {what} "
-            f"({'deep water' if math.isinf(self.depth) else f'depth {self.depth:g} m'}); waiting for the "
-            "step-0 odometry")
+            f"interactions ({'deep water' if math.isinf(depth) else f'depth {depth:g} m'}): {'; '.join(what)}; "
+            "waiting for the step-0 odometry")
 
     def accept_input(self, spec: StepInput, msg: cdr.OdometryIn) -> bool:
         if not msg.is_finite():
@@ -155,50 +147,39 @@ class InteractionNode(SteppedNode):
         return True
 
     def compute_step(self, inputs) -> None:
-        for topic, end in self.topics.items():
+        for topic, vessel in self.topics.items():
             msg = inputs.get(topic)
             if msg is not None:
-                self.states[end] = planar_state(msg)
+                self.states[vessel] = planar_state(msg)
         self._compute(1.5 * self.dt)      # from the state of step k, for the step k+1 -> k+2
 
     def _compute(self, lead: float) -> None:
-        if self.bank:
-            self._compute_bank(ahead(self.states["a"], lead))
-            return
-        a, b = ahead(self.states["a"], lead), ahead(self.states["b"], lead)
-        loads = {"a": loads_on(self.pairs["a"], a, b, self.depth), "b": loads_on(self.pairs["b"], b, a, self.depth)}
-        overlapping = loads["a"] is None or loads["b"] is None
-        self._switch(overlapping, f"{self.vessels['a']} and {self.vessels['b']}: hulls "
-                                  f"{'overlap (Wang loads off until they part)' if overlapping else 'apart again'}")
-        self.loads = {e: ZERO_LOADS if overlapping else loads[e] for e in ("a", "b")}
+        self.loads, off = self.interactions.loads(self.states, lead)
+        for name, now in off.items():
+            if now != self._off[name]:
+                self._off[name] = now
+                self.emit_event("interaction_off" if now else "interaction_on", name,
+                                self._detail(name, now))
 
-    def _compute_bank(self, own: PlanarState) -> None:
-        speed = math.cos(own.yaw) * own.vx + math.sin(own.yaw) * own.vy
-        try:
-            y, n = self.bank_effect.loads_along(self.bank, own.x, own.y, own.yaw, speed, self.depth)
-            loads = (0.0, y, n)
-        except ValueError:        # inside the half beam of the bank or beyond it (grounded): the model's limit
-            loads = None
-        self._switch(loads is None, f"{self.vessels['a']}: "
-                                    f"{'at or over the bank (suction off)' if loads is None else 'clear of the bank'}")
-        self.loads = {"a": loads or ZERO_LOADS}
-
-    def _switch(self, off: bool, detail: str) -> None:
-        if off != self._overlapping:
-            self._overlapping = off
-            self.emit_event("interaction_off" if off else "interaction_on", detail)
+    def _detail(self, name: str, off: bool) -> str:
+        pair = next((p for p in self.interactions.pairs if p.name == name), None)
+        if pair:
+            return (f"{pair.a} and {pair.b}: hulls "
+                    f"{'overlap (Wang loads off until they part)' if off else 'apart again'}")
+        bank = next(b for b in self.interactions.banks if b.name == name)
+        return f"{bank.vessel}: {'at or over the bank (suction off)' if off else 'clear of the bank'}"
 
     def publish_outputs(self) -> None:
         if self.loads is None:
             return
         stamp_ns = self.stamp_ns()
-        for end, (pub, encoder) in self.outputs.items():
-            x, y, n = self.loads[end]
+        for vessel, (pub, encoder) in self.outputs.items():
+            x, y, n = self.loads[vessel]
             pub.publish(encoder.encode(stamp_ns, (x, y, 0.0), (0.0, 0.0, n)), stamp_ns)
 
-    def emit_event(self, kind: str, detail: str) -> None:
+    def emit_event(self, kind: str, target: str, detail: str) -> None:
         ev = ScenarioEvent(step=self.step_index, source=self.get_fully_qualified_name(), kind=kind,
-                           target=self.name_, detail=detail, value=float("nan"))
+                           target=target, detail=detail, value=float("nan"))
         ev.header.stamp = self.stamp()
         self.event_pub.publish(ev)
         self.get_logger().info(detail)

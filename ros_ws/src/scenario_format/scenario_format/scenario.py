@@ -27,7 +27,7 @@ starts; every error names the file, the key and what was expected.
         fender: tug2/bow_fender # "<vessel>/<attachment>"
         hull: ship              # the vessel pushed on (outline from its ship file)
         # radius: 0.5  stiffness: 2.0e6  damping: 4.0e5  friction: 0.3   (m, N/m, N s/m, -)
-    interactions:               # passing-ship loads between two hulls (Wang 1975, hull_contact interaction_node)
+    interactions:               # passing-ship loads between two hulls (Wang 1975), one interaction_node for all
       - between: [ship, moored] # two vessels; name: optional (default <a>_<b>_interaction)
       - between: [ship]         # one vessel and a vertical bank: [x, y] points (m), the water on the left
         bank: [[0.0, -60.0], [2000.0, -60.0]]
@@ -223,7 +223,8 @@ class ContactSpec(_Strict):
 class InteractionSpec(_Strict):
     """Wang's (1975) passing-ship loads between two vessels (tug_dynamics.hull_interaction), or
     with a `bank` the image-method bank suction on one vessel (tug_dynamics.bank_effect),
-    computed every step from the odometry by a hull_contact interaction_node; deep water, or the
+    computed every step from the odometry by the run's one hull_contact interaction_node (all the
+    entries together, each vessel's loads summed); deep water, or the
     environment's depth when it is one number."""
     between: List[str] = Field(min_length=1, max_length=2)   # the two vessels, or one with a bank
     name: Optional[str] = Field(None, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")   # default <a>_<b>_interaction
@@ -231,7 +232,8 @@ class InteractionSpec(_Strict):
     bank: Optional[List[List[float]]] = None
 
     @property
-    def namespace(self) -> str:
+    def entry_name(self) -> str:
+        """The name its events carry (`interaction_off` / `interaction_on`)."""
         return self.name or ("_".join(self.between) + ("_bank" if self.bank else "_interaction"))
 
 
@@ -499,8 +501,13 @@ def _check_names(path: str, sc: Scenario, vessels: List[str]) -> None:
     pilots = [a.name for a in sc.autopilots]
     if len(set(pilots)) != len(pilots):
         raise ScenarioError(f"{path}: key 'autopilots': duplicate name(s)")
-    contacts = [c.name for c in sc.contacts] + [i.namespace for i in sc.interactions]
+    contacts = [c.name for c in sc.contacts] + [i.entry_name for i in sc.interactions]
     groups = [set(vessels), set(ropes), set(pilots), set(contacts)]
+    if sc.interactions:       # the interaction node's namespace (sim_contract.topics.INTERACTIONS)
+        taken = sorted(n for g in groups[:3] + [{c.name for c in sc.contacts}] for n in g if n == "interactions")
+        if taken:
+            raise ScenarioError(f"{path}: name 'interactions' is the interaction node's namespace in a run with "
+                                "'interactions': rename that vessel, rope, contact or autopilot")
     clash = {n for i, a in enumerate(groups) for b in groups[i + 1:] for n in a & b}
     if clash or len(set(contacts)) != len(contacts):
         raise ScenarioError(f"{path}: names {sorted(clash or {n for n in contacts if contacts.count(n) > 1})} are "

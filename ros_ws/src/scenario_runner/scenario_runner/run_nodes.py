@@ -56,7 +56,7 @@ def external_outputs(sc: Scenario, external: Sequence[str]) -> Tuple[Tuple[str, 
     that the recording loses none of them as the nodes' feed would not)."""
     outputs = tuple(t for t in _node_outputs(sc) if _published_by(t, external))
     names = ({f"/{v.name}" for v in sc.vessels} | {f"/{r.name}" for r in sc.ropes}
-             | {f"/{c.name}" for c in sc.contacts} | {f"/{i.namespace}" for i in sc.interactions})
+             | {f"/{c.name}" for c in sc.contacts} | ({f"/{T.INTERACTIONS}"} if sc.interactions else set()))
     per_step = ("odom", "attachments", "status", "thrusters", "state", "wrench")  # the contract's "every step"
     every_step = tuple(t for t in outputs if t.split("/")[-1] in per_step and "/" + t.split("/")[1] in names)
     return outputs, every_step
@@ -161,10 +161,8 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         contacts = [T.contact_topic(c.name) for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
         if contacts:
             params["contact_topics"] = contacts
-        interactions = [T.interaction_wrench_topic(i.namespace, end) for i in sc.interactions
-                        for end, name in zip("ab", i.between) if name == v.name]
-        if interactions:
-            params["wrench_topics"] = interactions
+        if any(v.name in i.between for i in sc.interactions):
+            params["wrench_topics"] = [T.interaction_wrench_topic(v.name)]
         if v.ship_overrides:
             params["ship_overrides"] = json.dumps(v.ship_overrides)
         if v.motion is not None:
@@ -214,21 +212,27 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
     return specs
 
 
+def interaction_vessels(sc: Scenario) -> List[str]:
+    """The vessels that feel an interaction, in the order the scenario first names them."""
+    return list(dict.fromkeys(name for i in sc.interactions for name in i.between))
+
+
 def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[NodeSpec]:
+    """One interaction node for all the run's pairs and banks (tug_dynamics.interaction_set)."""
+    if not sc.interactions:
+        return []
     ships = {v.name: v for v in sc.vessels}
-    specs = []
-    for i in sc.interactions:
-        params = {"depth": interaction_depth(sc)}
-        if i.bank:
-            params["bank"] = [float(c) for point in i.bank for c in point]
-        for end, name in zip("ab", i.between):
-            params[f"vessel_{end}"] = name
-            params[f"ship_file_{end}"] = resolve("tug_dynamics", "ships", ships[name].ship_file, scenario_path)
-            if ships[name].ship_overrides:
-                params[f"ship_overrides_{end}"] = json.dumps(ships[name].ship_overrides)
-        specs.append(NodeSpec(f"/{i.namespace}", "interaction", "hull_contact", "interaction_node", {
-            **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id}))
-    return specs
+    vessels = interaction_vessels(sc)
+    params = {"vessels": vessels,
+              "ship_files": [resolve("tug_dynamics", "ships", ships[n].ship_file, scenario_path) for n in vessels],
+              "ship_overrides": [json.dumps(ships[n].ship_overrides) if ships[n].ship_overrides else ""
+                                 for n in vessels],
+              "pairs": [f"{i.entry_name}={','.join(i.between)}" for i in sc.interactions if not i.bank] or [""],
+              "banks": [f"{i.entry_name}={i.between[0]}:" + ",".join(repr(float(c)) for point in i.bank for c in point)
+                        for i in sc.interactions if i.bank] or [""],
+              "depth": interaction_depth(sc)}
+    return [NodeSpec(f"/{T.INTERACTIONS}", "interaction", "hull_contact", "interaction_node", {
+        **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id})]
 
 
 def instrument_specs(sc: Scenario, scenario_path: str) -> List[NodeSpec]:
@@ -268,6 +272,5 @@ def contract_topics(sc: Scenario) -> List[tuple]:
         if r.layout == "winch":
             named.append((T.rope_topic(r.name, T.WINCH), T.WINCH_TOPIC))
     named += [(T.contact_topic(c.name), t) for c in sc.contacts for t in T.CONTACT_TOPICS]
-    named += [(T.interaction_wrench_topic(i.namespace, end), t) for i in sc.interactions
-              for end in "ab"[:len(i.between)] for t in T.INTERACTION_TOPICS]
+    named += [(T.interaction_wrench_topic(v), t) for v in interaction_vessels(sc) for t in T.INTERACTION_TOPICS]
     return [(name, rc.message_class(t.type), rc.QOS_BY_KIND[t.qos]) for name, t in named]

@@ -195,20 +195,20 @@ CONTACT_NODE = ParamTable(
     P("friction", 0.3, "Coulomb friction coefficient, fender on hull", 0.0, 2.0),
 )
 
-# hull_contact interaction_node: Wang's (1975) passing-ship loads between two vessels
-# (tug_dynamics.hull_interaction); the scenario's `interactions` set them.
+# hull_contact interaction_node: the run's hull interactions, all in one node (Wang's (1975)
+# passing-ship loads between pairs, the image-method bank suction; tug_dynamics.interaction_set);
+# the scenario's `interactions` set them.
 INTERACTION_NODE = ParamTable(
     "hull_contact/interaction_node",
-    P("vessel_a", "", "First vessel of the pair (its namespace)"),
-    P("vessel_b", "", "Second vessel of the pair (its namespace); empty with a bank"),
-    P("ship_file_a", "", "Ship file of vessel a (path or name in share/tug_dynamics/ships): its length and "
-                         "displaced volume give Wang's sectional-area parabola"),
-    P("ship_file_b", "", "Ship file of vessel b"),
-    P("ship_overrides_a", "", "JSON merged over vessel a's ship file (as the vessel node's)"),
-    P("ship_overrides_b", "", "JSON merged over vessel b's ship file"),
+    P("vessels", [""], "The vessels that feel an interaction (their namespaces), in the order of ship_files"),
+    P("ship_files", [""], "Ship file of each of `vessels` (path or name in share/tug_dynamics/ships): its length "
+                          "and displaced volume give Wang's sectional-area parabola"),
+    P("ship_overrides", [""], "JSON merged over each of `vessels`' ship file (as the vessel node's; \"\" none), "
+                              "in the same order, or one \"\" for all"),
+    P("pairs", [""], "Wang pairs, \"<name>=<vessel a>,<vessel b>\": each vessel feels the other"),
+    P("banks", [""], "Vertical banks, \"<name>=<vessel>:x0,y0,x1,y1,...\": the polyline's points (m, world "
+                     "(map)), the water on its left; the image-method bank suction on the vessel"),
     P("depth", 0.0, "Water depth for the bottom images (0: deep water)", 0.0, 1e4, "m"),
-    P("bank", [0.0], "A vertical bank instead of vessel b: the polyline's points x0, y0, x1, y1, ... (m, world "
-                     "(map)), the water on its left; the image-method bank suction on vessel a"),
 )
 
 # bridge_instruments nmea_out: NMEA 0183 / AIS over UDP beside a run (the runner sets the lists

@@ -63,11 +63,14 @@ WINCH_TOPIC = Topic(WINCH, "tug_msgs/msg/WinchCommand", "command", "-", "on dema
 CONTACT_TOPICS: Tuple[Topic, ...] = (
     Topic(STATE, "tug_msgs/msg/HullContact", "latched_state", "map", "every exchange step"),
 )
-# a hull interaction (one interaction_node per declared pair): the Wang (1975) passing-ship
-# load on each vessel of the pair, from the pair's odometry of the step before
+# the run's hull interactions (one interaction_node for every declared pair and bank, namespace
+# INTERACTIONS): on each vessel that feels one, the sum of its Wang (1975) passing-ship loads
+# and bank suction, from the odometry of the step before
+INTERACTIONS = "interactions"
 INTERACTION_TOPICS: Tuple[Topic, ...] = (
-    Topic("on_<a|b>/wrench", "geometry_msgs/msg/WrenchStamped", "latched_state", "<vessel>/base_link",
-          "every exchange step", note="surge and sway force and yaw moment on the pair's vessel a or b (body axes)"),
+    Topic("on_<vessel>/wrench", "geometry_msgs/msg/WrenchStamped", "latched_state", "<vessel>/base_link",
+          "every exchange step", note="surge and sway force and yaw moment on the vessel from all its "
+                                      "interactions (body axes, about midship)"),
 )
 CLOCK, SIM_STEP, STEP_DONE, EVENTS, TF, TF_STATIC = (
     "/clock", "/sim/step", "/sim/step_done", "/scenario/events", "/tf", "/tf_static")
@@ -118,8 +121,6 @@ def contact_topic(contact: str) -> str:
     return f"/{contact}/{STATE}"
 
 
-def interaction_wrench_topic(interaction: str, end: str) -> str:
-    """The interaction load on vessel `end` ('a' or 'b') of a pair: /<interaction>/on_<end>/wrench."""
-    if end not in ("a", "b"):
-        raise ValueError(f"interaction end '{end}': expected 'a' or 'b'")
-    return f"/{interaction}/on_{end}/wrench"
+def interaction_wrench_topic(vessel: str) -> str:
+    """The sum of the run's interaction loads on a vessel: /interactions/on_<vessel>/wrench."""
+    return f"/{INTERACTIONS}/on_{vessel}/wrench"
