@@ -281,3 +281,14 @@ def test_a_bad_bank_exits_2_before_start(tmp_path, run_in_process, edit, message
     proc = run_in_process("run_scenario", path, "--no-record", "--quiet")
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in proc.stderr, proc.stderr
+
+
+def test_a_vessel_named_interactions_exits_2_before_start(tmp_path, run_in_process):
+    """/interactions is the interaction node's namespace in a run with `interactions`."""
+    sc = yaml.safe_load(open(_library("passing_moored_s175_1p5B.yaml")))
+    text = yaml.safe_dump(sc).replace("moored", "interactions")
+    path = tmp_path / "clash.yaml"
+    path.write_text(text)
+    proc = run_in_process("run_scenario", path, "--no-record", "--quiet")
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "name 'interactions' is the interaction node's namespace" in proc.stderr, proc.stderr
