@@ -795,6 +795,7 @@ class _Session:
             if conductor.watched:
                 self.wait_for_states(k, stall_timeout)
             conductor.send_step(k)
+            self.step_local_nodes(f"computing step {k} -> {k + 1}")
             if recorder:
                 recorder.flush()  # the previous step's messages, written while the nodes compute
             self.wait_for(k + 1, stall_timeout, f"computing step {k} -> {k + 1}")
@@ -847,6 +848,18 @@ class _Session:
         start = time.monotonic()
         while time.monotonic() < start + 0.3 or (not settled() and time.monotonic() < start + 5.0):
             self.executor.spin_once(timeout_sec=0.01)
+
+    def step_local_nodes(self, what: str) -> None:
+        """The nodes of this process take the trigger just sent (SteppedNode.take_triggers); a
+        node's failure is reported by its failed answer, as in wait_for."""
+        try:
+            for node in self.local_nodes:
+                node.take_triggers()
+        except Exception as exc:  # noqa: BLE001 - an in-process node failed in its step
+            self.conductor.take_answers()
+            if self.conductor.failures:
+                self.raise_failure()
+            raise RunError(f"a node failed while {what}: {exc!r}") from exc
 
     def wait_for(self, step: int, timeout: float, what: str) -> None:
         """Spin until every node has answered StepDone(step); RunError if a node failed, died or

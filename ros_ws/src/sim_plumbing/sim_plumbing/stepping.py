@@ -250,6 +250,14 @@ class SteppedNode(Node):
             self.complaints("unconfirmed trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) of run '{msg.run_id}' "
                             "refused: not sent by this node's runner (not on its private channel)")
 
+    def take_triggers(self) -> None:
+        """Called by a runner that carries this node in its own process, right after it sent a
+        step: the trigger is taken from the private channel now, not when the executor gets to
+        the wire's SimStep (measured: 3-9 ms later with eight tows in one process, behind the
+        events queued before it). The wire's copy, when it comes, is checked as ever."""
+        if self.channel is not None and self.lockstep:
+            self._take_channel()
+
     def _take_channel(self) -> None:
         """Triggers the runner sent on the private channel, taken in order."""
         for t in self.channel.triggers():
