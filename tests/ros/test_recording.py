@@ -238,6 +238,7 @@ def test_realtime_mode_is_paced_and_reports_overruns(tmp_path, ros_domain):
                            str(tmp_path / "paced.mcap"), "--quiet"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert "overrun step(s)" in proc.stdout and "lateness" in proc.stdout
+    assert "step 0 (before the clock) took" in proc.stdout
     # Paced: the run cannot be faster than the simulated time (a lower bound, safe on a busy machine).
     assert time.monotonic() - t0 >= 3.0
     assert "3.0 s simulated in" in proc.stdout

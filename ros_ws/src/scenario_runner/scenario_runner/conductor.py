@@ -21,7 +21,7 @@ import secrets
 import signal
 import sys
 import time
-from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Callable, Deque, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 import rclpy
@@ -93,9 +93,11 @@ def domain_discovery_wait() -> float:
     return wait
 # s between looks at the ROS graph for external nodes that have left it (run(external=...))
 GRAPH_CHECK_PERIOD = 0.25
-# Paced, the graph look waits for idle time before a step (at least this much of it), not the
-# inside of a step, where in one process it made every 13th step of eight tows late; it is done
-# inside a step only when it has found no such time for this long past its due time.
+# Paced, the graph look waits for idle time before a step, not the inside of a step, where in one
+# process it made every 13th step of eight tows late: at least this much idle time, and 1.5 times
+# the longest of its last looks (5-8 ms with eight tows' 72 per-step topics: with a fixed 4 ms the
+# looks that found 4-7 ms made their next step 1-4 ms late). It is done inside a step only when it
+# has found no such time for this long past its due time.
 GRAPH_CHECK_IDLE = 0.004
 GRAPH_CHECK_OVERDUE = 1.0
 
@@ -110,6 +112,7 @@ class RunStats:
     wall_time: float = 0.0
     overruns: int = 0  # realtime: steps finished after their wall-clock deadline
     overrun_steps: List[Tuple[int, float]] = dataclasses.field(default_factory=list)  # the first: (step, s late)
+    first_step: float = float("nan")  # realtime: s step 0 took (before the clock: Session.step)
     lateness: List[float] = dataclasses.field(default_factory=list)  # realtime: s behind schedule per step
     round_trips: List[float] = dataclasses.field(default_factory=list)  # s from SimStep to last StepDone
     compute_times: Dict[str, List[float]] = dataclasses.field(default_factory=dict)  # node -> s per step
@@ -689,6 +692,7 @@ class _Session:
         self.external = set(external)
         self.seen_in_graph: set = set()  # external nodes seen in the ROS graph (gone_external)
         self.graph_check = 0.0  # when wait_for looks at the ROS graph next (strangers, external nodes gone)
+        self.look_times: Deque[float] = collections.deque(maxlen=8)   # s each of the last graph looks took
         self.own_specs = [s for s in specs if s.name not in self.external]  # the nodes this runner starts
         # the external nodes' per-step outputs, subscribed by the recorder: waited for every step
         self.awaited_outputs = external_outputs(sc, sorted(self.external))[1] if recorder and external else ()
@@ -759,12 +763,23 @@ class _Session:
         needs = [(p, want + self.conductor.own_readers(p)) for p in self.conductor.order_publishers()]
         needs.append((self.conductor.step_pub, len(self.specs)))
         deadline = time.monotonic() + ready_timeout
-        while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()):
+        conductor = self.conductor
+
+        def unrecorded_ready() -> list:
+            # the ready answers on the wire, recorded as /sim/step_done of step 0: a node in this
+            # process is triggered on its channel the moment step 0 is sent (take_triggers), and
+            # then stops repeating the answer its wire copy may not have reached us with yet
+            if not recorder:
+                return []
+            return [n for n in conductor.channels if not conductor.wire_copies.get(n, {}).get(0)]
+        while any(p.get_subscription_count() < n for p, n in needs) or (recorder and recorder.unmatched_topics()) \
+                or unrecorded_ready():
             self.executor.spin_once(timeout_sec=0.01)
             self.stop.check()
             if time.monotonic() > deadline:
                 late = [p.topic_name for p, n in needs if p.get_subscription_count() < n]
                 late += recorder.unmatched_topics() if recorder else []
+                late += [f"{rc.STEP_DONE_TOPIC} (the ready answer of {n})" for n in unrecorded_ready()]
                 raise RunError(f"no subscriber matched topic(s) {late} within {ready_timeout:g} s")
 
     def step(self, n_steps: int, stall_timeout: float, on_step: Optional[Callable[[int], None]]) -> None:
@@ -784,7 +799,8 @@ class _Session:
             if sc.mode == "realtime":
                 target = t_start + k * period
                 now = time.monotonic()
-                if k > 0 and now > self.graph_check and target - now > GRAPH_CHECK_IDLE:
+                if k > 0 and now > self.graph_check and target - now > max(
+                        GRAPH_CHECK_IDLE, 1.5 * max(self.look_times, default=0.0)):
                     self.look_at_graph(k, f"waiting to start step {k}")   # in the idle time, not in a step
                 while time.monotonic() < target:   # asleep until a message comes or the step is due
                     executor.spin_once(timeout_sec=max(0.0, target - time.monotonic()))
@@ -805,8 +821,15 @@ class _Session:
             conductor.done.pop(k, None)
             stats.steps_done = k + 1
             self.stop.check()
+            if sc.mode == "realtime" and k == 0:
+                # The clock starts when step 0 is done: every node's first step carries one-off work
+                # (code run for the first time, first messages on each topic; measured twice a
+                # steady step with eight tows in one process), part of starting the run, like the
+                # settling. Step 1 is due one period later, and every step after it on time.
+                stats.first_step = time.monotonic() - t_start
+                t_start = time.monotonic() - period
             over = time.monotonic() - (t_start + (k + 1) * period)
-            if sc.mode == "realtime" and over > 0.0:
+            if sc.mode == "realtime" and k > 0 and over > 0.0:
                 stats.overruns += 1
                 if len(stats.overrun_steps) < 5:
                     stats.overrun_steps.append((k, over))
@@ -928,9 +951,11 @@ class _Session:
 
     def look_at_graph(self, k: int, what: str) -> None:
         """The periodic look at the ROS graph: strangers on the run's topics, external nodes gone."""
-        self.graph_check = time.monotonic() + GRAPH_CHECK_PERIOD
+        began = time.monotonic()
+        self.graph_check = began + GRAPH_CHECK_PERIOD
         self.look_for_strangers(k)
         gone = self.gone_external() if self.external else []
+        self.look_times.append(time.monotonic() - began)
         if gone:
             raise RunError(f"node(s) {', '.join(gone)} left the network while {what}: external, their DDS "
                            "participant is no longer announced (process ended, or its host is down or cut off)")

@@ -68,7 +68,8 @@ def _run_lines(sc, stats: cd.RunStats) -> List[str]:
         which = (" (steps " + ", ".join(f"{k} by {1e3 * late:.1f} ms" for k, late in stats.overrun_steps[:5])
                  + (", ..." if stats.overruns > 5 else "") + ")") if stats.overrun_steps else ""
         lines.append(f"  realtime: {stats.overruns} overrun step(s){which}; lateness p99 "
-                     f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms")
+                     f"{1e3 * cd.percentile(stats.lateness, 99):.2f} ms; step 0 (before the clock) took "
+                     f"{1e3 * stats.first_step:.1f} ms")
     return lines
 
 
