@@ -250,6 +250,11 @@ class SteppedNode(Node):
             self.complaints("unconfirmed trigger", f"{rc.SIM_STEP_TOPIC}: SimStep({msg.step}) of run '{msg.run_id}' "
                             "refused: not sent by this node's runner (not on its private channel)")
 
+    def has_state_inputs(self, k: int) -> bool:
+        """Whether every state input of step k is here (what a trigger of step k would wait for,
+        but an order)."""
+        return all(k in self._buffer[spec.topic] for spec in self.inputs if spec.kind == "state")
+
     def take_triggers(self) -> None:
         """Called by a runner that carries this node in its own process, right after it sent a
         step: the trigger is taken from the private channel now, not when the executor gets to
