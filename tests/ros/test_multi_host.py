@@ -86,6 +86,24 @@ def _on_one_host(out, scenario, duration):
     return _messages(out)
 
 
+def _across_hosts(specs, tmp_path, scenario, duration, loss, delay):
+    """The scenario with the runner and every node on a host of its own, the links losing `loss` %
+    (and delaying `delay` ms): its decoded recording, the links having really lost packets."""
+    out = tmp_path / "hosts.mcap"
+    with hosts_harness.Hosts(["runner"] + [s.namespace.strip("/") for s in specs], loss_percent=loss,
+                             delay_ms=delay) as hosts:
+        env = hosts.env()
+        hosts_harness.start_nodes(hosts, specs, env, str(tmp_path / "node_logs"))
+        proc = hosts.run("runner", _runner_args(out, "--duration", str(duration), "--external", "all",
+                                                "--stall-timeout", "30", scenario=scenario),
+                         env=env, capture_output=True, text=True, timeout=180)
+        dropped = hosts.dropped()
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    print(f"\n{proc.stdout}packets dropped by the links ({loss:g} % loss, {delay:g} ms delay): {dropped}")
+    assert sum(dropped.values()) > 0, "the links lost nothing: the loss rule did not act"
+    return _messages(out)
+
+
 @pytest.fixture(scope="module")
 def one_host(tmp_path_factory):
     return _on_one_host(tmp_path_factory.mktemp("one_host") / "one_host.mcap", SCENARIO, DURATION)
@@ -116,19 +134,7 @@ def test_which_topics_an_external_node_has_recorded_by_subscription():
 @pytest.mark.parametrize("loss, delay", [(1.0, 0.0), (1.0, 5.0)], ids=["bridge-loss1", "switch-loss1-delay5ms"])
 def test_lockstep_across_hosts_is_identical_to_one_host(one_host, loss, delay, ros_domain, tmp_path):
     specs = _specs()
-    out = tmp_path / "hosts.mcap"
-    with hosts_harness.Hosts(["runner"] + [s.namespace.strip("/") for s in specs], loss_percent=loss,
-                             delay_ms=delay) as hosts:
-        env = hosts.env()
-        hosts_harness.start_nodes(hosts, specs, env, str(tmp_path / "node_logs"))
-        proc = hosts.run("runner", _runner_args(out, "--duration", str(DURATION), "--external", "all",
-                                                "--stall-timeout", "30"),
-                         env=env, capture_output=True, text=True, timeout=120)
-        dropped = hosts.dropped()
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    print(f"\n{proc.stdout}packets dropped by the links ({loss:g} % loss, {delay:g} ms delay): {dropped}")
-    assert sum(dropped.values()) > 0, "the links lost nothing: the loss rule did not act"
-    got = _messages(out)
+    got = _across_hosts(specs, tmp_path, SCENARIO, DURATION, loss, delay)
     for topic in PER_STEP:  # every step's output of the remote nodes, once, at its simulation time
         assert [t for t, _m in got[topic]] == [k * 20_000_000 for k in range(STEPS + 1)], topic
     for topic in COMPARED:
@@ -195,18 +201,7 @@ def test_the_berthing_across_hosts_is_identical_to_one_host(ros_domain, tmp_path
     want_all = _on_one_host(tmp_path / "one_host.mcap", BERTHING, duration)
     specs = _specs(BERTHING)
     outputs, every_step = run_nodes.external_outputs(load_scenario(scenario_path(BERTHING)), [s.name for s in specs])
-    out = tmp_path / "hosts.mcap"
-    with hosts_harness.Hosts(["runner"] + [s.namespace.strip("/") for s in specs], loss_percent=1.0) as hosts:
-        env = hosts.env()
-        hosts_harness.start_nodes(hosts, specs, env, str(tmp_path / "node_logs"))
-        proc = hosts.run("runner", _runner_args(out, "--duration", str(duration), "--external", "all",
-                                                "--stall-timeout", "30", scenario=BERTHING),
-                         env=env, capture_output=True, text=True, timeout=180)
-        dropped = hosts.dropped()
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    print(f"\n{proc.stdout}packets dropped by the links (1 % loss): {dropped}")
-    assert sum(dropped.values()) > 0, "the links lost nothing: the loss rule did not act"
-    got = _messages(out)
+    got = _across_hosts(specs, tmp_path, BERTHING, duration, 1.0, 0.0)
     assert len(every_step) >= 5 * 3 + 2 * 3 + 2      # odom, attachments, status of each vessel; ropes; contacts
     for topic in every_step:
         assert [t for t, _m in got[topic]] == [k * 20_000_000 for k in range(steps + 1)], topic

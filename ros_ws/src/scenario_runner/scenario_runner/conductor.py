@@ -885,15 +885,7 @@ class _Session:
             return
         until = time.monotonic() + limit
         while not all(n.has_state_inputs(k) for n in self.local_nodes) and time.monotonic() < until:
-            try:
-                self.executor.spin_once(timeout_sec=0.001)
-            except rclpy.executors.ExternalShutdownException:
-                raise
-            except Exception as exc:  # noqa: BLE001 - an in-process node failed in its callback, as in wait_for
-                self.conductor.take_answers()
-                if self.conductor.failures:
-                    self.raise_failure()
-                raise RunError(f"a node failed before step {k}: {exc!r}") from exc
+            self.spin_once(f"delivering the inputs of step {k}")
 
     def step_local_nodes(self, what: str) -> None:
         """The nodes of this process take the trigger just sent (SteppedNode.take_triggers); a
@@ -902,15 +894,28 @@ class _Session:
             for node in self.local_nodes:
                 node.take_triggers()
         except Exception as exc:  # noqa: BLE001 - an in-process node failed in its step
-            self.conductor.take_answers()
-            if self.conductor.failures:
-                self.raise_failure()
-            raise RunError(f"a node failed while {what}: {exc!r}") from exc
+            self.node_failed(exc, what)
+
+    def spin_once(self, what: str) -> None:
+        """One round of the executor; an in-process node's failure in a callback stops the run."""
+        try:
+            self.executor.spin_once(timeout_sec=0.001)
+        except rclpy.executors.ExternalShutdownException:
+            raise  # the context was shut down: the caller finalises the recording
+        except Exception as exc:  # noqa: BLE001 - an in-process node failed in its callback
+            self.node_failed(exc, what)
+
+    def node_failed(self, exc: Exception, what: str) -> None:
+        """An in-process node raised: its failed answer names it, as a node process's does."""
+        self.conductor.take_answers()
+        if self.conductor.failures:
+            self.raise_failure()
+        raise RunError(f"a node failed while {what}: {exc!r}") from exc
 
     def wait_for(self, step: int, timeout: float, what: str) -> None:
         """Spin until every node has answered StepDone(step); RunError if a node failed, died or
         stays silent for timeout s, Interrupted on a stop signal."""
-        conductor, executor, procs, recorder = self.conductor, self.executor, self.procs, self.recorder
+        conductor, procs, recorder = self.conductor, self.procs, self.recorder
         now = time.monotonic()
         deadline = now + timeout
         next_check = now  # processes are polled every 20 ms, not after every message
@@ -918,15 +923,7 @@ class _Session:
         expected = conductor.expected
         done = conductor.done
         while done.get(step) != expected:
-            try:
-                executor.spin_once(timeout_sec=0.001)
-            except rclpy.executors.ExternalShutdownException:
-                raise  # the context was shut down: the caller finalises the recording
-            except Exception as exc:  # an in-process node failed in its callback
-                conductor.take_answers()   # its failed answer names it, as a node process's does
-                if conductor.failures:
-                    self.raise_failure()
-                raise RunError(f"a node failed while {what}: {exc!r}") from exc
+            self.spin_once(what)
             conductor.take_answers()
             if conductor.failures:
                 self.raise_failure()

@@ -432,13 +432,10 @@ class SteppedNode(Node):
         trigger = self._triggers.get(k)
         if trigger is None or not self.ready_to_step or self.untrusted is not None:
             return False
-        ordered = self.namespace_name in trigger.ordered
-        for spec in self.inputs:
-            if spec.kind == "state" and k not in self._buffer[spec.topic]:
-                return False
-            if spec.kind == "order" and ordered and k not in self._buffer[spec.topic]:
-                return False
-        return True
+        if not self.has_state_inputs(k):
+            return False
+        return self.namespace_name not in trigger.ordered or all(
+            k in self._buffer[spec.topic] for spec in self.inputs if spec.kind == "order")
 
     def _advance(self) -> None:
         while self._ready(self.step_index):
