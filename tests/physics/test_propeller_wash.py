@@ -68,9 +68,9 @@ def test_momentum_flux_equals_the_thrust(x_over_d0):
     assert flux == pytest.approx(THRUST, rel=0.02)
 
 
-def fraction_by_dblquad(jet, side, offset, psi):
+def fraction_by_dblquad(jet, side, offset, psi, weight=lambda u: 1.0):
     """The fraction of the jet's momentum flux the side takes, (V^2 + mirror V^2) / flux integrated
-    over the side's u and depth, V from the jet's formula."""
+    over the side's u and depth, V from the jet's formula (times weight(u): the first moment)."""
     flux = jet.v0 ** 2 * math.pi * (2.8 * jet.d0) ** 2 / 30.8      # V_max^2 pi x^2 / 30.8, all x
 
     def density(z, u):
@@ -78,7 +78,7 @@ def fraction_by_dblquad(jet, side, offset, psi):
         h2 = u * u + offset * offset - x * x
         v2 = sum(jet_velocity(x, math.sqrt(max(h2, 0.0) + (z - zp) ** 2), jet.v0, jet.d0) ** 2
                  for zp in (-jet.depth, jet.depth))
-        return v2 / flux
+        return weight(u) * v2 / flux
     return integrate.dblquad(density, side.u_start, side.u_end, -side.draft, 0.0, epsabs=1e-10, epsrel=1e-8)[0]
 
 
@@ -139,6 +139,106 @@ def test_bad_input_names_the_value(kwargs, word):
 def test_bad_geometry_names_the_value(call, word):
     with pytest.raises(ValueError, match=word):
         call(PropellerJet(THRUST, DIAMETER, DEPTH), HullSide(-S175_HALF, S175_HALF, S175_DRAFT))
+
+
+# ---- the wash on a hull in a run (wash_on_hull; InteractionSet's washes) --------------------------
+S175_BEAM = 25.4
+
+
+@pytest.mark.parametrize("px, jet_deg, offset", [(10.0, -90.0, 30.0), (-40.0, -60.0, 25.0), (30.0, -150.0, 20.0),
+                                                 (0.0, 170.0, 12.0)])
+def test_wash_on_a_box_hull_against_quadrature(px, jet_deg, offset):
+    """A jet from a propeller `offset` m off the S-175's port side at x = px, heading jet_deg (the
+    hull's axes): the sway force is the side's normal momentum (toward starboard when the jet heads
+    at the hull, suction to port when it leaves it) and the moment puts it at the intercepted
+    flux's centroid, both by dblquad of the jet's formula over the side (u from the foot along the
+    jet's along-hull part)."""
+    from tug_dynamics.propeller_wash import _GAUSS_W, _GAUSS_X, wash_on_hull
+    jet = PropellerJet(THRUST, DIAMETER, DEPTH)
+    jx, jy = math.cos(math.radians(jet_deg)), math.sin(math.radians(jet_deg))
+    psi = math.asin(-jy)                        # to the port side (normal -y), positive toward it
+    along = 1.0 if jx >= 0.0 else -1.0
+    side = HullSide(min(along * (-S175_HALF - px), along * (S175_HALF - px)),
+                    max(along * (-S175_HALF - px), along * (S175_HALF - px)), S175_DRAFT)
+    fraction = fraction_by_dblquad(jet, side, offset, psi)
+    first = fraction_by_dblquad(jet, side, offset, psi, weight=lambda u: u)
+    fy, n = wash_on_hull(THRUST, jet.d0, DEPTH, 1.0, px, 0.5 * S175_BEAM + offset, jx, jy, 2 * S175_HALF,
+                         S175_BEAM, S175_DRAFT, _GAUSS_X, _GAUSS_W)
+    want = -math.copysign(THRUST * math.sin(psi) ** 2 * fraction, psi)
+    assert fy == pytest.approx(want, rel=1e-4, abs=2e-5 * THRUST)
+    assert n / fy == pytest.approx(px + along * first / fraction, abs=0.05)
+    # the starboard side, mirrored: the same force to the other side, the same lever
+    fs, ns = wash_on_hull(THRUST, jet.d0, DEPTH, 1.0, px, -0.5 * S175_BEAM - offset, jx, -jy, 2 * S175_HALF,
+                          S175_BEAM, S175_DRAFT, _GAUSS_X, _GAUSS_W)
+    assert (fs, ns) == pytest.approx((-fy, -n), rel=1e-12)
+
+
+def test_a_jet_wholly_stopped_by_the_side_gives_the_thrust():
+    """Momentum: a jet straight at a long, deep side 1 m away (all of it within the hull's draft)
+    pushes the hull with the jet's whole momentum: T (the wash takes the fraction of the jet's flux)."""
+    from tug_dynamics.propeller_wash import _GAUSS_W, _GAUSS_X, wash_on_hull
+    d0 = 2.4
+    fy, n = wash_on_hull(THRUST, d0, 10.0, 1.0, 0.0, 13.7, 0.0, -1.0, 175.0, 25.4, 30.0, _GAUSS_X, _GAUSS_W)
+    assert -fy == pytest.approx(THRUST, rel=1e-4)
+    assert abs(n) < 1e-9 * THRUST
+
+
+def _asd_beside_the_ship(tug_yaw_from_ship):
+    """The ASD tug's stern 20 m off the S-175's port side at x = 30 m (the ship at (100, 50), heading
+    30 deg), the tug heading tug_yaw_from_ship relative to the ship."""
+    from tug_dynamics.interaction_set import PlanarState
+    ship = PlanarState(100.0, 50.0, math.radians(30.0), 0.0, 0.0)
+    c, s = math.cos(ship.yaw), math.sin(ship.yaw)
+    yaw = ship.yaw + tug_yaw_from_ship
+    # the tug's midship so that its stern units' mid-point (x = -11.5) sits at (30, 12.7 + 20) in the ship's axes
+    bx, by = 30.0 + 11.5 * math.cos(tug_yaw_from_ship), 32.7 + 11.5 * math.sin(tug_yaw_from_ship)
+    tug = PlanarState(ship.x + c * bx - s * by, ship.y + s * bx + c * by, yaw, 0.0, 0.0)
+    return ship, tug
+
+
+def test_interaction_set_wash_of_an_asd_tug_on_the_s175_by_hand():
+    """The ASD tug at right angles to the S-175's port side, stern to it, both units ahead (jets
+    straight astern at the side): each unit's jet (ducted, D0 = D) acts as PropellerJet.wash_force
+    at its own offset and foot; reversed thrust at azimuth 180 deg is the same jet; a tug heading
+    away from the hull washes nothing; and the ship file's particulars are what is used."""
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
+    from tug_dynamics.interaction_set import InteractionSet, PairEntry, WashEntry, propulsors_of
+    from tug_dynamics.ship_file import ship_config
+    from sim_math.data_files import resolve
+    tug_cfg = ship_config(resolve("tug_dynamics", "ships", "asd_tug.yaml"))[1]
+    ship_cfg = ship_config(resolve("tug_dynamics", "ships", "s175_003.yaml"))[1]
+    kind, props = propulsors_of(tug_cfg)
+    assert kind == "thrusters" and [p.d0 for p in props] == [2.4, 2.4] and [p.depth for p in props] == [3.9, 3.9]
+    hulls = {"ship": SectionalAreaCurve.from_ship_config(ship_cfg),
+             "tug": SectionalAreaCurve.from_ship_config(tug_cfg)}
+    sets = InteractionSet(hulls, washes=[WashEntry("w", "tug", "ship")], propulsors={"tug": props},
+                          drafts={"ship": 8.5})
+    assert sets.vessels == ["ship"] and sets.tracked == ["ship", "tug"]
+    ship, tug = _asd_beside_the_ship(math.radians(90.0))          # bow away from the ship: stern to it
+    loads, _ = sets.loads({"ship": ship, "tug": tug}, 0.0, {"tug": [(THRUST, 0.0), (THRUST, 0.0)]})
+    want_y = want_n = 0.0
+    for foot in (30.0 + 3.0, 30.0 - 3.0):          # port unit (body y +3) lies toward the ship's stern
+        jet = PropellerJet(THRUST, 2.4, 3.9, ducted=True)
+        f = jet.wash_force(HullSide(-S175_HALF - foot, S175_HALF - foot, 8.5), 20.0, 0.5 * math.pi)
+        want_y -= f
+        want_n -= f * foot
+    x, y, n = loads["ship"]
+    assert x == 0.0 and y == pytest.approx(want_y, rel=1e-6) and n == pytest.approx(want_n, rel=1e-4)
+    assert -y < 2 * THRUST
+    reversed_, _ = sets.loads({"ship": ship, "tug": tug}, 0.0, {"tug": [(-THRUST, math.pi)] * 2})
+    assert reversed_["ship"] == pytest.approx(loads["ship"], rel=1e-9)
+    ship, tug = _asd_beside_the_ship(math.radians(-90.0))          # bow to the ship: jets away from it
+    none, _ = sets.loads({"ship": ship, "tug": tug}, 0.0, {"tug": [(THRUST, 0.0), (THRUST, 0.0)]})
+    assert none["ship"] == (0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="3 thrusts for 2 propulsors"):
+        sets.loads({"ship": ship, "tug": tug}, 0.0, {"tug": [(THRUST, 0.0)] * 3})
+    with pytest.raises(ValueError, match="washes its own hull"):
+        InteractionSet(hulls, washes=[WashEntry("w", "tug", "tug")], propulsors={"tug": props}, drafts={"tug": 4.0})
+    with pytest.raises(ValueError, match="'ship' has no draft"):
+        InteractionSet(hulls, washes=[WashEntry("w", "tug", "ship")], propulsors={"tug": props})
+    with pytest.raises(ValueError, match="both propellers and azimuth thrusters"):
+        propulsors_of(tug_cfg | {"propellers": ship_cfg["propellers"]})
+    assert PairEntry  # the pairs' loads are summed with the wash (test_interaction_set)
 
 
 def best_time(fn, repeats=5, calls=300):

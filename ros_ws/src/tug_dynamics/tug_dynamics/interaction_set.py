@@ -1,6 +1,7 @@
 """A run's hull interactions together: every declared pair's Wang (1975) loads
-(tug_dynamics.hull_interaction) and every declared bank's image-method suction
-(tug_dynamics.bank_effect), summed per vessel, from the vessels' planar states. ROS-free; the
+(tug_dynamics.hull_interaction), every declared bank's image-method suction
+(tug_dynamics.bank_effect) and every declared wash's jets on a hull (tug_dynamics.propeller_wash),
+summed per vessel, from the vessels' planar states and propulsors' thrust. ROS-free; the
 hull_contact interaction node is its shell (one node for all the run's interactions, issue 33's
 speed goal: one node and one wrench per vessel, not a node and two wrenches per pair).
 
@@ -19,6 +20,7 @@ from numba import njit
 from tug_dynamics.bank_effect import BankEffect, BankPolyline
 from tug_dynamics.hull_interaction import (DEFAULT_NODES, IMAGE_COUNT, SectionalAreaCurve, composite_gauss,
                                            wang_loads)
+from tug_dynamics.propeller_wash import _GAUSS_W, _GAUSS_X, efflux_diameter, wash_on_hull
 
 ZERO_LOADS = (0.0, 0.0, 0.0)
 
@@ -110,20 +112,68 @@ class BankEntry(NamedTuple):
     bank: BankPolyline
 
 
+class WashEntry(NamedTuple):
+    """`source`'s propeller jets on `target`'s hull side (propeller_wash.wash_on_hull)."""
+    name: str
+    source: str
+    target: str
+    impingement: float = 1.0
+
+
+class Propulsor(NamedTuple):
+    """Where a propeller's or azimuth thruster's jet leaves it: body position (m), the depth of
+    its axis below the waterline (m) and its efflux diameter D0 (m)."""
+    x: float
+    y: float
+    depth: float
+    d0: float
+
+
+def propulsors_of(config: dict) -> Tuple[str, List[Propulsor]]:
+    """("thrusters" or "propellers", the propulsors) of a ship file's mapping: its azimuth
+    thrusters if it has any (each unit's thrust and azimuth are known), else its propellers (thrust
+    along body x, the vessel's total shared equally). A vessel with both is refused: its status
+    gives the propellers' thrust only summed with the thrusters'."""
+    thrusters, propellers = config.get("thrusters") or [], config.get("propellers") or []
+    if thrusters and propellers:
+        raise ValueError("propeller wash: a vessel with both propellers and azimuth thrusters is not modelled")
+    kind, units = ("thrusters", thrusters) if thrusters else ("propellers", propellers)
+    if not units:
+        raise ValueError("propeller wash: the vessel has no propellers or azimuth thrusters")
+    return kind, [Propulsor(float(u["position"][0]), float(u["position"][1]), max(0.0, -float(u["position"][2])),
+                            efflux_diameter(float(u["diameter"]), bool(u.get("ducted", False)))) for u in units]
+
+
 class InteractionSet:
     """The run's pairs and banks over its vessels' hulls (Wang's parabolas), in water of `depth`
     (math.inf: deep). `loads(states, lead)` gives each vessel's summed (X, Y, N) (body axes,
-    about midship) and which entries are off (overlapping hulls, a ship at or over its bank)."""
+    about midship) and which entries are off (overlapping hulls, a ship at or over its bank).
+    A wash needs its target's draft (`drafts`) and its source's `propulsors`; `loads` then takes
+    each source's (thrust N signed, azimuth rad) per propulsor."""
 
     def __init__(self, hulls: Dict[str, SectionalAreaCurve], pairs: Sequence[PairEntry] = (),
                  banks: Sequence[BankEntry] = (), depth: float = math.inf,
-                 water_density: Dict[str, float] = None, nodes: int = DEFAULT_NODES):
+                 water_density: Dict[str, float] = None, nodes: int = DEFAULT_NODES,
+                 washes: Sequence[WashEntry] = (), propulsors: Dict[str, Sequence[Propulsor]] = None,
+                 drafts: Dict[str, float] = None):
         if math.isnan(depth) or depth <= 0.0:
             raise ValueError(f"interactions: depth must be > 0 (math.inf for deep water), got {depth!r}")
         density = {name: 1025.0 for name in hulls} | dict(water_density or {})
         names = []
-        for entry in list(pairs) + list(banks):
-            felt = (entry.a, entry.b) if isinstance(entry, PairEntry) else (entry.vessel,)
+        propulsors, drafts = dict(propulsors or {}), dict(drafts or {})
+        for entry in washes:
+            if entry.source == entry.target:
+                raise ValueError(f"interaction '{entry.name}': '{entry.source}' washes its own hull")
+            if not propulsors.get(entry.source):
+                raise ValueError(f"interaction '{entry.name}': '{entry.source}' has no propulsors given")
+            if not drafts.get(entry.target, 0.0) > 0.0:
+                raise ValueError(f"interaction '{entry.name}': '{entry.target}' has no draft given")
+            if not 0.0 <= entry.impingement <= 1.0:
+                raise ValueError(f"interaction '{entry.name}': impingement must be within [0, 1], "
+                                 f"got {entry.impingement!r}")
+        for entry in list(pairs) + list(banks) + list(washes):
+            felt = ((entry.a, entry.b) if isinstance(entry, PairEntry) else
+                    (entry.target,) if isinstance(entry, WashEntry) else (entry.vessel,))
             for vessel in felt:
                 if vessel not in hulls:
                     raise ValueError(f"interaction '{entry.name}': vessel '{vessel}' has no hull "
@@ -132,13 +182,19 @@ class InteractionSet:
                     names.append(vessel)
             if isinstance(entry, PairEntry) and entry.a == entry.b:
                 raise ValueError(f"interaction '{entry.name}': '{entry.a}' twice (a pair of two vessels)")
-        entry_names = [e.name for e in list(pairs) + list(banks)]
+        entry_names = [e.name for e in list(pairs) + list(banks) + list(washes)]
         if len(set(entry_names)) != len(entry_names):
             raise ValueError(f"interactions: names {sorted({n for n in entry_names if entry_names.count(n) > 1})} "
                              "used twice")
         self.vessels: List[str] = names              # every vessel that feels a load, in order of mention
+        # and every vessel whose state a load needs (a wash's source may feel nothing)
+        self.tracked: List[str] = names + [w.source for w in washes if w.source not in names]
+        self.tracked = list(dict.fromkeys(self.tracked))
         self.index = {n: i for i, n in enumerate(names)}
-        self.pairs, self.banks = list(pairs), list(banks)
+        self.pairs, self.banks, self.washes = list(pairs), list(banks), list(washes)
+        self.propulsors = {w.source: list(propulsors[w.source]) for w in washes}
+        self._box = {w.target: (hulls[w.target].length, hulls[w.target].beam, float(drafts[w.target]))
+                     for w in washes}
         self.depth = float(depth)
         curves = [hulls[n] for n in names]
         rules = [composite_gauss(c.length, nodes) for c in curves]
@@ -159,10 +215,12 @@ class InteractionSet:
         self._loads = np.zeros((len(names), 3))
         self._off = np.zeros(len(self.pairs), dtype=np.int64)
 
-    def loads(self, states: Dict[str, PlanarState], lead: float) -> Tuple[Dict[str, Tuple[float, float, float]],
-                                                                           Dict[str, bool]]:
+    def loads(self, states: Dict[str, PlanarState], lead: float,
+              thrust: Dict[str, Sequence[Tuple[float, float]]] = None) -> Tuple[
+            Dict[str, Tuple[float, float, float]], Dict[str, bool]]:
         """({vessel: (X, Y, N) summed over its entries}, {entry name: off}) with every state
-        carried on `lead` s."""
+        carried on `lead` s; `thrust`: each wash source's (thrust N, azimuth rad) per propulsor,
+        held over the lead (absent: no wash)."""
         for i, name in enumerate(self.vessels):
             self._states[i] = states[name]
         _pair_loads(self._states, float(lead), self._pair_a, self._pair_b, self._hull_of, self._x1, self._sway_w1,
@@ -181,4 +239,39 @@ class InteractionSet:
             row = self._loads[self.index[entry.vessel]]
             row[1] += y
             row[2] += n
+        for entry in self.washes:
+            units = (thrust or {}).get(entry.source)
+            if units is None:
+                continue
+            y, n = self.wash_load(entry, ahead(states[entry.source], lead), ahead(states[entry.target], lead), units)
+            row = self._loads[self.index[entry.target]]
+            row[1] += y
+            row[2] += n
         return {name: tuple(float(v) for v in self._loads[i]) for i, name in enumerate(self.vessels)}, off
+
+    def wash_load(self, entry: WashEntry, source: PlanarState, target: PlanarState,
+                  units: Sequence[Tuple[float, float]]) -> Tuple[float, float]:
+        """The sway force and yaw moment (target's body axes, about midship) of `entry`'s jets: each
+        propulsor's jet leaves it against its thrust (with the thrust when reversed) and carries the
+        thrust's momentum (propeller_wash)."""
+        props = self.propulsors[entry.source]
+        if len(units) != len(props):
+            raise ValueError(f"interaction '{entry.name}': {len(units)} thrusts for {len(props)} propulsors "
+                             f"of '{entry.source}'")
+        length, beam, draft = self._box[entry.target]
+        cs, ss = math.cos(source.yaw), math.sin(source.yaw)
+        ct, st = math.cos(target.yaw), math.sin(target.yaw)
+        fy = fn = 0.0
+        for prop, (t, azimuth) in zip(props, units):
+            if t == 0.0:
+                continue
+            wx = source.x + cs * prop.x - ss * prop.y - target.x      # the propeller, from the target's midship
+            wy = source.y + ss * prop.x + cs * prop.y - target.y
+            jet = math.pi + source.yaw + azimuth if t > 0.0 else source.yaw + azimuth   # jet heading (world)
+            jx, jy = math.cos(jet), math.sin(jet)
+            y, n = wash_on_hull(abs(t), prop.d0, prop.depth, entry.impingement, ct * wx + st * wy,
+                                -st * wx + ct * wy, ct * jx + st * jy, -st * jx + ct * jy, length, beam, draft,
+                                _GAUSS_X, _GAUSS_W)
+            fy += y
+            fn += n
+        return fy, fn

@@ -122,9 +122,10 @@ def _reach(u, offset, sin_psi, cos_psi, d0):
 
 
 @njit(cache=True)
-def intercepted_fraction(offset, psi, u_start, u_end, propeller_depth, draft, d0, gx, gw):
-    """int over the hull side of (a/pi) exp(-a r^2) dA, composite Gauss-Legendre in u over where the
-    jet reaches the side (found by a coarse scan), the depth in closed form."""
+def intercepted(offset, psi, u_start, u_end, propeller_depth, draft, d0, gx, gw):
+    """(int over the hull side of (a/pi) exp(-a r^2) dA, its first moment in u): composite
+    Gauss-Legendre in u over where the jet reaches the side (found by a coarse scan), the depth in
+    closed form. The moment over the fraction is where along the side the wash acts."""
     s, c = math.sin(psi), math.cos(psi)
     axis_to_keel, image_to_keel = draft - propeller_depth, draft + propeller_depth
     step = (u_end - u_start) / (SCAN_POINTS - 1)
@@ -134,7 +135,7 @@ def intercepted_fraction(offset, psi, u_start, u_end, propeller_depth, draft, d0
         scan[i] = _reach(u_start + i * step, offset, s, c, d0)
         peak = max(peak, scan[i])
     if peak <= 0.0:
-        return 0.0
+        return 0.0, 0.0
     lo, hi = SCAN_POINTS, -1
     for i in range(SCAN_POINTS):
         if scan[i] > NEGLIGIBLE * peak:
@@ -143,13 +144,53 @@ def intercepted_fraction(offset, psi, u_start, u_end, propeller_depth, draft, d0
     ua = max(u_start, u_start + (lo - 1) * step)
     ub = min(u_end, u_start + (hi + 1) * step)
     total = 0.0
+    moment = 0.0
     width = (ub - ua) / PANELS
     for p in range(PANELS):
         mid = ua + (p + 0.5) * width
         for k in range(gx.shape[0]):
             u = mid + 0.5 * width * gx[k]
-            total += gw[k] * 0.5 * width * _strip(u, offset, s, c, axis_to_keel, image_to_keel, d0)
-    return total
+            f = gw[k] * 0.5 * width * _strip(u, offset, s, c, axis_to_keel, image_to_keel, d0)
+            total += f
+            moment += f * u
+    return total, moment
+
+
+@njit(cache=True)
+def intercepted_fraction(offset, psi, u_start, u_end, propeller_depth, draft, d0, gx, gw):
+    """int over the hull side of (a/pi) exp(-a r^2) dA (`intercepted`'s first part)."""
+    return intercepted(offset, psi, u_start, u_end, propeller_depth, draft, d0, gx, gw)[0]
+
+
+@njit(cache=True)
+def wash_on_hull(thrust, d0, propeller_depth, impingement, px, py, jx, jy, length, beam, draft, gx, gw):
+    """The wash's sway force (N) and yaw moment (N m, about midship) on a hull taken as a box (its
+    sides the planes y = +-beam/2 from x = -length/2 to +length/2, `draft` deep), from a jet of
+    momentum `thrust` (N, >= 0) leaving a propeller at (px, py) in the hull's body axes along the
+    unit vector (jx, jy) in those axes. The side facing the propeller takes it (PropellerJet.wash_force
+    with psi = the jet's angle to that side, the along-hull coordinate from the propeller's foot);
+    a propeller within the hull's beam (ahead of or astern of it) washes no side: (0, 0)."""
+    half = 0.5 * beam
+    if thrust <= 0.0 or abs(py) <= half:
+        return 0.0, 0.0
+    side = 1.0 if py > 0.0 else -1.0
+    sin_psi = -side * jy                        # the jet's component toward the side
+    if sin_psi > 1.0:
+        sin_psi = 1.0
+    elif sin_psi < -1.0:
+        sin_psi = -1.0
+    if sin_psi == 0.0:
+        return 0.0, 0.0
+    psi = math.asin(sin_psi)
+    along = 1.0 if jx >= 0.0 else -1.0          # u runs the way the jet's along-hull part points
+    u_start = along * (-along * 0.5 * length - px)
+    u_end = along * (along * 0.5 * length - px)
+    total, moment = intercepted(abs(py) - half, psi, u_start, u_end, propeller_depth, draft, d0, gx, gw)
+    if total <= 0.0:
+        return 0.0, 0.0
+    # heading at the side: pushes the hull away from the propeller; leaving it: suction toward it
+    fy = -side * impingement * thrust * sin_psi * abs(sin_psi) * total
+    return fy, (px + along * moment / total) * fy
 
 
 class HullSide:

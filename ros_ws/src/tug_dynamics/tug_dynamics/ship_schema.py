@@ -168,6 +168,7 @@ class Propeller(_S):
     wake_fraction: float = _num(0.0, 0.9)
     thrust_deduction: float = _num(0.0, 0.9)
     astern_factor: float = _num(0.0, 1.5)
+    ducted: bool = False                  # in a nozzle: its jet leaves at D, an open one's at D/sqrt(2) (wash)
 
 
 class OpenWater(_S):
@@ -201,6 +202,7 @@ class Thruster(_S):
     azimuth_time_constant: float = _num(0.05, 10.0, default=0.5)  # s, lag of the last few degrees
     full_360: bool = True                       # turns without stops (shortest way round)
     azimuth_range_deg: Optional[Vec2] = None    # [lo, hi] deg within -180..180 when full_360 is false
+    ducted: bool = False                        # in a nozzle: its jet leaves at D, an open one's at D/sqrt(2) (wash)
 
 
 class Steering(_S):
