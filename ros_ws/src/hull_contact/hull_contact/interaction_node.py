@@ -1,12 +1,14 @@
 """The hull interaction node: every interaction of a run in one node, every step: Wang's (1975)
-passing-ship loads between the declared pairs and the bank suction on a vessel from a declared
-vertical bank (tug_dynamics.interaction_set).
+passing-ship loads between the declared pairs, the bank suction on a vessel from a declared
+vertical bank, and a declared source's propeller wash on a target's hull side
+(tug_dynamics.interaction_set).
 
     ros2 run hull_contact interaction_node --ros-args -r __ns:=/interactions \
         -p vessels:="[ship, moored]" -p ship_files:="[s175_003.yaml, s175_003.yaml]" \
         -p pairs:="[passing=ship,moored]"
 
-Subscribes ``/<vessel>/odom`` of each of ``vessels`` and publishes ``on_<vessel>/wrench``
+Subscribes ``/<vessel>/odom`` of each of ``vessels`` (and each wash source's ``thrusters``, or its
+``status`` when it has propellers) and publishes ``on_<vessel>/wrench``
 (geometry_msgs/WrenchStamped in ``<vessel>/base_link``, body axes, about midship): the sum of the
 surge and sway forces and yaw moments of its pairs and banks, computed from the odometry of step
 k, each position carried on at its velocity to the middle of the step the load acts over
@@ -24,7 +26,7 @@ from typing import Dict, List, Optional
 
 from geometry_msgs.msg import WrenchStamped
 from nav_msgs.msg import Odometry
-from tug_msgs.msg import ScenarioEvent
+from tug_msgs.msg import ScenarioEvent, ThrusterStatus, VesselStatus
 
 from sim_contract import topics as T
 from sim_contract.node_params import INTERACTION_NODE
@@ -35,7 +37,8 @@ from sim_plumbing import ros_common as rc
 from sim_plumbing.stepping import SteppedNode, StepInput
 from tug_dynamics.bank_effect import BankPolyline
 from tug_dynamics.hull_interaction import SectionalAreaCurve
-from tug_dynamics.interaction_set import BankEntry, InteractionSet, PairEntry, PlanarState
+from tug_dynamics.interaction_set import (BankEntry, InteractionSet, PairEntry, PlanarState, WashEntry,
+                                          propulsors_of)
 from tug_dynamics.ship_file import ship_config
 
 
@@ -55,15 +58,27 @@ def _named(param: str, text: str):
     return name, rest
 
 
-def parse_pairs(values: List[str]) -> List[PairEntry]:
+def parse_pairs(values: List[str], param: str = "pairs", entry=PairEntry) -> list:
     out = []
     for text in _listed(values):
-        name, rest = _named("pairs", text)
+        name, rest = _named(param, text)
         vessels = rest.split(",")
         if len(vessels) != 2 or not all(vessels):
-            raise ValueError(f"parameter pairs: \"{name}\" needs two vessels \"<a>,<b>\", got {rest!r}")
-        out.append(PairEntry(name, *vessels))
+            raise ValueError(f"parameter {param}: \"{name}\" needs two vessels \"<a>,<b>\", got {rest!r}")
+        out.append(entry(name, *vessels))
     return out
+
+
+def parse_washes(values: List[str]) -> List[WashEntry]:
+    return parse_pairs(values, "washes", WashEntry)
+
+
+def thrust_units(kind: str, msg, count: int):
+    """(thrust N, azimuth rad) per propulsor from a source's thruster status (each unit's open-water
+    thrust: the jet carries it) or vessel status (its propellers' total, shared equally, along x)."""
+    if kind == "thrusters":
+        return list(zip(msg.open_water_thrust, msg.azimuth))
+    return [(msg.thrust / count, 0.0)] * count
 
 
 def parse_banks(values: List[str]) -> List[BankEntry]:
@@ -113,48 +128,86 @@ class InteractionNode(SteppedNode):
         gp = lambda name: self.get_parameter(name).value  # noqa: E731
         vessels = _listed(gp("vessels"))
         configs = hulls_of(vessels, _listed(gp("ship_files")), list(gp("ship_overrides")))
-        pairs, banks = parse_pairs(gp("pairs")), parse_banks(gp("banks"))
-        if not pairs and not banks:
-            raise ValueError("parameters pairs and banks: no interaction declared")
+        pairs, banks, washes = parse_pairs(gp("pairs")), parse_banks(gp("banks")), parse_washes(gp("washes"))
+        if not pairs and not banks and not washes:
+            raise ValueError("parameters pairs, banks and washes: no interaction declared")
         depth = gp("depth") or math.inf
+        propulsors = {}
+        for w in washes:
+            if w.source not in configs:
+                raise ValueError(f"parameter washes: \"{w.name}\": '{w.source}' is not one of vessels {vessels}")
+            try:
+                propulsors[w.source] = propulsors_of(configs[w.source])
+            except ValueError as exc:
+                raise ValueError(f"parameter washes: \"{w.name}\": '{w.source}': {exc}") from None
         self.interactions = InteractionSet(
             {n: SectionalAreaCurve.from_ship_config(c) for n, c in configs.items()}, pairs, banks, depth,
-            {n: float(c.get("water_density", 1025.0)) for n, c in configs.items()})
-        self.topics = {T.vessel_topic(n, T.ODOM): n for n in self.interactions.vessels}
+            {n: float(c.get("water_density", 1025.0)) for n, c in configs.items()}, washes=washes,
+            propulsors={n: units for n, (_, units) in propulsors.items()},
+            drafts={n: float(c["hull"]["draft"]) for n, c in configs.items()})
+        self.topics = {T.vessel_topic(n, T.ODOM): n for n in self.interactions.tracked}
+        # each wash source's thrust: (vessel, kind, propulsor count) by topic
+        self.thrust_topics = {T.vessel_topic(n, T.THRUSTERS if kind == "thrusters" else T.STATUS):
+                              (n, kind, len(units)) for n, (kind, units) in propulsors.items()}
+        self.thrust: Dict[str, list] = {}
         self.states: Dict[str, PlanarState] = {}
         self.loads = None
         self._off = {name: False for name in [p.name for p in pairs] + [b.name for b in banks]}
         self.outputs = {n: (self.create_fed_publisher(WrenchStamped, f"on_{n}/wrench", rc.LATCHED_STATE_QOS),
                             cdr.WrenchStampedEncoder(f"{n}/base_link")) for n in self.interactions.vessels}
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
-        self.init_stepping([StepInput(t, Odometry, decode=cdr.decode_odometry) for t in self.topics], ready=False)
+        self.init_stepping([StepInput(t, Odometry, decode=cdr.decode_odometry) for t in self.topics] +
+                           [StepInput(t, ThrusterStatus if kind == "thrusters" else VesselStatus)
+                            for t, (_, kind, _) in self.thrust_topics.items()], ready=False)
         what = [f"{p.name}: Wang (1975) between {p.a} and {p.b}" for p in pairs] + \
-               [f"{b.name}: bank suction (image method) on {b.vessel}" for b in banks]
+               [f"{b.name}: bank suction (image method) on {b.vessel}" for b in banks] + \
+               [f"{w.name}: {w.source}'s propeller wash on {w.target}" for w in washes]
         self.get_logger().info(
             f"interactions ({'deep water' if math.isinf(depth) else f'depth {depth:g} m'}): {'; '.join(what)}; "
             "waiting for the step-0 odometry")
 
-    def accept_input(self, spec: StepInput, msg: cdr.OdometryIn) -> bool:
+    def accept_input(self, spec: StepInput, msg) -> bool:
+        if spec.topic in self.thrust_topics:
+            vessel, kind, count = self.thrust_topics[spec.topic]
+            try:
+                units = thrust_units(kind, msg, count)
+            except (TypeError, ZeroDivisionError):
+                units = []
+            if len(units) != count or not all(math.isfinite(t) and math.isfinite(a) for t, a in units):
+                self.complaints(kind + " " + spec.topic, f"{spec.topic}: not {count} finite thrusts and azimuths; "
+                                                         "rejected")
+                return False
+            if self.loads is None and self.step_of(spec, msg) == 0:
+                self.thrust[vessel] = units
+                self._start_if_complete()
+            return True
         if not msg.is_finite():
             self.complaints("odom " + spec.topic, f"{spec.topic}: non-finite odometry rejected")
             return False
         if self.loads is None and self.step_of(spec, msg) == 0:
             self.states[self.topics[spec.topic]] = planar_state(msg)
-            if len(self.states) == len(self.topics):
-                self._compute(0.5 * self.dt)   # step-0 output from the step-0 state: it acts over step 0 -> 1
-                self.ready_to_step = True
-                self.publish_outputs()
+            self._start_if_complete()
         return True
+
+    def _start_if_complete(self) -> None:
+        if len(self.states) == len(self.topics) and len(self.thrust) == len(self.thrust_topics):
+            self._compute(0.5 * self.dt)   # step-0 output from the step-0 state: it acts over step 0 -> 1
+            self.ready_to_step = True
+            self.publish_outputs()
 
     def compute_step(self, inputs) -> None:
         for topic, vessel in self.topics.items():
             msg = inputs.get(topic)
             if msg is not None:
                 self.states[vessel] = planar_state(msg)
+        for topic, (vessel, kind, count) in self.thrust_topics.items():
+            msg = inputs.get(topic)
+            if msg is not None:
+                self.thrust[vessel] = thrust_units(kind, msg, count)
         self._compute(1.5 * self.dt)      # from the state of step k, for the step k+1 -> k+2
 
     def _compute(self, lead: float) -> None:
-        self.loads, off = self.interactions.loads(self.states, lead)
+        self.loads, off = self.interactions.loads(self.states, lead, self.thrust)
         for name, now in off.items():
             if now != self._off[name]:
                 self._off[name] = now

@@ -221,20 +221,31 @@ class ContactSpec(_Strict):
 
 
 class InteractionSpec(_Strict):
-    """Wang's (1975) passing-ship loads between two vessels (tug_dynamics.hull_interaction), or
-    with a `bank` the image-method bank suction on one vessel (tug_dynamics.bank_effect),
-    computed every step from the odometry by the run's one hull_contact interaction_node (all the
-    entries together, each vessel's loads summed); deep water, or the
-    environment's depth when it is one number."""
+    """Between two vessels, the `loads` named: "wang", Wang's (1975) passing-ship loads on each
+    from the other (tug_dynamics.hull_interaction); "wash", the first vessel's propeller or
+    azimuth-thruster jets on the second's hull side (tug_dynamics.propeller_wash: still water,
+    the second's side a flat box side). Or with a `bank` the image-method bank suction on one
+    vessel (tug_dynamics.bank_effect). Computed every step from the odometry (and the wash
+    source's thrust) by the run's one hull_contact interaction_node (all the entries together,
+    each vessel's loads summed); deep water, or the environment's depth when it is one number."""
     between: List[str] = Field(min_length=1, max_length=2)   # the two vessels, or one with a bank
     name: Optional[str] = Field(None, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")   # default <a>_<b>_interaction
     # a vertical bank (image method, tug_dynamics.bank_effect): polyline points [x, y] (m, world), water on the left
     bank: Optional[List[List[float]]] = None
+    # two vessels: "wang" (each on the other), "wash" (the first's jets on the second's side), or both
+    loads: List[Literal["wang", "wash"]] = Field(default_factory=lambda: ["wang"], min_length=1, max_length=2)
 
     @property
     def entry_name(self) -> str:
         """The name its events carry (`interaction_off` / `interaction_on`)."""
         return self.name or ("_".join(self.between) + ("_bank" if self.bank else "_interaction"))
+
+    @property
+    def felt_by(self) -> List[str]:
+        """The vessels it puts a load on."""
+        if self.bank or "wang" in self.loads:
+            return list(self.between)
+        return self.between[1:]
 
 
 class Trigger(_Strict):
@@ -524,7 +535,12 @@ def _check_interaction_names(path: str, sc: Scenario, vessels: List[str]) -> Non
             raise ScenarioError(f"{path}: key 'interactions[{i}].between': {pair.between} with "
                                 f"{'a bank' if pair.bank else 'no bank'}: two vessels, or one vessel and a 'bank'")
         if pair.bank:
+            if pair.loads != ["wang"] and "loads" in pair.model_fields_set:
+                raise ScenarioError(f"{path}: key 'interactions[{i}].loads': a bank has no loads to choose "
+                                    "(its suction only)")
             continue
+        if len(set(pair.loads)) != len(pair.loads):
+            raise ScenarioError(f"{path}: key 'interactions[{i}].loads': {pair.loads} names one twice")
         if pair.between[0] == pair.between[1]:
             raise ScenarioError(f"{path}: key 'interactions[{i}].between': '{pair.between[0]}' twice (a pair of two "
                                 "vessels)")
@@ -884,6 +900,15 @@ def _check_interaction(path: str, sc: Scenario, i: int, pair: InteractionSpec) -
     try:
         configs = [ship_config(resolve("tug_dynamics", "ships", v.ship_file, path), v.ship_overrides or None)[1]
                    for v in (a, b)]
+        if "wash" in pair.loads:
+            from tug_dynamics.interaction_set import propulsors_of
+            try:
+                propulsors_of(configs[0])
+            except ValueError as exc:
+                raise ScenarioError(f"{path}: key 'interactions[{i}].loads': wash of '{a.name}' "
+                                    f"({a.ship_file}): {exc}") from None
+        if "wang" not in pair.loads:
+            return
         for own, other, cfgs in ((a, b, configs), (b, a, configs[::-1])):
             c, s = math.cos(heading_rad(own)), math.sin(heading_rad(own))
             dx, dy = other.initial.x - own.initial.x, other.initial.y - own.initial.y

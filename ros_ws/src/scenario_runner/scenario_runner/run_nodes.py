@@ -161,7 +161,7 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         contacts = [T.contact_topic(c.name) for c in sc.contacts if v.name in (c.hull, c.fender.split("/")[0])]
         if contacts:
             params["contact_topics"] = contacts
-        if any(v.name in i.between for i in sc.interactions):
+        if any(v.name in i.felt_by for i in sc.interactions):
             params["wrench_topics"] = [T.interaction_wrench_topic(v.name)]
         if v.ship_overrides:
             params["ship_overrides"] = json.dumps(v.ship_overrides)
@@ -213,8 +213,13 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
 
 
 def interaction_vessels(sc: Scenario) -> List[str]:
-    """The vessels that feel an interaction, in the order the scenario first names them."""
+    """The vessels in an interaction, in the order the scenario first names them."""
     return list(dict.fromkeys(name for i in sc.interactions for name in i.between))
+
+
+def interaction_felt(sc: Scenario) -> List[str]:
+    """The vessels an interaction puts a load on (each has its on_<vessel>/wrench)."""
+    return list(dict.fromkeys(name for i in sc.interactions for name in i.felt_by))
 
 
 def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[NodeSpec]:
@@ -227,7 +232,10 @@ def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[No
               "ship_files": [resolve("tug_dynamics", "ships", ships[n].ship_file, scenario_path) for n in vessels],
               "ship_overrides": [json.dumps(ships[n].ship_overrides) if ships[n].ship_overrides else ""
                                  for n in vessels],
-              "pairs": [f"{i.entry_name}={','.join(i.between)}" for i in sc.interactions if not i.bank] or [""],
+              "pairs": [f"{i.entry_name}={','.join(i.between)}" for i in sc.interactions
+                        if not i.bank and "wang" in i.loads] or [""],
+              "washes": [f"{i.entry_name}_wash={','.join(i.between)}" for i in sc.interactions
+                         if not i.bank and "wash" in i.loads] or [""],
               "banks": [f"{i.entry_name}={i.between[0]}:" + ",".join(repr(float(c)) for point in i.bank for c in point)
                         for i in sc.interactions if i.bank] or [""],
               "depth": interaction_depth(sc)}
@@ -272,5 +280,5 @@ def contract_topics(sc: Scenario) -> List[tuple]:
         if r.layout == "winch":
             named.append((T.rope_topic(r.name, T.WINCH), T.WINCH_TOPIC))
     named += [(T.contact_topic(c.name), t) for c in sc.contacts for t in T.CONTACT_TOPICS]
-    named += [(T.interaction_wrench_topic(v), t) for v in interaction_vessels(sc) for t in T.INTERACTION_TOPICS]
+    named += [(T.interaction_wrench_topic(v), t) for v in interaction_felt(sc) for t in T.INTERACTION_TOPICS]
     return [(name, rc.message_class(t.type), rc.QOS_BY_KIND[t.qos]) for name, t in named]
