@@ -153,7 +153,7 @@ def test_wash_on_a_box_hull_against_quadrature(px, jet_deg, offset):
     at the hull, suction to port when it leaves it) and the moment puts it at the intercepted
     flux's centroid, both by dblquad of the jet's formula over the side (u from the foot along the
     jet's along-hull part)."""
-    from tug_dynamics.propeller_wash import _GAUSS_W, _GAUSS_X, wash_on_hull
+    from tug_dynamics.propeller_wash import GAUSS_W, GAUSS_X, wash_on_hull
     jet = PropellerJet(THRUST, DIAMETER, DEPTH)
     jx, jy = math.cos(math.radians(jet_deg)), math.sin(math.radians(jet_deg))
     psi = math.asin(-jy)                        # to the port side (normal -y), positive toward it
@@ -163,22 +163,22 @@ def test_wash_on_a_box_hull_against_quadrature(px, jet_deg, offset):
     fraction = fraction_by_dblquad(jet, side, offset, psi)
     first = fraction_by_dblquad(jet, side, offset, psi, weight=lambda u: u)
     fy, n = wash_on_hull(THRUST, jet.d0, DEPTH, 1.0, px, 0.5 * S175_BEAM + offset, jx, jy, 2 * S175_HALF,
-                         S175_BEAM, S175_DRAFT, _GAUSS_X, _GAUSS_W)
+                         S175_BEAM, S175_DRAFT, GAUSS_X, GAUSS_W)
     want = -math.copysign(THRUST * math.sin(psi) ** 2 * fraction, psi)
     assert fy == pytest.approx(want, rel=1e-4, abs=2e-5 * THRUST)
     assert n / fy == pytest.approx(px + along * first / fraction, abs=0.05)
     # the starboard side, mirrored: the same force to the other side, the same lever
     fs, ns = wash_on_hull(THRUST, jet.d0, DEPTH, 1.0, px, -0.5 * S175_BEAM - offset, jx, -jy, 2 * S175_HALF,
-                          S175_BEAM, S175_DRAFT, _GAUSS_X, _GAUSS_W)
+                          S175_BEAM, S175_DRAFT, GAUSS_X, GAUSS_W)
     assert (fs, ns) == pytest.approx((-fy, -n), rel=1e-12)
 
 
 def test_a_jet_wholly_stopped_by_the_side_gives_the_thrust():
     """Momentum: a jet straight at a long, deep side 1 m away (all of it within the hull's draft)
     pushes the hull with the jet's whole momentum: T (the wash takes the fraction of the jet's flux)."""
-    from tug_dynamics.propeller_wash import _GAUSS_W, _GAUSS_X, wash_on_hull
+    from tug_dynamics.propeller_wash import GAUSS_W, GAUSS_X, wash_on_hull
     d0 = 2.4
-    fy, n = wash_on_hull(THRUST, d0, 10.0, 1.0, 0.0, 13.7, 0.0, -1.0, 175.0, 25.4, 30.0, _GAUSS_X, _GAUSS_W)
+    fy, n = wash_on_hull(THRUST, d0, 10.0, 1.0, 0.0, 13.7, 0.0, -1.0, 175.0, 25.4, 30.0, GAUSS_X, GAUSS_W)
     assert -fy == pytest.approx(THRUST, rel=1e-4)
     assert abs(n) < 1e-9 * THRUST
 
@@ -202,7 +202,7 @@ def test_interaction_set_wash_of_an_asd_tug_on_the_s175_by_hand():
     at its own offset and foot; reversed thrust at azimuth 180 deg is the same jet; a tug heading
     away from the hull washes nothing; and the ship file's particulars are what is used."""
     from tug_dynamics.hull_interaction import SectionalAreaCurve
-    from tug_dynamics.interaction_set import InteractionSet, PairEntry, WashEntry, propulsors_of
+    from tug_dynamics.interaction_set import InteractionSet, WashEntry, propulsors_of
     from tug_dynamics.ship_file import ship_config
     from sim_math.data_files import resolve
     tug_cfg = ship_config(resolve("tug_dynamics", "ships", "asd_tug.yaml"))[1]
@@ -238,7 +238,6 @@ def test_interaction_set_wash_of_an_asd_tug_on_the_s175_by_hand():
         InteractionSet(hulls, washes=[WashEntry("w", "tug", "ship")], propulsors={"tug": props})
     with pytest.raises(ValueError, match="both propellers and azimuth thrusters"):
         propulsors_of(tug_cfg | {"propellers": ship_cfg["propellers"]})
-    assert PairEntry  # the pairs' loads are summed with the wash (test_interaction_set)
 
 
 def best_time(fn, repeats=5, calls=300):

@@ -20,7 +20,7 @@ from numba import njit
 from tug_dynamics.bank_effect import BankEffect, BankPolyline
 from tug_dynamics.hull_interaction import (DEFAULT_NODES, IMAGE_COUNT, SectionalAreaCurve, composite_gauss,
                                            wang_loads)
-from tug_dynamics.propeller_wash import _GAUSS_W, _GAUSS_X, efflux_diameter, wash_on_hull
+from tug_dynamics.propeller_wash import GAUSS_W, GAUSS_X, efflux_diameter, wash_on_hull
 
 ZERO_LOADS = (0.0, 0.0, 0.0)
 
@@ -271,7 +271,7 @@ class InteractionSet:
             jx, jy = math.cos(jet), math.sin(jet)
             y, n = wash_on_hull(abs(t), prop.d0, prop.depth, entry.impingement, ct * wx + st * wy,
                                 -st * wx + ct * wy, ct * jx + st * jy, -st * jx + ct * jy, length, beam, draft,
-                                _GAUSS_X, _GAUSS_W)
+                                GAUSS_X, GAUSS_W)
             fy += y
             fn += n
         return fy, fn

@@ -51,7 +51,7 @@ PANELS = 8                      # Gauss-Legendre panels along the hull, 4 nodes 
 SCAN_POINTS = 129               # coarse scan that finds where the jet meets the hull side
 NEGLIGIBLE = 1e-12              # relative integrand below which the side is out of the jet
 
-_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(4)
+GAUSS_X, GAUSS_W = np.polynomial.legendre.leggauss(4)
 
 
 def _check_positive(name: str, value: float, allow_zero: bool = False) -> float:
@@ -230,7 +230,7 @@ class PropellerJet:
         if not math.isfinite(psi) or abs(psi) > 0.5 * math.pi:
             raise ValueError(f"propeller wash: psi must be within [-pi/2, pi/2] rad, got {psi!r}")
         fraction = intercepted_fraction(offset, float(psi), side.u_start, side.u_end, self.depth, side.draft,
-                                        self.d0, _GAUSS_X, _GAUSS_W)
+                                        self.d0, GAUSS_X, GAUSS_W)
         return self.impingement * self.thrust * math.sin(psi) ** 2 * fraction
 
     def pull_delivered(self, side: HullSide, offset: float, psi: float) -> Tuple[float, float]:
