@@ -11,7 +11,7 @@ import pytest
 
 from tug_dynamics.bank_effect import BankEffect, BankPolyline
 from tug_dynamics.hull_interaction import HullPair, SectionalAreaCurve, pair_from_ship_configs
-from tug_dynamics.interaction_set import BankEntry, InteractionSet, PairEntry, PlanarState
+from tug_dynamics.interaction_set import BankEntry, InteractionSet, PairEntry, PlanarState, WashEntry, propulsors_of
 from tug_dynamics.ship_file import ship_config
 
 SHIP = ship_config("s175_003.yaml")[1]
@@ -63,6 +63,29 @@ def test_a_bank_adds_its_suction_to_the_pair_loads_of_its_vessel():
     np.testing.assert_allclose(got["tug"], _by_hand(c["tug"], c["ship"], TUG, SHIP, 12.75), rtol=1e-12)
     assert y < 0.0 and off == {"bow": False, "edge": False}      # drawn toward the bank, to starboard
     assert sets.vessels == ["tug", "ship"]
+
+
+def test_a_wash_adds_its_jets_to_the_pair_loads_of_its_target():
+    """loads [wang, wash]: the ship feels the pair's Wang load plus the tug's jets (wash_load of the
+    carried states); the tug only its Wang load; a step without the tug's thrust: no wash."""
+    hulls = {"ship": SectionalAreaCurve.from_ship_config(SHIP), "tug": SectionalAreaCurve.from_ship_config(TUG)}
+    states = {"ship": PlanarState.from_body(0.0, 0.0, 0.0, 0.2, 0.0),
+              "tug": PlanarState.from_body(60.0, 50.0, math.radians(80.0), 0.5, 0.0)}
+    kind, props = propulsors_of(TUG)
+    assert kind == "propellers" and len(props) == 2
+    wash = WashEntry("w", "tug", "ship")
+    sets = InteractionSet(hulls, [PairEntry("p", "tug", "ship")], washes=[wash], propulsors={"tug": props},
+                          drafts={"ship": SHIP["hull"]["draft"]})
+    thrust = {"tug": [(60e3, 0.0), (60e3, 0.0)]}
+    got, _ = sets.loads(states, 0.15, thrust)
+    c = {n: _carried(s, 0.15) for n, s in states.items()}
+    y, n = sets.wash_load(wash, c["tug"], c["ship"], thrust["tug"])
+    assert y < -1e3 and n < 0.0          # the tug's jets on the port side, forward of midship: pushed to starboard
+    np.testing.assert_allclose(got["ship"], _by_hand(c["ship"], c["tug"], SHIP, TUG, math.inf) + [0.0, y, n],
+                               rtol=1e-12)
+    np.testing.assert_allclose(got["tug"], _by_hand(c["tug"], c["ship"], TUG, SHIP, math.inf), rtol=1e-12)
+    no_thrust, _ = sets.loads(states, 0.15)
+    np.testing.assert_allclose(no_thrust["ship"], _by_hand(c["ship"], c["tug"], SHIP, TUG, math.inf), rtol=1e-12)
 
 
 def test_overlapping_hulls_switch_only_their_pair_off():
