@@ -17,6 +17,7 @@ import pytest
 import yaml
 
 from conftest import record_scenario, reserved_domain
+from test_interaction_runs import _library, _states
 from test_recording import decoded
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
@@ -24,21 +25,6 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 DURATION, RATE = 30.0, 20.0
 WASH = "/interactions/on_ship/wrench"
 TOPICS = ["/ship/odom", "/bow_tug/odom", "/stern_tug/odom", "/bow_tug/status", "/stern_tug/thrusters", WASH]
-
-
-def _yaw(odom):
-    q = odom.pose.pose.orientation
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def _states(msgs, vessel):
-    """x, y, yaw, world velocity (vx, vy) per step."""
-    rows = []
-    for m in msgs[f"/{vessel}/odom"]:
-        yaw, u, v = _yaw(m), m.twist.twist.linear.x, m.twist.twist.linear.y
-        rows.append([m.pose.pose.position.x, m.pose.pose.position.y, yaw,
-                     math.cos(yaw) * u - math.sin(yaw) * v, math.sin(yaw) * u + math.cos(yaw) * v])
-    return np.array(rows)
 
 
 def _physics(msgs):
@@ -175,8 +161,3 @@ def test_a_wash_from_a_vessel_without_propulsion_exits_2_before_start(tmp_path, 
     assert "key 'interactions[0].loads': wash of 'bow_tug' (box_barge_000.yaml): propeller wash: the vessel has " \
            "no propellers or azimuth thrusters" in proc.stderr, proc.stderr
 
-
-def _library(name):
-    import os
-    return os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "ros_ws", "src", "scenario_runner",
-                        "scenarios", name)
