@@ -86,6 +86,15 @@ def test_a_wash_adds_its_jets_to_the_pair_loads_of_its_target():
     np.testing.assert_allclose(got["tug"], _by_hand(c["tug"], c["ship"], TUG, SHIP, math.inf), rtol=1e-12)
     no_thrust, _ = sets.loads(states, 0.15)
     np.testing.assert_allclose(no_thrust["ship"], _by_hand(c["ship"], c["tug"], SHIP, TUG, math.inf), rtol=1e-12)
+    # C_w scales the wash and nothing else (F = C_w T sin^2 psi x the intercepted fraction)
+    half = InteractionSet(hulls, [PairEntry("p", "tug", "ship")], washes=[wash._replace(impingement=0.5)],
+                          propulsors={"tug": props}, drafts={"ship": SHIP["hull"]["draft"]})
+    got_half, _ = half.loads(states, 0.15, thrust)
+    np.testing.assert_allclose(got_half["ship"], _by_hand(c["ship"], c["tug"], SHIP, TUG, math.inf)
+                               + [0.0, 0.5 * y, 0.5 * n], rtol=1e-12)
+    with pytest.raises(ValueError, match="impingement must be within"):
+        InteractionSet(hulls, washes=[wash._replace(impingement=1.5)], propulsors={"tug": props},
+                       drafts={"ship": 8.5})
 
 
 def test_overlapping_hulls_switch_only_their_pair_off():

@@ -161,3 +161,29 @@ def test_a_wash_from_a_vessel_without_propulsion_exits_2_before_start(tmp_path, 
     assert "key 'interactions[0].loads': wash of 'bow_tug' (box_barge_000.yaml): propeller wash: the vessel has " \
            "no propellers or azimuth thrusters" in proc.stderr, proc.stderr
 
+
+
+def test_the_wash_entry_reaches_the_node_and_bad_entries_are_named(tmp_path, run_in_process):
+    """wash_impingement is C_w of the node's washes entry; without 'wash' in its loads it exits 2;
+    the node's parameter refuses a malformed entry or a C_w outside 0..1, naming it."""
+    from hull_contact.interaction_node import parse_washes
+    from scenario_format.scenario import load_scenario
+    from scenario_runner.run_nodes import _interaction_specs
+    sc = yaml.safe_load(open(_library("assist_s175_berth_turn_wash.yaml")))
+    sc["interactions"][0]["wash_impingement"] = 0.6
+    path = tmp_path / "half.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    (spec,) = _interaction_specs(load_scenario(str(path)), str(path), "run")
+    washes = spec.params["washes"]
+    assert washes == ["bow_tug_ship_interaction_wash=bow_tug,ship,0.6", "stern_tug_ship_interaction_wash=stern_tug,ship,1.0"]
+    assert [(w.source, w.target, w.impingement) for w in parse_washes(washes)] == [
+        ("bow_tug", "ship", 0.6), ("stern_tug", "ship", 1.0)]
+    assert parse_washes(["w=a,b"])[0].impingement == 1.0
+    for bad in (["w=a,b,1.5"], ["w=a,b,x"], ["w=a"], ["w=a,b,0.5,1"], ["w=,b"]):
+        with pytest.raises(ValueError, match="parameter washes: \"w\" needs"):
+            parse_washes(bad)
+    sc["interactions"][0]["loads"] = ["wang"]
+    path.write_text(yaml.safe_dump(sc))
+    proc = run_in_process("run_scenario", path, "--no-record", "--quiet")
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "key 'interactions[0].wash_impingement': only with 'wash' in its loads" in proc.stderr, proc.stderr

@@ -58,19 +58,30 @@ def _named(param: str, text: str):
     return name, rest
 
 
-def parse_pairs(values: List[str], param: str = "pairs", entry=PairEntry) -> list:
+def parse_pairs(values: List[str]) -> List[PairEntry]:
     out = []
     for text in _listed(values):
-        name, rest = _named(param, text)
+        name, rest = _named("pairs", text)
         vessels = rest.split(",")
         if len(vessels) != 2 or not all(vessels):
-            raise ValueError(f"parameter {param}: \"{name}\" needs two vessels \"<a>,<b>\", got {rest!r}")
-        out.append(entry(name, *vessels))
+            raise ValueError(f"parameter pairs: \"{name}\" needs two vessels \"<a>,<b>\", got {rest!r}")
+        out.append(PairEntry(name, *vessels))
     return out
 
 
 def parse_washes(values: List[str]) -> List[WashEntry]:
-    return parse_pairs(values, "washes", WashEntry)
+    out = []
+    for text in _listed(values):
+        name, rest = _named("washes", text)
+        parts = rest.split(",")
+        try:
+            impingement = float(parts[2]) if len(parts) == 3 else 1.0
+        except ValueError:
+            impingement = math.nan
+        if len(parts) not in (2, 3) or not all(parts[:2]) or not 0.0 <= impingement <= 1.0:
+            raise ValueError(f"parameter washes: \"{name}\" needs \"<source>,<target>[,<C_w> 0..1]\", got {rest!r}")
+        out.append(WashEntry(name, parts[0], parts[1], impingement))
+    return out
 
 
 def thrust_units(kind: str, msg, count: int):

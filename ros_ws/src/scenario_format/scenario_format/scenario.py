@@ -234,6 +234,8 @@ class InteractionSpec(_Strict):
     bank: Optional[List[List[float]]] = None
     # two vessels: "wang" (each on the other), "wash" (the first's jets on the second's side), or both
     loads: List[Literal["wang", "wash"]] = Field(default_factory=lambda: ["wang"], min_length=1, max_length=2)
+    # the wash's impingement coefficient C_w (tug_dynamics.propeller_wash): 1 the ideal plate (an upper bound)
+    wash_impingement: float = Field(1.0, ge=0.0, le=1.0)
 
     @property
     def entry_name(self) -> str:
@@ -539,6 +541,8 @@ def _check_interaction_names(path: str, sc: Scenario, vessels: List[str]) -> Non
                 raise ScenarioError(f"{path}: key 'interactions[{i}].loads': a bank has no loads to choose "
                                     "(its suction only)")
             continue
+        if "wash_impingement" in pair.model_fields_set and "wash" not in pair.loads:
+            raise ScenarioError(f"{path}: key 'interactions[{i}].wash_impingement': only with 'wash' in its loads")
         if len(set(pair.loads)) != len(pair.loads):
             raise ScenarioError(f"{path}: key 'interactions[{i}].loads': {pair.loads} names one twice")
         if pair.between[0] == pair.between[1]:

@@ -234,7 +234,7 @@ def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[No
                                  for n in vessels],
               "pairs": [f"{i.entry_name}={','.join(i.between)}" for i in sc.interactions
                         if not i.bank and "wang" in i.loads] or [""],
-              "washes": [f"{i.entry_name}_wash={','.join(i.between)}" for i in sc.interactions
+              "washes": [f"{i.entry_name}_wash={','.join(i.between)},{i.wash_impingement!r}" for i in sc.interactions
                          if not i.bank and "wash" in i.loads] or [""],
               "banks": [f"{i.entry_name}={i.between[0]}:" + ",".join(repr(float(c)) for point in i.bank for c in point)
                         for i in sc.interactions if i.bank] or [""],

@@ -208,9 +208,10 @@ INTERACTION_NODE = ParamTable(
     P("pairs", [""], "Wang pairs, \"<name>=<vessel a>,<vessel b>\": each vessel feels the other"),
     P("banks", [""], "Vertical banks, \"<name>=<vessel>:x0,y0,x1,y1,...\": the polyline's points (m, world "
                      "(map)), the water on its left; the image-method bank suction on the vessel"),
-    P("washes", [""], "Propeller wash, \"<name>=<source>,<target>\": the source's propeller or azimuth-thruster "
-                      "jets on the target's hull side (its thrust from /<source>/thrusters, or /<source>/status "
-                      "shared over its propellers)"),
+    P("washes", [""], "Propeller wash, \"<name>=<source>,<target>[,<C_w>]\": the source's propeller or "
+                      "azimuth-thruster jets on the target's hull side (its thrust from /<source>/thrusters, or "
+                      "/<source>/status shared over its propellers), C_w the impingement coefficient 0..1 "
+                      "(default 1)"),
     P("depth", 0.0, "Water depth for the bottom images (0: deep water)", 0.0, 1e4, "m"),
 )
 
