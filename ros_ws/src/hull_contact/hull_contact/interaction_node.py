@@ -10,7 +10,7 @@ vertical bank, and a declared source's propeller wash on a target's hull side
 Subscribes ``/<vessel>/odom`` of each of ``vessels`` (and each wash source's ``thrusters``, or its
 ``status`` when it has propellers) and publishes ``on_<vessel>/wrench``
 (geometry_msgs/WrenchStamped in ``<vessel>/base_link``, body axes, about midship): the sum of the
-surge and sway forces and yaw moments of its pairs and banks, computed from the odometry of step
+surge and sway forces and yaw moments of its pairs, banks and washes, computed from the odometry of step
 k, each position carried on at its velocity to the middle of the step the load acts over
 (k+1 -> k+2, 1.5 steps on), and applied by the vessel nodes (their ``wrench_topics``) over that
 step (docs/confined-water.md, "In a run"). ``interaction_off`` / ``interaction_on`` events name

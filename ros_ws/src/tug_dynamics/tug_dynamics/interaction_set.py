@@ -188,8 +188,7 @@ class InteractionSet:
                              "used twice")
         self.vessels: List[str] = names              # every vessel that feels a load, in order of mention
         # and every vessel whose state a load needs (a wash's source may feel nothing)
-        self.tracked: List[str] = names + [w.source for w in washes if w.source not in names]
-        self.tracked = list(dict.fromkeys(self.tracked))
+        self.tracked: List[str] = list(dict.fromkeys(names + [w.source for w in washes]))
         self.index = {n: i for i, n in enumerate(names)}
         self.pairs, self.banks, self.washes = list(pairs), list(banks), list(washes)
         self.propulsors = {w.source: list(propulsors[w.source]) for w in washes}
