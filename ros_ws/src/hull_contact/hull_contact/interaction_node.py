@@ -167,8 +167,9 @@ class InteractionNode(SteppedNode):
         self.outputs = {n: (self.create_fed_publisher(WrenchStamped, f"on_{n}/wrench", rc.LATCHED_STATE_QOS),
                             cdr.WrenchStampedEncoder(f"{n}/base_link")) for n in self.interactions.vessels}
         self.event_pub = self.create_publisher(ScenarioEvent, rc.EVENTS_TOPIC, rc.EVENTS_QOS)
-        self.init_stepping([StepInput(t, Odometry, decode=cdr.decode_odometry) for t in self.topics] +
-                           [StepInput(t, ThrusterStatus if kind == "thrusters" else VesselStatus)
+        # local: the vessels' outputs, from nodes of this process without DDS (sim_plumbing.local_bus)
+        self.init_stepping([StepInput(t, Odometry, decode=cdr.decode_odometry, local=True) for t in self.topics] +
+                           [StepInput(t, ThrusterStatus if kind == "thrusters" else VesselStatus, local=True)
                             for t, (_, kind, _) in self.thrust_topics.items()], ready=False)
         what = [f"{p.name}: Wang (1975) between {p.a} and {p.b}" for p in pairs] + \
                [f"{b.name}: bank suction (image method) on {b.vessel}" for b in banks] + \

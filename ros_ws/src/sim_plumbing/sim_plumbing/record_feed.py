@@ -21,6 +21,8 @@ import os
 import struct
 from typing import Callable, Dict, Iterator, List, Optional, Tuple
 
+from sim_plumbing import local_bus
+
 ENV_FD = "TUGSIM_RECORD_FD"
 _FRAME = struct.Struct("<BHqI")
 _NAME, _MESSAGE = 0, 1
@@ -118,5 +120,6 @@ class FedPublisher:
 
     def publish(self, data: bytes, log_time_ns: int) -> None:
         self.publisher.publish(data)
+        local_bus.post(self.topic, data)  # to this process's nodes that take the topic locally
         if self.feed is not None:
             self.feed(self.topic, log_time_ns, data)

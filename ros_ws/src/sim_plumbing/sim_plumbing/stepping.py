@@ -43,11 +43,12 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.serialization import serialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from tug_msgs.msg import SimStep, StepDone
 
 from sim_contract.node_params import STEPPING
 from sim_plumbing import cdr
+from sim_plumbing import local_bus
 from sim_plumbing import record_feed
 from sim_plumbing import ros_common as rc
 from sim_plumbing import step_channel
@@ -118,6 +119,9 @@ class StepInput:
     # Hot inputs are taken raw and decoded by this function (sim_plumbing.cdr) into a light
     # tuple with a stamp_ns field; None: rclpy deserializes into the message class.
     decode: Optional[Callable[[bytes], Any]] = None
+    # Taken from a publisher in this process without DDS once one delivers (sim_plumbing.local_bus;
+    # lockstep only). For the per-step outputs of the run's own nodes, never for orders.
+    local: bool = False
 
 
 class SteppedNode(Node):
@@ -154,6 +158,7 @@ class SteppedNode(Node):
         self.namespace_name = self.get_namespace().strip("/")
         self._wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self._taken: List[Tuple[Any, Callable]] = []  # (subscription, callback) for take_missed
+        self._local_ends: List[Callable[[], None]] = []  # local_bus subscriptions, ended with the node
         self._progress = (0, time.monotonic())  # (step, wall time it was reached)
         self._last_rescue = 0.0
         self.rescued = 0  # messages the executor did not deliver, taken by poll()
@@ -170,6 +175,9 @@ class SteppedNode(Node):
                 callback = lambda data, s=spec: self._on_raw_input(s, data)  # noqa: E731
                 sub = self.create_subscription(spec.msg_type, spec.topic, callback, qos, raw=True)
             self._taken.append((sub, callback))
+            if spec.local and self.lockstep and spec.kind == "state":
+                self._local_ends.append(local_bus.subscribe(
+                    sub.topic_name, lambda data, s=spec, sub=sub: self._on_local_input(s, sub, data)))
         if self.lockstep:
             # Started by the scenario runner: its private channel carries the triggers and takes
             # the answers; a SimStep on the wire is then only a wake-up (sim_plumbing/step_channel.py).
@@ -232,6 +240,22 @@ class SteppedNode(Node):
             "undecodable " + spec.topic, f"{spec.topic}: undecodable {spec.msg_type.__name__} dropped: {why}"))
         if msg is not None:
             self._on_input(spec, msg, data)
+
+    def _on_local_input(self, spec: StepInput, sub: Any, data: bytes) -> None:
+        """An input's bytes from a node of this process (local_bus): the first one takes the
+        input off DDS, whose copies would only repeat them."""
+        if any(taken is sub for taken, _ in self._taken):
+            self._taken = [(t, c) for t, c in self._taken if t is not sub]
+            self.destroy_subscription(sub)
+        if spec.decode is not None:
+            self._on_raw_input(spec, data)
+        else:
+            self._on_input(spec, deserialize_message(data, spec.msg_type), data)
+
+    def destroy_node(self):
+        for end in getattr(self, "_local_ends", ()):
+            end()
+        return super().destroy_node()
 
     def _on_trigger_raw(self, data: bytes) -> None:
         msg = cdr.decode_or_report(cdr.decode_sim_step, data, lambda why: self.complaints(
@@ -438,6 +462,10 @@ class SteppedNode(Node):
             k in self._buffer[spec.topic] for spec in self.inputs if spec.kind == "order")
 
     def _advance(self) -> None:
+        with local_bus.stepping():  # what this node's steps post reaches the others after them
+            self._advance_steps()
+
+    def _advance_steps(self) -> None:
         while self._ready(self.step_index):
             k = self.step_index
             del self._triggers[k]

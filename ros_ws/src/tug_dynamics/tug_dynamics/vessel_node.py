@@ -143,7 +143,8 @@ class VesselNode(SteppedNode):
         self.init_stepping([StepInput(T.COMMAND, VesselCommand, kind="order", decode=cdr.decode_vessel_command),
                             StepInput(T.THRUSTER_COMMAND, ThrusterCommand, kind="order",
                                       decode=cdr.decode_thruster_command)] +
-                           [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped) for t in self.wrench_topics] +
+                           [StepInput(t, WrenchStamped, decode=cdr.decode_wrench_stamped, local=True)
+                            for t in self.wrench_topics] +
                            [StepInput(t, RopeEndCoupling, decode=cdr.decode_rope_end_coupling)
                             for t in self.rope_end_topics] +
                            [StepInput(t, HullContact, decode=cdr.decode_hull_contact) for t in self.contact_topics])
