@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import contextlib
 import os
+import random
 import signal
+import socket
 import subprocess
 import time
 from typing import Callable, List
@@ -26,6 +28,27 @@ os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; the range abo
 use_discovery_profile()  # as the runner and nodes: the test's observers discover as fast as they do
 
 
+
+
+def free_port(kind: int = socket.SOCK_STREAM) -> int:
+    """A free port on 127.0.0.1 for a server a test starts (the live view, the station, gpsd).
+    Not bind(0): that hands out a port of the kernel's ephemeral range, which the kernel hands
+    again to the next outgoing connection of any process, so between this call and the server's
+    bind another test's client could take it (ci22: the station never came up, its port taken).
+    Below that range instead, and clear of the DDS ports of the first 40 participants of any
+    domain (7400 + 250 d + 0..100)."""
+    low = int(open("/proc/sys/net/ipv4/ip_local_port_range").read().split()[0])
+    for _ in range(1000):
+        port = random.randrange(10000, low)
+        if (port - 7400) % 250 < 150:
+            continue
+        with socket.socket(socket.AF_INET, kind) as s:
+            try:
+                s.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free port found below the ephemeral range")
 
 
 class NodeProcess:

@@ -34,7 +34,7 @@ import urllib.request
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import executable_path, free_port
 from test_recording import decoded
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(420)]
@@ -47,9 +47,7 @@ BROWSER_ARGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ign
 
 
 def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    return free_port()
 
 
 @pytest.fixture

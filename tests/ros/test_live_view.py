@@ -21,7 +21,7 @@ import time
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import executable_path, free_port
 from test_recording import decoded
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(300)]
@@ -36,9 +36,7 @@ FLOOD = 10_000
 
 
 def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    return free_port()
 
 
 def _expected_topics(sc):

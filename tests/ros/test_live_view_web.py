@@ -24,6 +24,8 @@ import time
 
 import pytest
 
+from conftest import free_port
+
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(180)]
 
 RATE = 20.0  # the node's input_rate (default)
@@ -33,9 +35,7 @@ BOMBS = [b'{"engine_order": 1' + b"0" * 399 + b"}", b'{"engine_order": ' + b"[" 
 
 
 def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    return free_port()
 
 
 class Run:

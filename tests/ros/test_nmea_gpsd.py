@@ -27,7 +27,7 @@ import time
 import pytest
 import yaml
 
-from conftest import executable_path
+from conftest import executable_path, free_port
 from test_nmea_out import BARGE_HULL, DURATION, ORIGIN, RATE, UTC_START, _angle_diff, _scenario, _truth
 from test_recording import decoded
 
@@ -53,9 +53,7 @@ def _ensure_gpsd():
 
 
 def _free_port(kind) -> int:
-    with socket.socket(socket.AF_INET, kind) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    return free_port(kind)
 
 
 def _stop(proc):

@@ -32,10 +32,14 @@ from conftest import executable_path, record_scenario, spin_until
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(150)]
 
 # End-to-end timing tolerance (replay process -> DDS -> a Python subscriber in this process), on
-# a shared 2-core machine; unloaded, p95 is about 5 ms.
-P50_TOL = 0.020  # s
-P95_TOL = 0.100  # s
-MAX_TOL = 0.500  # s
+# a shared 2-core machine. Unloaded: p50 about 1 ms, p95 about 5 ms. With both cores saturated
+# (CI's busy core beside two workers, ci22) the subscriber here falls behind: p50 38 ms, p95 472
+# ms, max 706 ms. The bounds pass that; what they guard is a replay that is not paced at all or
+# late throughout, which the span check (replay span within 0.25 s of the recording's) and the
+# order check below also catch.
+P50_TOL = 0.060  # s
+P95_TOL = 0.600  # s
+MAX_TOL = 1.000  # s
 
 
 def tool(executable):
