@@ -202,9 +202,7 @@ def _send_from_page(page, topic, body, ctype):
 
 
 def test_instructor_station_in_a_paced_run(tmp_path, ros_domain, browser, artifacts):
-    # long enough for the page's work on a starved machine (swiftshader screenshots take seconds):
-    # the clamped order at the end must reach a run that is still going
-    duration = 60.0
+    duration = 60.0  # outlasts the page's work when starved: the clamped order at the end needs a live run
     path = _scenario(tmp_path, "station", duration, "realtime")
     out = tmp_path / "station.mcap"
     http_port = _free_port()

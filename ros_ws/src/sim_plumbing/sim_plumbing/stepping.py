@@ -159,6 +159,7 @@ class SteppedNode(Node):
         self._wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self._taken: List[Tuple[Any, Callable]] = []  # (subscription, callback) for take_missed
         self._local_ends: List[Callable[[], None]] = []  # local_bus subscriptions, ended with the node
+        self._off_dds: set = set()  # inputs taken locally, their DDS subscriptions destroyed
         self._progress = (0, time.monotonic())  # (step, wall time it was reached)
         self._last_rescue = 0.0
         self.rescued = 0  # messages the executor did not deliver, taken by poll()
@@ -244,7 +245,8 @@ class SteppedNode(Node):
     def _on_local_input(self, spec: StepInput, sub: Any, data: bytes) -> None:
         """An input's bytes from a node of this process (local_bus): the first one takes the
         input off DDS, whose copies would only repeat them."""
-        if any(taken is sub for taken, _ in self._taken):
+        if spec.topic not in self._off_dds:  # a set look-up per message, not a scan of the readers
+            self._off_dds.add(spec.topic)
             self._taken = [(t, c) for t, c in self._taken if t is not sub]
             self.destroy_subscription(sub)
         if spec.decode is not None:
