@@ -62,3 +62,22 @@ def test_nesting_deeper_than_the_reader_goes_is_an_input_error(tmp_path):
     (tmp_path / "deep.yaml").write_text("description: " + "[" * 3000 + "]" * 3000 + "\n")
     with pytest.raises(YamlInputError, match="nested deeper"):
         load_yaml(str(tmp_path / "deep.yaml"))
+
+
+def test_a_file_read_again_is_its_own_copy_and_an_edit_is_seen(tmp_path):
+    """load_yaml keeps parsed documents by their bytes (a run's start reads one ship file dozens of
+    times): a caller changing what it got changes nothing for the next, and an edited file (same
+    path) is parsed anew, its errors as well."""
+    path = tmp_path / "ship.yaml"
+    path.write_text("hull: {mass: 1000.0, inertia: [1, 2, 3]}\n")
+    first = load_yaml(str(path))
+    first["hull"]["inertia"].append(99)
+    first["hull"]["mass"] = -1
+    assert load_yaml(str(path)) == {"hull": {"mass": 1000.0, "inertia": [1, 2, 3]}}
+    path.write_text("hull: {mass: 2000.0, inertia: [1, 2, 3]}\n")
+    assert load_yaml(str(path))["hull"]["mass"] == 2000.0
+    path.write_text("hull: {mass: 1, mass: 2}\n")
+    with pytest.raises(YamlInputError, match="duplicate key 'mass'"):
+        load_yaml(str(path))
+    with pytest.raises(YamlInputError, match="duplicate key 'mass'"):  # an error is not kept as a document
+        load_yaml(str(path))
