@@ -108,10 +108,10 @@ def _input_error(exc: yaml.YAMLError) -> YamlInputError:
                           duplicate_key=exc.key if dup else None, first_line=exc.first_line if dup else None)
 
 
-# Parsed documents by their text. Why: a run's start reads the same ship file many times (the
-# scenario check, every node that models or draws the vessel, the interaction node for each pair:
-# 60 reads of 20-30 ms each for six vessels with 15 pairs, measured). Keyed by the bytes, so an
-# edited file is parsed again; a caller gets its own deep copy, so nobody changes another's.
+# Parsed documents by the SHA-256 of the file's bytes. Why: a run's start reads the same ship
+# file many times (the scenario check, every node that models or draws the vessel, the
+# interaction check of each pair: 60 reads of 20-30 ms each for six vessels with 15 pairs,
+# measured). An edited file is parsed again; each caller gets its own deep copy.
 _PARSED: "dict[bytes, Any]" = {}
 _PARSED_MAX = 64
 
