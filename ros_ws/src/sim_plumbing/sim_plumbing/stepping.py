@@ -146,9 +146,9 @@ class SteppedNode(Node):
         self._heap_settled = False
         self.inputs = inputs
         self._buffer: Dict[str, Dict[int, Any]] = {i.topic: {} for i in inputs}
-        # the serialized state input held or used for each step (the last KEPT_STEPS): a second,
-        # different one for that step is a conflict (CONFLICT_MARK), an identical copy changes nothing
-        self._prints: Dict[str, Dict[int, bytes]] = {i.topic: {} for i in inputs}
+        # the state input held or used for each step (the last KEPT_STEPS), as (bytes, decoded): a
+        # second one with other content for that step is a conflict (CONFLICT_MARK), a copy changes nothing
+        self._prints: Dict[str, Dict[int, Tuple[bytes, Any]]] = {i.topic: {} for i in inputs}
         self.untrusted: Optional[str] = None  # why this node stopped stepping (a conflict)
         self._latest: Dict[str, Any] = {}
         self._triggers: Dict[int, cdr.TriggerIn] = {}
@@ -341,12 +341,14 @@ class SteppedNode(Node):
             data = raw if raw is not None else serialize_message(msg)
             held = self._prints[spec.topic].get(k)
             if held is not None:
-                if held != data:
+                # the bytes first (a DDS copy repeats them); then the content, because CDR's alignment
+                # padding is not zeroed by the serializer: one message serialized twice can differ there
+                if held[0] != data and held[1] != msg:
                     self._conflict(spec.topic, f"two different messages stamped step {k}")
                 return  # a copy of what is held or was used: changes nothing
             if k < self.step_index:
                 return  # for a step computed long ago: nothing to use it for
-            self._prints[spec.topic][k] = data
+            self._prints[spec.topic][k] = (data, msg)
         if spec.kind == "order":
             k = max(k, self.step_index)
             if not accepted:
