@@ -95,3 +95,27 @@ def test_an_order_to_a_vessel_on_a_prescribed_motion_is_refused_aloud(start_node
     node.destroy_node()
     vessel.stop()
     assert "'tug' follows a prescribed motion: orders have no effect" in vessel.log()
+
+
+def test_print_nodes_gives_a_ros2_run_line_per_node(run_in_process):
+    """`run_scenario default_demo.yaml --print-nodes` (docs/several-machines.md): one `ros2 run`
+    line per node of the scenario; without --run-id no run_id (the node joins the first run it
+    sees), with it the same id on every line."""
+    import shlex
+    from scenario_runner import run_nodes
+    from scenario_format.scenario import load_scenario
+    from ament_index_python.packages import get_package_share_directory
+    import os
+    path = os.path.join(get_package_share_directory("scenario_runner"), "scenarios", "default_demo.yaml")
+    specs = run_nodes.node_specs(load_scenario(path), path)
+    for extra, run_id in (((), None), (("--run-id", "study-7"), "study-7")):
+        out = run_in_process("run_scenario", "default_demo.yaml", "--print-nodes", *extra)
+        assert out.returncode == 0, out.stderr
+        lines = out.stdout.strip().splitlines()
+        assert len(lines) == len(specs) >= 3
+        for line, spec in zip(lines, specs):
+            words = shlex.split(line)
+            assert words[:4] == ["ros2", "run", spec.package, spec.executable] and words[4] == "--ros-args", line
+            params = [w for i, w in enumerate(words) if i > 0 and words[i - 1] == "-p"]
+            ids = [p for p in params if p.startswith("run_id:=")]
+            assert ids == ([] if run_id is None else [f'run_id:="{run_id}"']), line

@@ -111,7 +111,7 @@ class NodeSpec:
         """The same parameters as `--ros-args` for a process started like `ros2 run`."""
         args = ["-r", f"__ns:={self.namespace}", "-r", f"__node:={self.node_name}"]
         for key, value in self.params.items():
-            args += ["-p", f"{key}:={_yaml_value(value)}"]
+            args += ["-p", f"{key}:={yaml_value(value)}"]
         return args
 
     def parameter_overrides(self):
@@ -128,14 +128,14 @@ def executable_path(package: str, executable: str) -> str:
     return path
 
 
-def _yaml_value(value) -> str:
+def yaml_value(value) -> str:
     # rcl parses -p values as YAML: strings are quoted so that none turns into a number or map.
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (int, float)):
         return repr(value)
     if isinstance(value, (list, tuple)):
-        return "[" + ",".join(_yaml_value(v) for v in value) + "]"
+        return "[" + ",".join(yaml_value(v) for v in value) + "]"
     return json.dumps(str(value))
 
 

@@ -199,7 +199,7 @@ def node_commands(plan: "RunPlan", run_id: str = "") -> List[str]:
     for spec in run_nodes.node_specs(plan.sc, plan.path, run_id):
         args = spec.ros_args()
         if not run_id:
-            i = args.index("run_id:=" + cd._yaml_value(""))
+            i = args.index("run_id:=" + run_nodes.yaml_value(""))
             del args[i - 1:i + 1]
         lines.append(shlex.join(["ros2", "run", spec.package, spec.executable, "--ros-args", *args]))
     return lines
