@@ -20,7 +20,11 @@ import dataclasses
 import math
 from typing import Iterable, List
 
-from scipy.optimize import brentq
+
+def brentq(*args, **kwargs):
+    # scipy.optimize takes 0.6 s to import: only a planing hull's node pays it, not every vessel node
+    from scipy.optimize import brentq as scipy_brentq
+    return scipy_brentq(*args, **kwargs)
 
 
 @dataclasses.dataclass(frozen=True)
