@@ -160,6 +160,48 @@ def test_line_strip_marker_array(n, ns, frame):
     assert got.markers[0].points == m.points  # float64: exact
 
 
+def _marker(spec, frame, stamp_ns):
+    """The visualization_msgs/Marker a MarkerSpec stands for, built field by field."""
+    from geometry_msgs.msg import Point
+    from std_msgs.msg import ColorRGBA
+    from visualization_msgs.msg import Marker
+    m = Marker(ns=spec.ns, id=spec.marker_id, type=spec.marker_type, action=Marker.ADD, text=spec.text,
+               frame_locked=spec.frame_locked)
+    m.header.frame_id = frame
+    _stamp(m.header, stamp_ns)
+    p = m.pose
+    p.position.x, p.position.y, p.position.z = spec.pose[:3]
+    p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w = spec.pose[3:]
+    m.scale.x, m.scale.y, m.scale.z = spec.scale
+    m.color = ColorRGBA(r=spec.color[0], g=spec.color[1], b=spec.color[2], a=spec.color[3])
+    m.points = [Point(x=float(q[0]), y=float(q[1]), z=float(q[2])) for q in np.reshape(spec.points, (-1, 3))]
+    m.colors = [ColorRGBA(r=float(c[0]), g=float(c[1]), b=float(c[2]), a=float(c[3]))
+                for c in np.reshape(spec.colors, (-1, 4))]
+    return m
+
+
+@pytest.mark.parametrize("frame", ["tug/base_link", "b", "abcdefg/base_link"])
+@pytest.mark.parametrize("n_changing", [0, 1, 3])
+def test_marker_array_template(frame, n_changing):
+    """The fixed markers laid out once and the changing ones after them, at two stamps: rclpy
+    reads exactly the array built field by field (names of many lengths move the alignment)."""
+    from visualization_msgs.msg import MarkerArray
+    rng = np.random.default_rng(len(frame) + n_changing)
+    fixed = [cdr.MarkerSpec(name, i, cdr.MARKER_TRIANGLE_LIST if i % 2 else cdr.MARKER_SPHERE_LIST,
+                            tuple(rng.random(3)), tuple(rng.random(4)), rng.normal(size=(3 * i + 1, 3)),
+                            rng.random(size=(3 * i + 1, 4)) if i % 3 == 0 else (), frame_locked=True)
+             for i, name in enumerate(NAMES[:6])]
+    fixed.append(cdr.MarkerSpec("tug", 9, cdr.MARKER_TEXT, (0.0, 0.0, 2.5), (1.0, 1.0, 1.0, 1.0),
+                                pose=(0.0, 0.0, 7.0, 0.0, 0.0, 0.0, 1.0), text="tug 1", frame_locked=True))
+    template = cdr.MarkerArrayTemplate(frame, fixed)
+    for stamp_ns in (STAMP_NS, STAMP_NS + 50_000_000):
+        changing = [cdr.MarkerSpec(NAMES[j + 4], 20 + j, cdr.MARKER_ARROW, (0.2, 0.4, 0.6), (1.0, 0.5, 0.0, 1.0),
+                                   rng.normal(size=(2, 3)), frame_locked=True) for j in range(n_changing)]
+        ref = MarkerArray(markers=[_marker(m, frame, stamp_ns) for m in fixed + changing])
+        ref = deserialize_message(serialize_message(ref), MarkerArray)  # colors: float32 on the wire
+        assert deserialize_message(template.encode(stamp_ns, changing), MarkerArray) == ref
+
+
 def test_undecodable_bytes_are_reported_and_dropped():
     reasons = []
     bad_name = cdr.StepDoneEncoder("/tug/vessel", "r").encode(STAMP_NS, 1, 0.1).replace(b"/tug/vessel", b"/tug/\xffessel")

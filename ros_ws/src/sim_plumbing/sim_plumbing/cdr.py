@@ -435,6 +435,38 @@ def marker_array_cdr(stamp_ns: int, frame_id: str, markers: Sequence[MarkerSpec]
     return w.getvalue()
 
 
+class MarkerArrayTemplate:
+    """visualization_msgs/MarkerArray whose first markers never change but for the stamp (a
+    vessel's hull, deck, points and name): their bytes are laid out once, each call copies them,
+    sets the count and the stamps, and writes the changing markers (arrows) after them. An S-175's
+    24 kB of markers with its three arrows: 216 -> 132 us a call (the arrows are most of the rest)."""
+
+    def __init__(self, frame_id: str, fixed: Sequence[MarkerSpec]):
+        self.frame_id = frame_id
+        self.n_fixed = len(fixed)
+        w = CdrWriter()
+        w.uint32(0)
+        self._stamps: List[int] = []  # offsets in the body (after the encapsulation) of each stamp
+        for m in fixed:
+            w.align(4)
+            self._stamps.append(w.size)
+            _write_marker(w, 0, frame_id, m)
+        self._body = w.getvalue()[_HEADER:]
+
+    def encode(self, stamp_ns: int, changing: Sequence[MarkerSpec]) -> bytes:
+        body = bytearray(self._body)
+        _U32.pack_into(body, 0, self.n_fixed + len(changing))
+        parts = stamp_parts(stamp_ns)
+        for at in self._stamps:
+            _STAMP.pack_into(body, at, *parts)
+        w = CdrWriter()
+        w.parts.append(bytes(body))
+        w.size = len(body)
+        for m in changing:
+            _write_marker(w, stamp_ns, self.frame_id, m)
+        return w.getvalue()
+
+
 def line_strip_marker_array_cdr(stamp_ns: int, frame_id: str, ns: str, marker_id: int, width: float,
                                 points, colors_rgba) -> bytes:
     """visualization_msgs/MarkerArray holding one LINE_STRIP marker (action ADD, identity pose,

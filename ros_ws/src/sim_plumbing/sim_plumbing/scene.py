@@ -114,6 +114,7 @@ class VesselScene:
                            text=vessel, frame_locked=True),
         ]
         self._shaft = max(0.15, 0.012 * dims.length)
+        self._template = cdr.MarkerArrayTemplate(self.frame, self._fixed)
 
     def _arrow(self, marker_id: int, start: Sequence[float], vector: Sequence[float], color) -> cdr.MarkerSpec:
         start = np.asarray(start, float)
@@ -131,4 +132,4 @@ class VesselScene:
             arrows.append(self._arrow(10 + i, p, (share * force_scale, 0.0, 0.0), THRUST_COLOR))
         for j, (point, force) in enumerate(rope_forces):
             arrows.append(self._arrow(20 + j, point, np.asarray(force, float) * force_scale, ROPE_FORCE_COLOR))
-        return cdr.marker_array_cdr(stamp_ns, self.frame, self._fixed + arrows)
+        return self._template.encode(stamp_ns, arrows)
