@@ -364,7 +364,8 @@ class SteppedNode(Node):
             buf[k] = msg
         else:
             return
-        self._advance()
+        if k == self.step_index:  # an input for a later step cannot make this one ready
+            self._advance()
 
     def _on_trigger(self, msg: cdr.TriggerIn) -> None:
         if self.untrusted is not None:
