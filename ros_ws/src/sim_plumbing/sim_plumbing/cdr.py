@@ -428,11 +428,7 @@ def _write_marker(w: CdrWriter, stamp_ns: int, frame_id: str, m: MarkerSpec) -> 
 
 def marker_array_cdr(stamp_ns: int, frame_id: str, markers: Sequence[MarkerSpec]) -> bytes:
     """visualization_msgs/MarkerArray of these markers, all in one frame and stamp."""
-    w = CdrWriter()
-    w.uint32(len(markers))
-    for m in markers:
-        _write_marker(w, stamp_ns, frame_id, m)
-    return w.getvalue()
+    return MarkerArrayTemplate(frame_id, ()).encode(stamp_ns, markers)
 
 
 class MarkerArrayTemplate:
@@ -460,7 +456,7 @@ class MarkerArrayTemplate:
         for at in self._stamps:
             _STAMP.pack_into(body, at, *parts)
         w = CdrWriter()
-        w.parts.append(bytes(body))
+        w.parts.append(body)
         w.size = len(body)
         for m in changing:
             _write_marker(w, stamp_ns, self.frame_id, m)
