@@ -97,17 +97,22 @@ def test_an_order_to_a_vessel_on_a_prescribed_motion_is_refused_aloud(start_node
     assert "'tug' follows a prescribed motion: orders have no effect" in vessel.log()
 
 
-def test_print_nodes_gives_a_ros2_run_line_per_node(run_in_process):
+def test_print_nodes_gives_a_ros2_run_line_per_node(run_in_process, tmp_path):
     """`run_scenario default_demo.yaml --print-nodes` (docs/several-machines.md): one `ros2 run`
     line per node of the scenario; without --run-id no run_id (the node joins the first run it
-    sees), with it the same id on every line."""
+    sees), with it the same id on every line. A ship or rope file the packages ship goes by its
+    bare name (another PC's node finds it in its own installation), a user's own by its path."""
     import shlex
+    import shutil
+    import yaml
     from scenario_runner import run_nodes
     from scenario_format.scenario import load_scenario
     from ament_index_python.packages import get_package_share_directory
     import os
     path = os.path.join(get_package_share_directory("scenario_runner"), "scenarios", "default_demo.yaml")
-    specs = run_nodes.node_specs(load_scenario(path), path)
+    scenario = load_scenario(path)
+    specs = run_nodes.node_specs(scenario, path)
+    shipped = {v.ship_file for v in scenario.vessels} | {r.rope_file for r in scenario.ropes}
     for extra, run_id in (((), None), (("--run-id", "study-7"), "study-7")):
         out = run_in_process("run_scenario", "default_demo.yaml", "--print-nodes", *extra)
         assert out.returncode == 0, out.stderr
@@ -119,3 +124,16 @@ def test_print_nodes_gives_a_ros2_run_line_per_node(run_in_process):
             params = [w for i, w in enumerate(words) if i > 0 and words[i - 1] == "-p"]
             ids = [p for p in params if p.startswith("run_id:=")]
             assert ids == ([] if run_id is None else [f'run_id:="{run_id}"']), line
+            # the files the packages ship by their bare names: another PC finds them in its install
+            files = [p.split(":=")[1].strip('"') for p in params if p.split(":=")[0] in ("ship_file", "rope_file")]
+            assert len(files) == 1 and files[0] in shipped, line
+    # a ship file of the user's own, beside the scenario, keeps its path (the other PC needs it there)
+    sc = yaml.safe_load(open(path))
+    sc["vessels"][0]["ship_file"] = "my_tug.yaml"
+    shutil.copy(os.path.join(get_package_share_directory("tug_dynamics"), "ships", "harbour_tug.yaml"),
+                tmp_path / "my_tug.yaml")
+    (tmp_path / "own.yaml").write_text(yaml.safe_dump(sc))
+    out = run_in_process("run_scenario", tmp_path / "own.yaml", "--print-nodes")
+    assert out.returncode == 0, out.stderr
+    first = shlex.split(out.stdout.splitlines()[0])
+    assert f'ship_file:="{tmp_path / "my_tug.yaml"}"' in first, first

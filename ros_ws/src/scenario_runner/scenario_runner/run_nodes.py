@@ -14,6 +14,7 @@ from scenario_format.scenario import (Scenario, environment_parameter, has_thrus
                                      interaction_depth, resolve)
 from sim_contract import topics as T
 from sim_contract.node_params import NODE_TABLES
+from sim_math import data_files
 from sim_plumbing import ros_common as rc
 
 
@@ -139,8 +140,15 @@ def yaml_value(value) -> str:
     return json.dumps(str(value))
 
 
-def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeSpec]:
-    """The nodes a scenario needs, with their parameters (run_id: the run they belong to)."""
+def _data_file(package: str, subdir: str, name: str, scenario_path: str, portable: bool) -> str:
+    path = resolve(package, subdir, name, scenario_path)
+    return data_files.shipped_name(package, subdir, path) if portable else path
+
+
+def node_specs(sc: Scenario, scenario_path: str, run_id: str = "", portable: bool = False) -> List[NodeSpec]:
+    """The nodes a scenario needs, with their parameters (run_id: the run they belong to;
+    portable: a ship or rope file the packages ship by its bare name, which a node on another
+    machine finds in its own installation, not by this checkout's path)."""
     # No use_sim_time: a stepped node takes the time of each step from its trigger, and /clock
     # would cost one more delivery per node per step (issue 34; an outside autopilot keeps it).
     common = {"exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id}
@@ -150,7 +158,7 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
         common["environment"] = environment_parameter(sc, scenario_path)
     specs = []
     for v in sc.vessels:
-        params = {"ship_file": resolve("tug_dynamics", "ships", v.ship_file, scenario_path),
+        params = {"ship_file": _data_file("tug_dynamics", "ships", v.ship_file, scenario_path, portable),
                   "initial_x": float(v.initial.x), "initial_y": float(v.initial.y), "initial_yaw": heading_rad(v),
                   "initial_speed": float(v.initial.speed), "initial_engine_order": float(v.initial.engine_order),
                   "initial_steering_angle": math.radians(v.initial.steering_deg)}
@@ -173,7 +181,7 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
                           motion_turn_start=float(m.turn_start), motion_turn_duration=float(m.turn_duration))
         specs.append(NodeSpec(f"/{v.name}", "vessel", "tug_dynamics", "vessel_node", {**params, **common}))
     for r in sc.ropes:
-        params = {"rope_file": resolve("rope_model", "ropes", r.rope_file, scenario_path),
+        params = {"rope_file": _data_file("rope_model", "ropes", r.rope_file, scenario_path, portable),
                   "end_a": r.end_a, "end_b": r.end_b, "layout": r.layout, "equilibrium": r.equilibrium}
         for end in ("a", "b"):
             pos = getattr(r, f"end_{end}_position")
@@ -191,12 +199,12 @@ def node_specs(sc: Scenario, scenario_path: str, run_id: str = "") -> List[NodeS
                   "radius": float(c.radius), "stiffness": float(c.stiffness), "damping": float(c.damping),
                   "friction": float(c.friction)}
         for side, v in (("fender", ships[fender_vessel]), ("hull", ships[c.hull])):
-            params[f"{side}_ship_file"] = resolve("tug_dynamics", "ships", v.ship_file, scenario_path)
+            params[f"{side}_ship_file"] = _data_file("tug_dynamics", "ships", v.ship_file, scenario_path, portable)
             if v.ship_overrides:
                 params[f"{side}_ship_overrides"] = json.dumps(v.ship_overrides)
         specs.append(NodeSpec(f"/{c.name}", "contact", "hull_contact", "contact_node", {
             **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id}))
-    specs += _interaction_specs(sc, scenario_path, run_id)
+    specs += _interaction_specs(sc, scenario_path, run_id, portable)
     for a in sc.autopilots:
         # YAML 90 is an int; ROS would refuse it for a double parameter: numbers go as floats.
         params = {k: (list(v) if isinstance(v, tuple) else
@@ -222,14 +230,15 @@ def interaction_felt(sc: Scenario) -> List[str]:
     return list(dict.fromkeys(name for i in sc.interactions for name in i.felt_by))
 
 
-def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str) -> List[NodeSpec]:
+def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str, portable: bool = False) -> List[NodeSpec]:
     """One interaction node for all the run's pairs and banks (tug_dynamics.interaction_set)."""
     if not sc.interactions:
         return []
     ships = {v.name: v for v in sc.vessels}
     vessels = interaction_vessels(sc)
     params = {"vessels": vessels,
-              "ship_files": [resolve("tug_dynamics", "ships", ships[n].ship_file, scenario_path) for n in vessels],
+              "ship_files": [_data_file("tug_dynamics", "ships", ships[n].ship_file, scenario_path, portable)
+                             for n in vessels],
               "ship_overrides": [json.dumps(ships[n].ship_overrides) if ships[n].ship_overrides else ""
                                  for n in vessels],
               "pairs": [f"{i.entry_name}={','.join(i.between)}" for i in sc.interactions

@@ -196,7 +196,7 @@ def node_commands(plan: "RunPlan", run_id: str = "") -> List[str]:
     on the other PCs). Without a run id the nodes join the first run that starts."""
     import shlex
     lines = []
-    for spec in run_nodes.node_specs(plan.sc, plan.path, run_id):
+    for spec in run_nodes.node_specs(plan.sc, plan.path, run_id, portable=True):
         args = spec.ros_args()
         if not run_id:
             i = args.index("run_id:=" + run_nodes.yaml_value(""))

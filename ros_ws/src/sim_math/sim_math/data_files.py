@@ -45,3 +45,13 @@ def resolve(package: str, subdir: str, name: str, relative_to: Optional[str] = N
     if relative_to is None and not candidate.endswith((".yaml", ".yml")) and not os.path.exists(candidate):
         candidate += ".yaml"
     return candidate
+
+
+def shipped_name(package: str, subdir: str, path: str) -> str:
+    """A path resolve() gave, as the name another installation resolves to its own copy: the bare
+    file name when the file is one the package ships (in its data directory), else the path as
+    given (a user's own file: the other machine needs it at that path)."""
+    if os.path.isabs(path) and os.path.dirname(os.path.realpath(path)) == os.path.realpath(
+            package_data_dir(package, subdir)):
+        return os.path.basename(path)
+    return path
