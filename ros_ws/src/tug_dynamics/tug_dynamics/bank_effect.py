@@ -17,7 +17,12 @@ Limits: a vertical bank (no slope: a sloping bank or a bank with a shallow berm 
 parallel course (the image of a ship at an angle to the bank is not parallel to it); potential
 flow at low Froude number. Wang's parabola is fore-and-aft symmetric, so N_bank is zero: the
 bow-away moment measured on real hulls (from the fuller stern and the propeller's suction, as in
-the empirical models of Norrbin 1974 and Lataire & Vantorre 2008) is not in this model.
+the empirical models of Norrbin 1974 and Lataire & Vantorre 2008) is not in this model, nor the
+repulsion measured in very shallow water (Lataire, Vantorre & Eloot 2009: below 15-20 % under-keel
+clearance the ship is pushed away from the bank).
+
+The second part of this module is the bank geometry of that empirical model (Lataire, Vantorre &
+Eloot 2009, Eqs 1-22): d2b and m_eq of any bank cross-section (BankGeometry).
 """
 from __future__ import annotations
 
@@ -158,3 +163,162 @@ class BankEffect:
             raise ValueError(f"bank effect: the ship at ({x:.1f}, {y:.1f}) m is on the land side of the bank line")
         to_port = -math.sin(yaw) * (px - x) + math.cos(yaw) * (py - y) > 0.0
         return self.loads(distance, speed, depth, bank_to_port=to_port)
+
+
+# ---- Lataire, Vantorre & Eloot (2009): the bank's geometry as the ship feels it ----------------
+# E. Lataire, M. Vantorre, K. Eloot, "Systematic model tests on ship-bank interaction effects",
+# Int. Conf. on Ship Manoeuvring in Shallow and Confined Water: Bank Effects, Antwerp 2009 (RINA),
+# section 4; equation numbers are the paper's. A bank of any cross-section (vertical wall, slope,
+# submerged platform, the bathymetry across a channel) enters the model through two numbers built
+# from an exponential weight of every water particle around the ship: the dimensionless distance
+# to the bank d2b (Eq 12) and the equivalent blockage m_eq (Eq 11). The paper's sway force and yaw
+# moment (Eqs 18, 19) are linear in 1/d2b; their coefficients xi are not in the paper (they are in
+# Lataire & Vantorre 2008, 27th Symp. Naval Hydrodynamics), so the loads are not computed here.
+# Coordinates: y across the ship from its centreline (>= 0 on the side considered), z down from
+# the free surface; a side's water is described by its depth profile d(y).
+
+def horizontal_reach(beam: float, speed: float, depth: float, gravity: float = 9.80665) -> float:
+    """Eqs (1)-(2): y_infl = B (5 Fr_h + 5), Fr_h = V / sqrt(g h): beyond it a bank has no
+    significant effect."""
+    return beam * (5.0 * speed / math.sqrt(gravity * depth) + 5.0)
+
+
+def weight_factors(y_infl: float, draft: float) -> Tuple[float, float]:
+    """Eqs (6)-(7): (a, b) of the weight exp(-(a |y| + b |z|)) (Eqs 5, 8), a = 3 / y_infl,
+    b = 1 / (3 T)."""
+    if not (y_infl > 0.0 and draft > 0.0):
+        raise ValueError(f"bank weights: horizontal reach {y_infl!r} m and draft {draft!r} m must be positive")
+    return 3.0 / y_infl, 1.0 / (3.0 * draft)
+
+
+def _exp_integral(k: float, u: float, v: float) -> float:
+    """int_u^v exp(-k y) dy (v may be inf for k > 0)."""
+    if math.isinf(v):
+        return math.exp(-k * u) / k
+    if abs(k * (v - u)) < 1e-12:
+        return (v - u) * math.exp(-k * u)
+    return -math.exp(-k * u) * math.expm1(-k * (v - u)) / k
+
+
+def rectangle_weight(a: float, b: float, y1: float, y2: float, z1: float, z2: float) -> float:
+    """Eq (9): the weight of the rectangle y1 <= y <= y2, z1 <= z <= z2 (0 <= y1, 0 <= z1; an
+    upper bound may be inf)."""
+    return _exp_integral(a, y1, y2) * _exp_integral(b, z1, z2)
+
+
+def ocean_weight(a: float, b: float) -> float:
+    """Eq (10): an infinitely wide and deep ocean, both sides: 2 / (a b) = 2 y_infl T."""
+    return 2.0 / (a * b)
+
+
+def ship_weight(a: float, b: float, beam: float, draft: float) -> float:
+    """The ship's own section, taken as the rectangle B x T on the centreline (both halves)."""
+    return 2.0 * rectangle_weight(a, b, 0.0, 0.5 * beam, 0.0, draft)
+
+
+class SideProfile:
+    """The water depth d(y) on one side of a ship, y >= 0 from its centreline: the points
+    (y_i, d_i) joined by straight lines, the last depth held to y = inf (0: the bank's land from
+    there on). A vertical wall is two points at one y. Depths may all be inf (deep water)."""
+
+    def __init__(self, points: Sequence[Tuple[float, float]]):
+        pts = [(float(y), float(d)) for y, d in points]
+        if not pts or pts[0][0] != 0.0:
+            raise ValueError(f"side profile: the first point must be at y = 0 (the ship's centreline), got {points!r}")
+        for i, (y, d) in enumerate(pts):
+            if math.isnan(y) or math.isinf(y) or math.isnan(d) or d < 0.0:
+                raise ValueError(f"side profile: point {i} ({y!r}, {d!r}) needs a finite y and a depth >= 0")
+            if i and y < pts[i - 1][0]:
+                raise ValueError(f"side profile: point {i} at y = {y!r} m lies before point {i - 1} "
+                                 f"at y = {pts[i - 1][0]!r} m")
+        if any(math.isinf(d) for _, d in pts) and not all(math.isinf(d) for _, d in pts):
+            raise ValueError("side profile: an infinite depth must hold everywhere (deep water), not at some points")
+        self.points = pts
+
+    def pieces(self, half_beam: float):
+        """(y_start, y_end, depth at y_start, slope) of each linear piece, split at the half beam."""
+        pts = self.points + [(math.inf, self.points[-1][1])]
+        for (ya, da), (yb, db) in zip(pts, pts[1:]):
+            if yb <= ya:
+                continue            # a vertical step: no width
+            slope = 0.0 if math.isinf(yb) or math.isinf(da) else (db - da) / (yb - ya)
+            cuts = [ya] + ([half_beam] if ya < half_beam < yb else []) + [yb]
+            for u, v in zip(cuts, cuts[1:]):
+                yield u, v, (da if math.isinf(da) else da + slope * (u - ya)), slope
+
+
+def side_weight(profile: SideProfile, a: float, b: float, beam: float, draft: float) -> float:
+    """The weight (Eq 9's integral over the water) of one side of the ship: every particle from
+    the free surface (under the ship: from its keel) down to the bottom d(y), y from 0 to inf;
+    exact for the straight pieces of the profile."""
+    total = 0.0
+    for u, v, d_u, slope in profile.pieces(0.5 * beam):
+        top = draft if u < 0.5 * beam else 0.0
+        if math.isinf(d_u):        # deep: the water column from `top` down to infinity
+            total += _exp_integral(a, u, v) * math.exp(-b * top) / b
+            continue
+        # water where d(y) = d_u + slope (y - u) > top: one interval [lo, hi] of [u, v]
+        lo, hi = u, v
+        if slope == 0.0:
+            if d_u <= top:
+                continue
+        else:
+            y_top = u + (top - d_u) / slope           # where the bottom meets `top`
+            if slope > 0.0:
+                lo = max(u, y_top)
+            else:
+                hi = min(v, y_top)
+            if hi <= lo:
+                continue
+        # int e^{-a y} (e^{-b top} - e^{-b d(y)}) / b dy, d(y) = (d_u - slope u) + slope y
+        total += (math.exp(-b * top) * _exp_integral(a, lo, hi)
+                  - math.exp(-b * (d_u - slope * u)) * _exp_integral(a + b * slope, lo, hi)) / b
+    return total
+
+
+def inverse_distance_to_bank(chi_ocean: float, chi_ship: float, chi_port: float, chi_starboard: float) -> float:
+    """Eq (12): 1/d2b = 1/2 (chi_ocean - chi_ship) (1/chi_p - 1/chi_s): 0 on the centreline of a
+    symmetric channel, negative with the nearer bank to starboard (less water there)."""
+    return 0.5 * (chi_ocean - chi_ship) * (1.0 / chi_port - 1.0 / chi_starboard)
+
+
+def equivalent_blockage(chi_ocean: float, chi_ship: float, chi_port: float, chi_starboard: float) -> float:
+    """Eq (11): m_eq = chi_ship / (chi_p + chi_s) - chi_ship / (chi_ocean - chi_ship): 0 in open deep
+    water, larger the more of the weighted water the banks and the bottom take away."""
+    return chi_ship / (chi_port + chi_starboard) - chi_ship / (chi_ocean - chi_ship)
+
+
+def propeller_wake_speed(thrust: float, diameter: float, water_density: float = 1025.0) -> float:
+    """Eq (13): V_T = sign(T_P) sqrt(|8 T_P / (rho pi D^2)|), the axial speed behind the propeller."""
+    return math.copysign(math.sqrt(abs(8.0 * thrust / (water_density * math.pi * diameter ** 2))), thrust)
+
+
+def critical_froude(blockage: float) -> float:
+    """Eq (21), Schijf (1949): Fr_crit = (2 sin(arcsin(1 - m) / 3))^(3/2), m the conventional
+    blockage (ship section over waterway section); the model holds for Fr_h < 0.84 Fr_crit (Eq 22)."""
+    if not 0.0 <= blockage < 1.0:
+        raise ValueError(f"critical speed: blockage {blockage!r} must be in [0, 1)")
+    return (2.0 * math.sin(math.asin(1.0 - blockage) / 3.0)) ** 1.5
+
+
+class BankGeometry:
+    """d2b and m_eq of a ship between two side profiles (Eqs 2, 5-12), with the model's range
+    (Eq 20: the weight of each side at least 0.45 of the ship's)."""
+
+    def __init__(self, beam: float, draft: float, speed: float, depth: float,
+                 port: SideProfile, starboard: SideProfile, gravity: float = 9.80665):
+        self.y_infl = horizontal_reach(beam, speed, depth, gravity)
+        a, b = weight_factors(self.y_infl, draft)
+        self.chi_ocean = ocean_weight(a, b)
+        self.chi_ship = ship_weight(a, b, beam, draft)
+        self.chi_port = side_weight(port, a, b, beam, draft)
+        self.chi_starboard = side_weight(starboard, a, b, beam, draft)
+        if min(self.chi_port, self.chi_starboard) <= 0.0:
+            raise ValueError("bank geometry: no water on one side of the ship (it is aground or in the bank)")
+        self.inverse_d2b = inverse_distance_to_bank(self.chi_ocean, self.chi_ship, self.chi_port, self.chi_starboard)
+        self.m_eq = equivalent_blockage(self.chi_ocean, self.chi_ship, self.chi_port, self.chi_starboard)
+
+    @property
+    def within_model_range(self) -> bool:
+        """Eq (20): chi_p / chi_ship and chi_s / chi_ship both above 0.45."""
+        return min(self.chi_port, self.chi_starboard) / self.chi_ship > 0.45
