@@ -283,6 +283,20 @@ def test_a_bad_bank_exits_2_before_start(tmp_path, run_in_process, edit, message
     assert message in proc.stderr, proc.stderr
 
 
+def test_a_bank_in_water_too_shallow_for_the_image_methods_sign_is_warned_of(tmp_path):
+    """Below 20 % under-keel clearance model tests measure the ship pushed away from a bank
+    (Lataire, Vantorre & Eloot 2009), the image method draws it in: the scenario check says so
+    (S-175, draft 8.5 m: 9.9 m of water is 16 %); the library's channel, 12.75 m (50 %), is quiet."""
+    from scenario_format.scenario import load_scenario
+    assert load_scenario(_library("bank_s175_channel.yaml")).warnings == []
+    sc = yaml.safe_load(open(_library("bank_s175_channel.yaml")))
+    sc["environment"]["depth"] = 9.9
+    path = tmp_path / "shallow_bank.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    (warning,) = load_scenario(str(path)).warnings
+    assert "key 'interactions[0].bank'" in warning and "clearance of 16 %" in warning and "wrong sign" in warning
+
+
 def test_a_vessel_named_interactions_exits_2_before_start(tmp_path, run_in_process):
     """/interactions is the interaction node's namespace in a run with `interactions`."""
     sc = yaml.safe_load(open(_library("passing_moored_s175_1p5B.yaml")))

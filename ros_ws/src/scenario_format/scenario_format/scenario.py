@@ -866,9 +866,15 @@ def interaction_depth(sc: Scenario) -> float:
     return float(depth) if isinstance(depth, (int, float)) and not isinstance(depth, bool) else 0.0
 
 
+# the effective under-keel clearance (over the draft) below which model tests along banks measure
+# repulsion, not suction, with the propeller idle: 15-20 % (Lataire, Vantorre & Eloot 2009, section 4.6)
+BANK_REPULSION_CLEARANCE = 0.20
+
+
 def _check_bank(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
     """The bank line is a polyline that does not cross itself (BankPolyline), and the vessel starts
-    on its water side, clear of it by more than its half beam."""
+    on its water side, clear of it by more than its half beam; a warning where the water is too
+    shallow for the image method's sign (BANK_REPULSION_CLEARANCE)."""
     from tug_dynamics.bank_effect import BankPolyline
     from tug_dynamics.hull_interaction import SectionalAreaCurve
     from tug_dynamics.ship_file import ship_config
@@ -879,8 +885,8 @@ def _check_bank(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
         raise ScenarioError(f"{key}: {exc}") from None
     v = next(v for v in sc.vessels if v.name == pair.between[0])
     try:
-        hull = SectionalAreaCurve.from_ship_config(
-            ship_config(resolve("tug_dynamics", "ships", v.ship_file, path), v.ship_overrides or None)[1])
+        cfg = ship_config(resolve("tug_dynamics", "ships", v.ship_file, path), v.ship_overrides or None)[1]
+        hull = SectionalAreaCurve.from_ship_config(cfg)
     except ValueError as exc:
         raise ScenarioError(f"{path}: key 'interactions[{i}].between': {exc}") from None
     distance = bank.nearest(v.initial.x, v.initial.y)[0]
@@ -889,6 +895,15 @@ def _check_bank(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
         raise ScenarioError(f"{key}: {v.name} starts at ({v.initial.x:g}, {v.initial.y:g}) m, {distance:.3g} m "
                             f"from the bank line{' on its land side' if land else ''}: it must start on the water "
                             f"side (left of the line's direction), more than its half beam {0.5 * hull.beam:.3g} m off")
+    depth, draft = interaction_depth(sc), float(cfg["hull"]["draft"])
+    if depth > 0.0 and (depth - draft) / draft < BANK_REPULSION_CLEARANCE:
+        # Lataire, Vantorre & Eloot (2009): below 15-20 % effective under-keel clearance the measured
+        # sway force pushes a ship (propeller idle) away from the bank; the image method always attracts
+        sc._warnings.append(
+            f"{key}: {v.name} runs along the bank with an under-keel clearance of {100 * (depth - draft) / draft:.0f} % "
+            f"of its draft ({depth:g} m of water, draft {draft:g} m): below {100 * BANK_REPULSION_CLEARANCE:.0f} % "
+            "model tests measure the ship pushed away from a bank, while the image method used here draws it in "
+            "at any depth; its sway force may have the wrong sign (docs/confined-water.md, Banks)")
 
 
 def _check_interaction(path: str, sc: Scenario, i: int, pair: InteractionSpec) -> None:
