@@ -65,6 +65,20 @@ def test_a_bank_adds_its_suction_to_the_pair_loads_of_its_vessel():
     assert sets.vessels == ["tug", "ship"]
 
 
+def test_a_sloped_bank_is_its_equivalent_walls_suction():
+    """An entry with a slope: BankEffect.loads_along with the slope (the wall of the same d2b), a
+    stronger pull than the vertical bank on the same line (the slope takes water from nearer the ship)."""
+    hulls = {"ship": SectionalAreaCurve.from_ship_config(SHIP)}
+    bank = BankPolyline([[-500.0, -60.0], [2000.0, -60.0]])
+    states = {"ship": PlanarState.from_body(0.0, 0.0, 0.0, 3.0, 0.0)}
+    sloped, _ = InteractionSet(hulls, [], [BankEntry("edge", "ship", bank, 3.0)], depth=12.75).loads(states, 0.15)
+    vertical, _ = InteractionSet(hulls, [], [BankEntry("edge", "ship", bank)], depth=12.75).loads(states, 0.15)
+    c = _carried(states["ship"], 0.15)
+    y, n = BankEffect(hulls["ship"]).loads_along(bank, c.x, c.y, 0.0, 3.0, 12.75, slope=3.0)
+    np.testing.assert_allclose(sloped["ship"], [0.0, y, n], rtol=1e-12)
+    assert sloped["ship"][1] < vertical["ship"][1] < 0.0
+
+
 def test_a_wash_adds_its_jets_to_the_pair_loads_of_its_target():
     """loads [wang, wash]: the ship feels the pair's Wang load plus the tug's jets (wash_load of the
     carried states); the tug only its Wang load; a step without the tug's thrust: no wash."""

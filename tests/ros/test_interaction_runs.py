@@ -224,6 +224,37 @@ def test_bank_run_loads_are_the_bank_model_at_the_recorded_positions(confined_ru
     assert ship[-1, 1] < ship[0, 1] - 0.5          # the free ship is drawn toward the bank
 
 
+@pytest.mark.timeout(300)
+def test_a_sloped_bank_in_a_run_is_its_equivalent_walls_suction(tmp_path, ros_domain):
+    """The channel bank with a 1:3 underwater slope from its line (bank_slope 3): 10 s in one
+    process; every recorded load is BankEffect.loads_along with the slope at the recorded state,
+    and the slope pulls harder than the vertical bank of the same line (test_bank_effect)."""
+    from tug_dynamics.bank_effect import BankEffect, BankPolyline
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
+    from tug_dynamics.ship_file import ship_config
+    sc = yaml.safe_load(open(_library("bank_s175_channel.yaml")))
+    sc["interactions"][0]["bank_slope"] = 3.0
+    path = tmp_path / "sloped_bank.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    out = tmp_path / "sloped.mcap"
+    record_scenario(path, out, "--duration", 10.0, layout="one_process", timeout=240)
+    msgs = decoded(out, BANK_TOPICS)
+    ship, loads = _states(msgs, "ship"), _loads(msgs, "/interactions/on_ship/wrench")
+    effect = BankEffect(SectionalAreaCurve.from_ship_config(ship_config("s175_003.yaml")[1]))
+    bank = BankPolyline(sc["interactions"][0]["bank"])
+    expected = []
+    for k in range(len(loads)):
+        x, y, yaw, vx, vy = ship[max(k - 1, 0)]
+        lead = (1.5 if k else 0.5) / RATE
+        speed = math.cos(yaw) * vx + math.sin(yaw) * vy
+        expected.append([0.0, *effect.loads_along(bank, x + vx * lead, y + vy * lead, yaw, speed, 12.75, 3.0)])
+    expected = np.array(expected)
+    scale = np.abs(expected).max(axis=0) + 1.0
+    np.testing.assert_allclose(loads / scale, expected / scale, rtol=0, atol=1e-6)
+    vertical = _bank_by_hand(ship[0], 0.5 / RATE)[0]
+    assert loads[0, 1] < vertical < 0.0
+
+
 def test_tug_at_the_bow_loads_are_wang_at_the_recorded_positions(confined_runs):
     from tug_dynamics.hull_interaction import pair_from_ship_configs
     from tug_dynamics.ship_file import ship_config
@@ -272,6 +303,7 @@ def test_confined_runs_identical_in_one_process(confined_runs, name):
     ({"bank": [[-500.0, -10.0], [2000.0, -10.0]]}, "key 'interactions[0].bank': ship starts at (0, 0) m, 10 m "
                                                     "from the bank line: it must start on the water side"),
     ({"between": ["ship", "ship"]}, "key 'interactions[0].between': ['ship', 'ship'] with a bank"),
+    ({"bank_slope": -1.0}, "interactions[0].bank_slope"),
 ])
 def test_a_bad_bank_exits_2_before_start(tmp_path, run_in_process, edit, message):
     sc = yaml.safe_load(open(_library("bank_s175_channel.yaml")))
@@ -281,6 +313,30 @@ def test_a_bad_bank_exits_2_before_start(tmp_path, run_in_process, edit, message
     proc = run_in_process("run_scenario", path, "--no-record", "--quiet")
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert message in proc.stderr, proc.stderr
+
+
+def test_a_sloped_bank_reaches_the_node_and_a_slope_without_a_bank_exits_2(tmp_path, run_in_process):
+    """bank_slope goes to the interaction node's banks entry ("<vessel>:<slope>:x0,y0,..."), which the
+    node parses back; on a pair of vessels (no bank) the scenario check refuses it."""
+    from hull_contact.interaction_node import parse_banks
+    from scenario_format.scenario import load_scenario
+    from scenario_runner.run_nodes import _interaction_specs
+    sc = yaml.safe_load(open(_library("bank_s175_channel.yaml")))
+    sc["interactions"][0]["bank_slope"] = 3.0
+    path = tmp_path / "sloped.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    (spec,) = _interaction_specs(load_scenario(str(path)), str(path), "run")
+    (entry,) = parse_banks(spec.params["banks"])
+    assert entry.slope == 3.0 and entry.vessel == "ship" and entry.bank.points == [(-500.0, -40.0), (2000.0, -40.0)]
+    assert parse_banks(["quay=ship:0.0,1.0,5.0,1.0"])[0].slope == 0.0      # the vertical form, as before
+    with pytest.raises(ValueError, match="<slope 0-100>"):
+        parse_banks(["quay=ship:-2:0.0,1.0,5.0,1.0"])
+    pair = yaml.safe_load(open(_library("passing_moored_s175_1p5B.yaml")))
+    pair["interactions"][0]["bank_slope"] = 2.0
+    bad = tmp_path / "pair_slope.yaml"
+    bad.write_text(yaml.safe_dump(pair))
+    proc = run_in_process("run_scenario", bad, "--no-record", "--quiet")
+    assert proc.returncode == 2 and "key 'interactions[0].bank_slope': only with a 'bank'" in proc.stderr, proc.stderr
 
 
 def test_a_bank_in_water_too_shallow_for_the_image_methods_sign_is_warned_of(tmp_path):

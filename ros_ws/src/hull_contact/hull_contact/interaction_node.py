@@ -1,6 +1,6 @@
 """The hull interaction node: every interaction of a run in one node, every step: Wang's (1975)
 passing-ship loads between the declared pairs, the bank suction on a vessel from a declared
-vertical bank, and a declared source's propeller wash on a target's hull side
+bank (vertical, or sloped: the vertical wall of the same d2b), and a declared source's propeller wash on a target's hull side
 (tug_dynamics.interaction_set).
 
     ros2 run hull_contact interaction_node --ros-args -r __ns:=/interactions \
@@ -96,18 +96,22 @@ def parse_banks(values: List[str]) -> List[BankEntry]:
     out = []
     for text in _listed(values):
         name, rest = _named("banks", text)
-        vessel, sep, coords = rest.partition(":")
+        parts = rest.split(":")
+        vessel, slope_text, coords = (parts[0], "0", parts[1]) if len(parts) == 2 else (
+            parts if len(parts) == 3 else ("", "", ""))
         try:
             flat = [float(c) for c in coords.split(",")]
+            slope = float(slope_text)
         except ValueError:
-            flat = []
-        if not sep or not vessel or len(flat) < 4 or len(flat) % 2:
-            raise ValueError(f"parameter banks: \"{name}\" needs \"<vessel>:x0,y0,x1,y1,...\", got {rest!r}")
+            flat, slope = [], math.nan
+        if not vessel or len(flat) < 4 or len(flat) % 2 or not 0.0 <= slope <= 100.0:
+            raise ValueError(f"parameter banks: \"{name}\" needs \"<vessel>:x0,y0,x1,y1,...\" or "
+                             f"\"<vessel>:<slope 0-100>:x0,y0,x1,y1,...\", got {rest!r}")
         try:
             bank = BankPolyline([flat[i:i + 2] for i in range(0, len(flat), 2)])
         except ValueError as exc:
             raise ValueError(f"parameter banks: \"{name}\": {exc}") from None
-        out.append(BankEntry(name, vessel, bank))
+        out.append(BankEntry(name, vessel, bank, slope))
     return out
 
 
@@ -172,7 +176,8 @@ class InteractionNode(SteppedNode):
                            [StepInput(t, ThrusterStatus if kind == "thrusters" else VesselStatus, local=True)
                             for t, (_, kind, _) in self.thrust_topics.items()], ready=False)
         what = [f"{p.name}: Wang (1975) between {p.a} and {p.b}" for p in pairs] + \
-               [f"{b.name}: bank suction (image method) on {b.vessel}" for b in banks] + \
+               [f"{b.name}: bank suction (image method{f', slope 1:{b.slope:g}' if b.slope else ''}) on {b.vessel}"
+                for b in banks] + \
                [f"{w.name}: {w.source}'s propeller wash on {w.target}" for w in washes]
         self.get_logger().info(
             f"interactions ({'deep water' if math.isinf(depth) else f'depth {depth:g} m'}): {'; '.join(what)}; "

@@ -225,13 +225,16 @@ class InteractionSpec(_Strict):
     from the other (tug_dynamics.hull_interaction); "wash", the first vessel's propeller or
     azimuth-thruster jets on the second's hull side (tug_dynamics.propeller_wash: still water,
     the second's side a flat box side). Or with a `bank` the image-method bank suction on one
-    vessel (tug_dynamics.bank_effect). Computed every step from the odometry (and the wash
+    vessel (tug_dynamics.bank_effect; a sloped bank as the vertical wall of the same d2b). Computed every step from the odometry (and the wash
     source's thrust) by the run's one hull_contact interaction_node (all the entries together,
     each vessel's loads summed); deep water, or the environment's depth when it is one number."""
     between: List[str] = Field(min_length=1, max_length=2)   # the two vessels, or one with a bank
     name: Optional[str] = Field(None, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")   # default <a>_<b>_interaction
-    # a vertical bank (image method, tug_dynamics.bank_effect): polyline points [x, y] (m, world), water on the left
+    # a bank (image method, tug_dynamics.bank_effect): polyline points [x, y] (m, world), water on the left
     bank: Optional[List[List[float]]] = None
+    # the bank's underwater slope, m across per m down from the line (its waterline) to the depth; 0: a vertical
+    # wall. A slope acts as the vertical wall of the same d2b (Lataire, Vantorre & Eloot 2009)
+    bank_slope: float = Field(0.0, ge=0.0, le=100.0)
     # two vessels: "wang" (each on the other), "wash" (the first's jets on the second's side), or both
     loads: List[Literal["wang", "wash"]] = Field(default_factory=lambda: ["wang"], min_length=1, max_length=2)
     # the wash's impingement coefficient C_w (tug_dynamics.propeller_wash): 1 the ideal plate (an upper bound)
@@ -536,6 +539,8 @@ def _check_interaction_names(path: str, sc: Scenario, vessels: List[str]) -> Non
         if bool(pair.bank) != (len(pair.between) == 1):
             raise ScenarioError(f"{path}: key 'interactions[{i}].between': {pair.between} with "
                                 f"{'a bank' if pair.bank else 'no bank'}: two vessels, or one vessel and a 'bank'")
+        if "bank_slope" in pair.model_fields_set and not pair.bank:
+            raise ScenarioError(f"{path}: key 'interactions[{i}].bank_slope': only with a 'bank'")
         if pair.bank:
             if pair.loads != ["wang"] and "loads" in pair.model_fields_set:
                 raise ScenarioError(f"{path}: key 'interactions[{i}].loads': a bank has no loads to choose "

@@ -245,7 +245,8 @@ def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str, portable: 
                         if not i.bank and "wang" in i.loads] or [""],
               "washes": [f"{i.entry_name}_wash={','.join(i.between)},{i.wash_impingement!r}" for i in sc.interactions
                          if not i.bank and "wash" in i.loads] or [""],
-              "banks": [f"{i.entry_name}={i.between[0]}:" + ",".join(repr(float(c)) for point in i.bank for c in point)
+              "banks": [f"{i.entry_name}={i.between[0]}:" + (f"{i.bank_slope!r}:" if i.bank_slope else "")
+                        + ",".join(repr(float(c)) for point in i.bank for c in point)
                         for i in sc.interactions if i.bank] or [""],
               "depth": interaction_depth(sc)}
     return [NodeSpec(f"/{T.INTERACTIONS}", "interaction", "hull_contact", "interaction_node", {

@@ -206,8 +206,9 @@ INTERACTION_NODE = ParamTable(
     P("ship_overrides", [""], "JSON merged over each of `vessels`' ship file (as the vessel node's; \"\" none), "
                               "in the same order, or one \"\" for all"),
     P("pairs", [""], "Wang pairs, \"<name>=<vessel a>,<vessel b>\": each vessel feels the other"),
-    P("banks", [""], "Vertical banks, \"<name>=<vessel>:x0,y0,x1,y1,...\": the polyline's points (m, world "
-                     "(map)), the water on its left; the image-method bank suction on the vessel"),
+    P("banks", [""], "Banks, \"<name>=<vessel>:x0,y0,x1,y1,...\" (vertical) or \"<name>=<vessel>:<slope>:x0,y0,...\" "
+                     "(falling <slope> m across per m down from the line, its waterline): the polyline's points (m, "
+                     "world (map)), the water on its left; the image-method bank suction on the vessel"),
     P("washes", [""], "Propeller wash, \"<name>=<source>,<target>[,<C_w>]\": the source's propeller or "
                       "azimuth-thruster jets on the target's hull side (its thrust from /<source>/thrusters, or "
                       "/<source>/status shared over its propellers), C_w the impingement coefficient 0..1 "

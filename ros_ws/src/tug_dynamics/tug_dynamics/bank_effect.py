@@ -154,14 +154,21 @@ class BankEffect:
         return y, n
 
     def loads_along(self, bank: BankPolyline, x: float, y: float, yaw: float, speed: float,
-                    depth: float = math.inf) -> Tuple[float, float]:
+                    depth: float = math.inf, slope: float = 0.0) -> Tuple[float, float]:
         """(Y, N) on a ship at (x, y) heading `yaw` (ENU, rad), `speed` m/s along its axis: the
         nearest point of the bank gives the distance and the side (the ship's course is taken as
-        parallel to the bank there: the image method's limit)."""
+        parallel to the bank there: the image method's limit). `slope` > 0: the line is the bank's
+        waterline and the bank falls to the depth at `slope` m across per m down; it acts as the
+        vertical wall of the same d2b (equivalent_wall_distance)."""
         distance, px, py = bank.nearest(x, y)
         if not bank.water_side(x, y):
             raise ValueError(f"bank effect: the ship at ({x:.1f}, {y:.1f}) m is on the land side of the bank line")
         to_port = -math.sin(yaw) * (px - x) + math.cos(yaw) * (py - y) > 0.0
+        if slope > 0.0:
+            distance = equivalent_wall_distance(sloped_bank(distance, slope, depth, self.hull.draft),
+                                                self.hull.beam, self.hull.draft, speed, depth)
+            if math.isinf(distance):
+                return 0.0, 0.0
         return self.loads(distance, speed, depth, bank_to_port=to_port)
 
 
@@ -322,3 +329,36 @@ class BankGeometry:
     def within_model_range(self) -> bool:
         """Eq (20): chi_p / chi_ship and chi_s / chi_ship both above 0.45."""
         return min(self.chi_port, self.chi_starboard) / self.chi_ship > 0.45
+
+
+def _profile_depth(depth: float, draft: float) -> float:
+    # deep water: 60 drafts down, where the weight exp(-z / 3T) is e^-20 (the profile must be finite)
+    return depth if math.isfinite(depth) and depth > 0.0 else 60.0 * draft
+
+
+def sloped_bank(waterline: float, slope: float, depth: float, draft: float) -> SideProfile:
+    """The bank side of a ship whose centreline is `waterline` m from the bank's waterline, the
+    bank falling at `slope` m across per m down to the water's `depth` (inf: deep)."""
+    h = _profile_depth(depth, draft)
+    toe = waterline - slope * h
+    if toe > 0.0:
+        return SideProfile([(0.0, h), (toe, h), (waterline, 0.0)])
+    return SideProfile([(0.0, waterline / slope), (waterline, 0.0)])   # the ship over the slope
+
+
+def equivalent_wall_distance(bank_side: SideProfile, beam: float, draft: float, speed: float,
+                             depth: float) -> float:
+    """The distance from the ship's centreline of the vertical wall (in the same depth) whose side
+    of water weighs what the bank's side does (chi_s, Eqs 5-9). With the other side unchanged the
+    two have the same 1/d2b (Eq 12), which carries the whole bank geometry in Lataire, Vantorre &
+    Eloot's model (their Fig. 17: the sway forces along seven banks, vertical to 1/8 slopes, on one
+    line in 1/d2b). The wall's weight is Eq (9)'s rectangle, so the distance is closed form:
+    chi_s + chi_ship / 2 = (1 - e^-a y) (1 - e^-b h) / (a b). inf: the side weighs what open water
+    does (the bank out of reach)."""
+    h = _profile_depth(depth, draft)
+    a, b = weight_factors(horizontal_reach(beam, abs(speed), h), draft)
+    chi_side = side_weight(bank_side, a, b, beam, draft) + 0.5 * ship_weight(a, b, beam, draft)
+    fraction = chi_side * a * b / -math.expm1(-b * h)    # of the open side's weight, 1 - e^-a y
+    if fraction >= 1.0:
+        return math.inf
+    return -math.log1p(-fraction) / a

@@ -50,12 +50,17 @@ class SectionalAreaCurve:
     """A hull's underwater sectional area, Wang's parabola S(x) = S_m (1 - (2x/L)^2), x from
     midship, positive forward; zero at both ends."""
 
-    def __init__(self, length: float, midship_area: float, beam: float):
-        for name, value in (("length", length), ("midship_area", midship_area), ("beam", beam)):
+    def __init__(self, length: float, midship_area: float, beam: float, draft: Optional[float] = None):
+        """draft: the hull's (a bank's weights use it, bank_effect); None: midship_area / beam, the
+        draft of a box midship section."""
+        for name, value in (("length", length), ("midship_area", midship_area), ("beam", beam), ("draft", draft)):
+            if value is None and name == "draft":
+                continue
             if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (math.isfinite(value)
                                                                                      and value > 0.0):
                 raise ValueError(f"sectional area curve: {name} must be finite and > 0, got {value!r}")
         self.length, self.midship_area, self.beam = float(length), float(midship_area), float(beam)
+        self.draft = float(draft) if draft is not None else self.midship_area / self.beam
 
     @staticmethod
     def from_ship_config(cfg: dict) -> "SectionalAreaCurve":
@@ -67,7 +72,7 @@ class SectionalAreaCurve:
         length, beam, draft = float(hull["length"]), float(hull["beam"]), float(hull["draft"])
         rho = float(cfg.get("water_density", 1025.0))
         volume = float(hull["mass"]) / rho if hull.get("mass") else 0.7 * length * beam * draft
-        return SectionalAreaCurve(length, 1.5 * volume / length, beam)
+        return SectionalAreaCurve(length, 1.5 * volume / length, beam, draft)
 
     @property
     def volume(self) -> float:

@@ -110,6 +110,7 @@ class BankEntry(NamedTuple):
     name: str
     vessel: str
     bank: BankPolyline
+    slope: float = 0.0      # m across per m down from the line (the waterline); 0: a vertical wall
 
 
 class WashEntry(NamedTuple):
@@ -230,7 +231,7 @@ class InteractionSet:
             own = ahead(states[entry.vessel], lead)
             speed = math.cos(own.yaw) * own.vx + math.sin(own.yaw) * own.vy
             try:
-                y, n = effect.loads_along(entry.bank, own.x, own.y, own.yaw, speed, self.depth)
+                y, n = effect.loads_along(entry.bank, own.x, own.y, own.yaw, speed, self.depth, entry.slope)
             except ValueError:        # inside the half beam of the bank or beyond it: the model's limit
                 off[entry.name] = True
                 continue
