@@ -8,6 +8,7 @@ Truths used:
 """
 import math
 
+import numpy as np
 import pytest
 from scipy import integrate
 
@@ -320,3 +321,40 @@ def test_loads_along_a_sloped_bank_are_the_loads_at_its_equivalent_wall():
         effect.loads(wall, 3.0, 12.75, bank_to_port=False), rel=1e-12)
     assert effect.loads_along(bank, 100.0, 0.0, 0.0, 3.0, 12.75, slope=0.0) == effect.loads(
         60.0, 3.0, 12.75, bank_to_port=False)
+
+
+# ---- the banks of a depth field (a bathymetry grid) -------------------------------------------
+S175_T = SectionalAreaCurve(175.0, 1.5 * 21648428.0 / RHO / 175.0, 25.4, 8.5)
+
+
+def _sloped_field(waterline_y=-60.0, slope=3.0, depth=12.75):
+    """A straight bank along y = waterline_y (land south of it), falling 1:slope to `depth`."""
+    def depth_at(xs, ys):
+        return np.minimum(depth, (np.asarray(ys, float) - waterline_y) / slope)
+    return depth_at
+
+
+def test_a_depth_fields_sloped_bank_is_the_declared_sloped_bank():
+    """A 1:3 bank 60 m to starboard in 12.75 m of water, as a depth field sampled across the ship,
+    gives the loads of the declared line with bank_slope 3 (the samples' straight pieces miss the
+    toe's corner: within 1 %); the open side pulls nothing."""
+    from tug_dynamics.bank_effect import BankPolyline
+    effect = BankEffect(S175_T)
+    sampled = effect.loads_in_depth(_sloped_field(), 100.0, 0.0, 0.0, 3.0)
+    declared = effect.loads_along(BankPolyline([(-500.0, -60.0), (2000.0, -60.0)]), 100.0, 0.0, 0.0, 3.0, 12.75, 3.0)
+    assert sampled[0] == pytest.approx(declared[0], rel=0.01) and sampled[0] < 0.0
+    # heading west the same bank lies to port
+    assert effect.loads_in_depth(_sloped_field(), 100.0, 0.0, math.pi, 3.0)[0] == pytest.approx(-sampled[0], rel=1e-6)
+
+
+def test_a_symmetric_channel_and_open_water_pull_nothing_and_aground_is_refused():
+    effect = BankEffect(S175_T)
+
+    def channel(xs, ys):     # 1:3 banks 60 m each side of y = 0
+        return np.minimum(12.75, (60.0 - np.abs(np.asarray(ys, float))) / 3.0)
+    y, _ = effect.loads_in_depth(channel, 0.0, 0.0, 0.0, 3.0)
+    one_bank = effect.loads_in_depth(_sloped_field(), 0.0, 0.0, 0.0, 3.0)[0]
+    assert abs(y) < 1e-9 * abs(one_bank)
+    assert effect.loads_in_depth(lambda xs, ys: np.full(np.shape(xs), 12.75), 0.0, 0.0, 0.3, 3.0) == (0.0, 0.0)
+    with pytest.raises(ValueError, match="no more than its draft"):
+        effect.loads_in_depth(lambda xs, ys: np.full(np.shape(xs), 8.0), 0.0, 0.0, 0.0, 3.0)

@@ -79,6 +79,24 @@ def test_a_sloped_bank_is_its_equivalent_walls_suction():
     assert sloped["ship"][1] < vertical["ship"][1] < 0.0
 
 
+def test_a_depth_fields_banks_are_bank_effects_loads_in_depth():
+    """An entry without a line (BankEntry.bank None): BankEffect.loads_in_depth of the set's depth
+    field at the carried state; without a depth field the set refuses it."""
+    hulls = {"ship": SectionalAreaCurve.from_ship_config(SHIP)}
+
+    def field(xs, ys):      # a 1:3 bank 60 m to starboard of y = 0
+        return np.minimum(12.75, (np.asarray(ys, float) + 60.0) / 3.0)
+    states = {"ship": PlanarState.from_body(0.0, 0.0, 0.1, 3.0, 0.2)}
+    got, off = InteractionSet(hulls, [], [BankEntry("edge", "ship", None)], depth_field=field).loads(states, 0.15)
+    c = _carried(states["ship"], 0.15)
+    speed = math.cos(c.yaw) * c.vx + math.sin(c.yaw) * c.vy
+    y, n = BankEffect(hulls["ship"]).loads_in_depth(field, c.x, c.y, c.yaw, speed)
+    np.testing.assert_allclose(got["ship"], [0.0, y, n], rtol=1e-12)
+    assert y < 0.0 and off == {"edge": False}
+    with pytest.raises(ValueError, match="no depth_field given"):
+        InteractionSet(hulls, [], [BankEntry("edge", "ship", None)])
+
+
 def test_a_wash_adds_its_jets_to_the_pair_loads_of_its_target():
     """loads [wang, wash]: the ship feels the pair's Wang load plus the tug's jets (wash_load of the
     carried states); the tug only its Wang load; a step without the tug's thrust: no wash."""

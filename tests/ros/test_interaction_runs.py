@@ -255,6 +255,49 @@ def test_a_sloped_bank_in_a_run_is_its_equivalent_walls_suction(tmp_path, ros_do
     assert loads[0, 1] < vertical < 0.0
 
 
+@pytest.mark.timeout(300)
+def test_the_banks_of_a_depth_grid_in_a_run(tmp_path, ros_domain, run_in_process):
+    """bank: depth: an S-175 at 3 kn along the harbour's quay (harbour_berth_s175.asc: the wall's face
+    52 m to starboard, an 8-15 m apron before it), 10 s in one process: every recorded load is
+    BankEffect.loads_in_depth of the grid at the recorded state, drawing the ship toward the quay.
+    Without a depth grid, or with a bank_slope, `bank: depth` exits 2."""
+    import os
+    from sea_environment.bathymetry import DepthGrid
+    from tug_dynamics.bank_effect import BankEffect
+    from tug_dynamics.hull_interaction import SectionalAreaCurve
+    from tug_dynamics.ship_file import ship_config
+    grid = os.path.abspath(_library("harbour_berth_s175.asc"))
+    sc = {"name": "quay_bank", "duration": 10.0, "exchange_rate": 10.0, "environment": {"depth": {"grid": grid}},
+          "vessels": [{"name": "ship", "ship_file": "s175_003.yaml",
+                       "initial": {"x": -200.0, "y": 0.0, "heading_deg": 0.0, "speed": 1.543, "engine_order": 0.17}}],
+          "interactions": [{"between": ["ship"], "bank": "depth"}]}
+    path = tmp_path / "quay_bank.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    out = tmp_path / "quay.mcap"
+    record_scenario(path, out, "--duration", 10.0, layout="one_process", timeout=240)
+    msgs = decoded(out, BANK_TOPICS)
+    ship, loads = _states(msgs, "ship"), _loads(msgs, "/interactions/on_ship/wrench")
+    effect = BankEffect(SectionalAreaCurve.from_ship_config(ship_config("s175_003.yaml")[1]))
+    depth_at = DepthGrid.load(grid).depth_at
+    expected = []
+    for k in range(len(loads)):
+        x, y, yaw, vx, vy = ship[max(k - 1, 0)]
+        lead = (1.5 if k else 0.5) / RATE
+        speed = math.cos(yaw) * vx + math.sin(yaw) * vy
+        expected.append([0.0, *effect.loads_in_depth(depth_at, x + vx * lead, y + vy * lead, yaw, speed)])
+    expected = np.array(expected)
+    scale = np.abs(expected).max(axis=0) + 1.0
+    np.testing.assert_allclose(loads / scale, expected / scale, rtol=0, atol=1e-6)
+    assert np.all(loads[:, 1] < 0.0)               # toward the quay, to starboard
+    for edit, message in (({"environment": {"depth": 15.0}}, "'environment.depth' is not a grid"),
+                          ({"interactions": [{"between": ["ship"], "bank": "depth", "bank_slope": 3.0}]},
+                           "key 'interactions[0].bank_slope': only with a 'bank' line")):
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(yaml.safe_dump({**sc, **edit}))
+        proc = run_in_process("run_scenario", bad, "--no-record", "--quiet")
+        assert proc.returncode == 2 and message in proc.stderr, proc.stderr
+
+
 def test_tug_at_the_bow_loads_are_wang_at_the_recorded_positions(confined_runs):
     from tug_dynamics.hull_interaction import pair_from_ship_configs
     from tug_dynamics.ship_file import ship_config

@@ -97,6 +97,9 @@ def parse_banks(values: List[str]) -> List[BankEntry]:
     for text in _listed(values):
         name, rest = _named("banks", text)
         parts = rest.split(":")
+        if len(parts) == 2 and parts[0] and parts[1] == "depth":
+            out.append(BankEntry(name, parts[0], None))      # the depth grid's banks
+            continue
         vessel, slope_text, coords = (parts[0], "0", parts[1]) if len(parts) == 2 else (
             parts if len(parts) == 3 else ("", "", ""))
         try:
@@ -155,11 +158,17 @@ class InteractionNode(SteppedNode):
                 propulsors[w.source] = propulsors_of(configs[w.source])
             except ValueError as exc:
                 raise ValueError(f"parameter washes: \"{w.name}\": '{w.source}': {exc}") from None
+        depth_field = None
+        if any(b.bank is None for b in banks):
+            if not gp("depth_grid"):
+                raise ValueError("parameter banks: a \"<vessel>:depth\" entry needs parameter depth_grid")
+            from sea_environment.bathymetry import DepthGrid
+            depth_field = DepthGrid.load(gp("depth_grid")).depth_at
         self.interactions = InteractionSet(
             {n: SectionalAreaCurve.from_ship_config(c) for n, c in configs.items()}, pairs, banks, depth,
             {n: float(c.get("water_density", 1025.0)) for n, c in configs.items()}, washes=washes,
             propulsors={n: units for n, (_, units) in propulsors.items()},
-            drafts={n: float(c["hull"]["draft"]) for n, c in configs.items()})
+            drafts={n: float(c["hull"]["draft"]) for n, c in configs.items()}, depth_field=depth_field)
         self.topics = {T.vessel_topic(n, T.ODOM): n for n in self.interactions.tracked}
         # each wash source's thrust: (vessel, kind, propulsor count) by topic
         self.thrust_topics = {T.vessel_topic(n, T.THRUSTERS if kind == "thrusters" else T.STATUS):
@@ -176,8 +185,8 @@ class InteractionNode(SteppedNode):
                            [StepInput(t, ThrusterStatus if kind == "thrusters" else VesselStatus, local=True)
                             for t, (_, kind, _) in self.thrust_topics.items()], ready=False)
         what = [f"{p.name}: Wang (1975) between {p.a} and {p.b}" for p in pairs] + \
-               [f"{b.name}: bank suction (image method{f', slope 1:{b.slope:g}' if b.slope else ''}) on {b.vessel}"
-                for b in banks] + \
+               [f"{b.name}: bank suction (image method{', the depth grid' if b.bank is None else ''}"
+                f"{f', slope 1:{b.slope:g}' if b.slope else ''}) on {b.vessel}" for b in banks] + \
                [f"{w.name}: {w.source}'s propeller wash on {w.target}" for w in washes]
         self.get_logger().info(
             f"interactions ({'deep water' if math.isinf(depth) else f'depth {depth:g} m'}): {'; '.join(what)}; "

@@ -45,7 +45,7 @@ import datetime as _dt
 import math
 import os
 import re
-from typing import Any, Dict, List, Literal, Optional
+from typing import Any, Dict, List, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 from typing_extensions import Annotated
@@ -230,8 +230,9 @@ class InteractionSpec(_Strict):
     each vessel's loads summed); deep water, or the environment's depth when it is one number."""
     between: List[str] = Field(min_length=1, max_length=2)   # the two vessels, or one with a bank
     name: Optional[str] = Field(None, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")   # default <a>_<b>_interaction
-    # a bank (image method, tug_dynamics.bank_effect): polyline points [x, y] (m, world), water on the left
-    bank: Optional[List[List[float]]] = None
+    # a bank (image method, tug_dynamics.bank_effect): polyline points [x, y] (m, world), water on the left;
+    # or "depth": the banks and channel edges of the environment's depth grid, across the ship every step
+    bank: Optional[Union[Literal["depth"], List[List[float]]]] = None
     # the bank's underwater slope, m across per m down from the line (its waterline) to the depth; 0: a vertical
     # wall. A slope acts as the vertical wall of the same d2b (Lataire, Vantorre & Eloot 2009)
     bank_slope: float = Field(0.0, ge=0.0, le=100.0)
@@ -539,8 +540,12 @@ def _check_interaction_names(path: str, sc: Scenario, vessels: List[str]) -> Non
         if bool(pair.bank) != (len(pair.between) == 1):
             raise ScenarioError(f"{path}: key 'interactions[{i}].between': {pair.between} with "
                                 f"{'a bank' if pair.bank else 'no bank'}: two vessels, or one vessel and a 'bank'")
-        if "bank_slope" in pair.model_fields_set and not pair.bank:
-            raise ScenarioError(f"{path}: key 'interactions[{i}].bank_slope': only with a 'bank'")
+        if "bank_slope" in pair.model_fields_set and (not pair.bank or pair.bank == "depth"):
+            raise ScenarioError(f"{path}: key 'interactions[{i}].bank_slope': only with a 'bank' line (a depth "
+                                "grid has its own slopes)")
+        if pair.bank == "depth" and not isinstance(sc.environment.depth, DepthGridSpec):
+            raise ScenarioError(f"{path}: key 'interactions[{i}].bank': 'depth' takes the banks of the environment's "
+                                "depth grid, and 'environment.depth' is not a grid")
         if pair.bank:
             if pair.loads != ["wang"] and "loads" in pair.model_fields_set:
                 raise ScenarioError(f"{path}: key 'interactions[{i}].loads': a bank has no loads to choose "
@@ -916,6 +921,8 @@ def _check_interaction(path: str, sc: Scenario, i: int, pair: InteractionSpec) -
     start inside each other (HullPair.check at the start positions, each seen from the other)."""
     from tug_dynamics.hull_interaction import pair_from_ship_configs
     from tug_dynamics.ship_file import ship_config
+    if pair.bank == "depth":
+        return     # the grid's banks, sampled across the ship in the run (its grounding: the vessel's)
     if pair.bank:
         _check_bank(path, sc, i, pair)
         return

@@ -10,8 +10,8 @@ import math
 import os
 from typing import Dict, List, Sequence, Tuple
 
-from scenario_format.scenario import (Scenario, environment_parameter, has_thrusters, heading_rad, installed_executable,
-                                     interaction_depth, resolve)
+from scenario_format.scenario import (Scenario, depth_grid_path, environment_parameter, has_thrusters, heading_rad,
+                                     installed_executable, interaction_depth, resolve)
 from sim_contract import topics as T
 from sim_contract.node_params import NODE_TABLES
 from sim_math import data_files
@@ -245,10 +245,13 @@ def _interaction_specs(sc: Scenario, scenario_path: str, run_id: str, portable: 
                         if not i.bank and "wang" in i.loads] or [""],
               "washes": [f"{i.entry_name}_wash={','.join(i.between)},{i.wash_impingement!r}" for i in sc.interactions
                          if not i.bank and "wash" in i.loads] or [""],
-              "banks": [f"{i.entry_name}={i.between[0]}:" + (f"{i.bank_slope!r}:" if i.bank_slope else "")
-                        + ",".join(repr(float(c)) for point in i.bank for c in point)
+              "banks": [f"{i.entry_name}={i.between[0]}:" + ("depth" if i.bank == "depth" else (
+                            (f"{i.bank_slope!r}:" if i.bank_slope else "")
+                            + ",".join(repr(float(c)) for point in i.bank for c in point)))
                         for i in sc.interactions if i.bank] or [""],
               "depth": interaction_depth(sc)}
+    if any(i.bank == "depth" for i in sc.interactions):
+        params["depth_grid"] = depth_grid_path(sc.environment.depth, scenario_path)
     return [NodeSpec(f"/{T.INTERACTIONS}", "interaction", "hull_contact", "interaction_node", {
         **params, "exchange_rate": float(sc.exchange_rate), "lockstep": True, "run_id": run_id})]
 

@@ -208,12 +208,15 @@ INTERACTION_NODE = ParamTable(
     P("pairs", [""], "Wang pairs, \"<name>=<vessel a>,<vessel b>\": each vessel feels the other"),
     P("banks", [""], "Banks, \"<name>=<vessel>:x0,y0,x1,y1,...\" (vertical) or \"<name>=<vessel>:<slope>:x0,y0,...\" "
                      "(falling <slope> m across per m down from the line, its waterline): the polyline's points (m, "
-                     "world (map)), the water on its left; the image-method bank suction on the vessel"),
+                     "world (map)), the water on its left; or \"<name>=<vessel>:depth\": the banks of depth_grid "
+                     "across the vessel; the image-method bank suction on the vessel"),
     P("washes", [""], "Propeller wash, \"<name>=<source>,<target>[,<C_w>]\": the source's propeller or "
                       "azimuth-thruster jets on the target's hull side (its thrust from /<source>/thrusters, or "
                       "/<source>/status shared over its propellers), C_w the impingement coefficient 0..1 "
                       "(default 1)"),
     P("depth", 0.0, "Water depth for the bottom images (0: deep water)", 0.0, 1e4, "m"),
+    P("depth_grid", "", "ESRI ASCII depth grid (path) whose banks the \"<vessel>:depth\" banks entries feel "
+                        "(\"\": none)"),
 )
 
 # bridge_instruments nmea_out: NMEA 0183 / AIS over UDP beside a run (the runner sets the lists

@@ -29,6 +29,8 @@ from __future__ import annotations
 import math
 from typing import List, Sequence, Tuple
 
+import numpy as np
+
 from tug_dynamics.hull_interaction import DEFAULT_NODES, HullPair, SectionalAreaCurve
 
 
@@ -135,6 +137,12 @@ class BankPolyline:
         return side
 
 
+# a depth field's banks: the depth sampled across the ship this far out (horizontal reaches, Eq 2;
+# the weight there is e^-7.5 of the ship's) at this many points a side
+REACH_SAMPLED = 2.5
+DEPTH_SAMPLES = 41
+
+
 class BankEffect:
     """Bank suction on one hull, its image pair precomputed."""
 
@@ -170,6 +178,41 @@ class BankEffect:
             if math.isinf(distance):
                 return 0.0, 0.0
         return self.loads(distance, speed, depth, bank_to_port=to_port)
+
+    def loads_in_depth(self, depth_at, x: float, y: float, yaw: float, speed: float,
+                       samples: int = DEPTH_SAMPLES) -> Tuple[float, float]:
+        """(Y, N) on a ship at (x, y) heading `yaw`, `speed` m/s along its axis, from the banks of a
+        depth field (`depth_at(xs, ys)` -> depths, m; <= 0 dry): its depth sampled across the ship
+        at midship out to REACH_SAMPLED horizontal reaches each side gives each side's profile
+        (cut at the first dry point), each side acts as its vertical wall of the same weight
+        (equivalent_wall_distance) in the depth under the ship, and their image-method pulls add
+        (an open side pulls nothing; a symmetric channel cancels). ValueError: the ship aground,
+        or a side's equivalent wall within its half beam (the model's limit)."""
+        beam, draft = self.hull.beam, self.hull.draft
+        depth = float(depth_at(np.array([x]), np.array([y]))[0])
+        if not depth > draft:
+            raise ValueError(f"bank effect: {depth:.2f} m of water at the ship, no more than its draft {draft:.2f} m")
+        reach = REACH_SAMPLED * horizontal_reach(beam, abs(speed), depth)
+        across = np.linspace(0.0, reach, samples)
+        px, py = -math.sin(yaw), math.cos(yaw)                     # to port, world
+        ys = np.concatenate((across, -across[1:]))
+        depths = np.asarray(depth_at(x + px * ys, y + py * ys), float)
+        total_y = total_n = 0.0
+        for side, values in ((1.0, depths[:samples]), (-1.0, np.concatenate(([depth], depths[samples:])))):
+            points = []
+            for d_across, d in zip(across, values):
+                if d <= 0.0:     # dry: the waterline where the depth between the last two samples is 0
+                    y_wet, d_wet = points[-1]
+                    points.append((y_wet + (float(d_across) - y_wet) * d_wet / (d_wet - float(d)), 0.0))
+                    break
+                points.append((float(d_across), float(d)))
+            wall = equivalent_wall_distance(SideProfile(points), beam, draft, speed, depth)
+            if math.isinf(wall):
+                continue
+            side_y, side_n = self.loads(wall, speed, depth, bank_to_port=side > 0.0)
+            total_y += side_y
+            total_n += side_n
+        return total_y, total_n
 
 
 # ---- Lataire, Vantorre & Eloot (2009): the bank's geometry as the ship feels it ----------------
@@ -331,6 +374,11 @@ class BankGeometry:
         return min(self.chi_port, self.chi_starboard) / self.chi_ship > 0.45
 
 
+# a side within this fraction of open water's weight is open water: the sum over a profile's pieces
+# carries round-off of ~1e-15, which would otherwise put a wall at 11-12 horizontal reaches or none
+OPEN_WATER_TOLERANCE = 1e-12
+
+
 def _profile_depth(depth: float, draft: float) -> float:
     # deep water: 60 drafts down, where the weight exp(-z / 3T) is e^-20 (the profile must be finite)
     return depth if math.isfinite(depth) and depth > 0.0 else 60.0 * draft
@@ -359,6 +407,6 @@ def equivalent_wall_distance(bank_side: SideProfile, beam: float, draft: float, 
     a, b = weight_factors(horizontal_reach(beam, abs(speed), h), draft)
     chi_side = side_weight(bank_side, a, b, beam, draft) + 0.5 * ship_weight(a, b, beam, draft)
     fraction = chi_side * a * b / -math.expm1(-b * h)    # of the open side's weight, 1 - e^-a y
-    if fraction >= 1.0:
+    if fraction >= 1.0 - OPEN_WATER_TOLERANCE:   # open water to round-off (a wall beyond 9 reaches)
         return math.inf
     return -math.log1p(-fraction) / a

@@ -12,7 +12,7 @@ with the states carried on, Wang's arguments and the overlap test done in the ke
 from __future__ import annotations
 
 import math
-from typing import Dict, List, NamedTuple, Sequence, Tuple
+from typing import Dict, List, NamedTuple, Optional, Sequence, Tuple
 
 import numpy as np
 from numba import njit
@@ -109,7 +109,7 @@ class PairEntry(NamedTuple):
 class BankEntry(NamedTuple):
     name: str
     vessel: str
-    bank: BankPolyline
+    bank: Optional[BankPolyline]   # None: the banks of the set's depth_field, across the ship
     slope: float = 0.0      # m across per m down from the line (the waterline); 0: a vertical wall
 
 
@@ -147,7 +147,8 @@ def propulsors_of(config: dict) -> Tuple[str, List[Propulsor]]:
 
 class InteractionSet:
     """The run's pairs and banks over its vessels' hulls (Wang's parabolas), in water of `depth`
-    (math.inf: deep). `loads(states, lead)` gives each vessel's summed (X, Y, N) (body axes,
+    (math.inf: deep; `depth_field(xs, ys)` the depths whose banks a bank entry without a line
+    feels). `loads(states, lead)` gives each vessel's summed (X, Y, N) (body axes,
     about midship) and which entries are off (overlapping hulls, a ship at or over its bank).
     A wash needs its target's draft (`drafts`) and its source's `propulsors`; `loads` then takes
     each source's (thrust N signed, azimuth rad) per propulsor."""
@@ -156,7 +157,7 @@ class InteractionSet:
                  banks: Sequence[BankEntry] = (), depth: float = math.inf,
                  water_density: Dict[str, float] = None, nodes: int = DEFAULT_NODES,
                  washes: Sequence[WashEntry] = (), propulsors: Dict[str, Sequence[Propulsor]] = None,
-                 drafts: Dict[str, float] = None):
+                 drafts: Dict[str, float] = None, depth_field=None):
         if math.isnan(depth) or depth <= 0.0:
             raise ValueError(f"interactions: depth must be > 0 (math.inf for deep water), got {depth!r}")
         density = {name: 1025.0 for name in hulls} | dict(water_density or {})
@@ -210,6 +211,10 @@ class InteractionSet:
         self._pair_a = np.array([self.index[p.a] for p in self.pairs], dtype=np.int64)
         self._pair_b = np.array([self.index[p.b] for p in self.pairs], dtype=np.int64)
         self._images = 0 if math.isinf(self.depth) else IMAGE_COUNT
+        for entry in self.banks:
+            if entry.bank is None and depth_field is None:
+                raise ValueError(f"interaction '{entry.name}': the banks of a depth field, and no depth_field given")
+        self.depth_field = depth_field
         self._bank_effects = [BankEffect(hulls[e.vessel], nodes, density[e.vessel]) for e in self.banks]
         self._states = np.zeros((len(names), 5))
         self._loads = np.zeros((len(names), 3))
@@ -231,7 +236,10 @@ class InteractionSet:
             own = ahead(states[entry.vessel], lead)
             speed = math.cos(own.yaw) * own.vx + math.sin(own.yaw) * own.vy
             try:
-                y, n = effect.loads_along(entry.bank, own.x, own.y, own.yaw, speed, self.depth, entry.slope)
+                if entry.bank is None:     # the depth field's banks across the ship
+                    y, n = effect.loads_in_depth(self.depth_field, own.x, own.y, own.yaw, speed)
+                else:
+                    y, n = effect.loads_along(entry.bank, own.x, own.y, own.yaw, speed, self.depth, entry.slope)
             except ValueError:        # inside the half beam of the bank or beyond it: the model's limit
                 off[entry.name] = True
                 continue
