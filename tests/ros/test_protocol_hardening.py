@@ -145,6 +145,39 @@ def test_runner_refuses_answers_not_of_this_run_step_or_node(rclpy_context):
         c.destroy_node()
 
 
+def test_wire_copies_far_behind_the_channel_are_late_not_strangers(rclpy_context):
+    """A node with a channel: its StepDone on the wire is checked against what its channel said, for
+    the last ANSWERS_KEPT steps. In a fast run the executor falls behind and the wire's copies come
+    late (seen: 900 steps behind at 1000 steps/s, a ship and a bank): a copy older than that is
+    counted as late, not refused as somebody else's answer; within the window a copy the channel
+    did not say is refused as before."""
+    from scenario_runner.conductor import ANSWERS_KEPT, Conductor
+    from scenario_format.scenario import load_scenario
+    from scenario_format.particulars import scenario_path
+    from sim_plumbing import step_channel
+    from sim_plumbing.cdr import DoneIn
+    sc = load_scenario(scenario_path(SCENARIO))
+    c = Conductor(sc, ["/tug/vessel", "/towline/rope"], run_id="r1", context=rclpy_context)
+    try:
+        runner_end, node_end = step_channel.local_pair()
+        c.channels["/tug/vessel"] = runner_end
+        for k in range(1, 201):
+            c.awaited = k
+            node_end.send_answer(step_channel.Answer(k, 0.001, True, 0, ""))
+            c.take_answers()
+
+        def wire(step, ok=True):
+            c._on_done(DoneIn(0, "r1", "/tug/vessel", step, 0.001, ok, 0, "" if ok else "boom"))
+        wire(200 - ANSWERS_KEPT - 1)
+        wire(10)
+        assert c.late_wire_copies == 2 and not c.refused
+        wire(200 - ANSWERS_KEPT)                 # the oldest kept: the channel's own answer, a copy
+        wire(150, ok=False)                      # within the window, not what the channel said
+        assert c.late_wire_copies == 2 and dict(c.refused) == {"not the node's": 1}
+    finally:
+        c.destroy_node()
+
+
 def test_second_run_on_a_domain_is_refused_and_sigkill_leaves_no_orphans(tmp_path, ros_domain, full_domain_check):
     log_dir = tmp_path / "logs"
     first = subprocess.Popen(runner(None, "--log-dir", str(log_dir), duration=600), stdout=subprocess.PIPE,

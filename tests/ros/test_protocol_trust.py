@@ -361,6 +361,27 @@ def test_a_node_with_a_channel_steps_only_on_the_runners_triggers(rclpy_context)
         node.destroy_node()
 
 
+def test_a_wire_trigger_far_behind_the_channel_is_late_not_a_strangers(rclpy_context):
+    """The wire's SimStep copies lag the channel when the executor falls behind a fast run: one more
+    than MAX_LEAD_STEPS behind the channel's latest trigger cannot be checked and is counted as late,
+    not refused as a stranger's; within the window one the channel did not send is refused as ever."""
+    from sim_plumbing import cdr, step_channel
+    from sim_plumbing.stepping import MAX_LEAD_STEPS
+    runner_end, node_end = step_channel.local_pair()
+    node = _vessel(rclpy_context, node_end)
+    try:
+        for k in range(MAX_LEAD_STEPS + 30):
+            runner_end.send_trigger(k, [])
+            node.take_triggers()
+        assert node.step_index == MAX_LEAD_STEPS + 30
+        node._on_trigger_raw(cdr.sim_step_cdr(5 * 20_000_000, 5, 0.02, [], "r"))
+        assert node.late_wire_triggers == 1 and node.complaints.counts["unconfirmed trigger"] == 0
+        node._on_trigger_raw(cdr.sim_step_cdr(120 * 20_000_000, 120, 0.02, ["tug"], "r"))   # not as sent
+        assert node.late_wire_triggers == 1 and node.complaints.counts["unconfirmed trigger"] == 1
+    finally:
+        node.destroy_node()
+
+
 def test_a_node_without_a_channel_stops_on_two_different_triggers_for_a_step(rclpy_context):
     """Started by somebody else, a node has the wire only: a second SimStep for a step with
     another `ordered` means a stranger's trigger may have been used; it stops stepping."""

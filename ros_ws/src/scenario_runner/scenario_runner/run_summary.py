@@ -56,6 +56,9 @@ def _run_lines(sc, stats: cd.RunStats) -> List[str]:
         lines.append("  refused protocol messages (logged, not used): " + ", ".join(
             [f"runner: {n} StepDone ({why})" for why, n in sorted(stats.refused.items())] +
             [f"{node}: {n}" for node, n in sorted(stats.node_refused.items()) if n]))
+    if stats.late_wire_copies:
+        lines.append(f"  StepDone wire copies too late to check against the channels (over {cd.ANSWERS_KEPT} steps "
+                     f"behind; not used): {stats.late_wire_copies}")
     if stats.strangers:
         lines.append("  strangers on the step protocol's topics (their messages refused): " + "; ".join(
             f"{who} from step {k}" for who, k in sorted(stats.strangers.items())))

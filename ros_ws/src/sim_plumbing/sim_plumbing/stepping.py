@@ -184,6 +184,8 @@ class SteppedNode(Node):
             # the answers; a SimStep on the wire is then only a wake-up (sim_plumbing/step_channel.py).
             self.channel = step_channel.for_node(self.get_fully_qualified_name())
             self._sent_triggers: Dict[int, Tuple[str, ...]] = {}  # step -> ordered, as the channel sent them
+            self._latest_sent = -1   # the latest step the channel triggered
+            self.late_wire_triggers = 0  # wire copies of this run's SimStep too far behind the channel to check
             self.done_pub = self.create_publisher(StepDone, rc.STEP_DONE_TOPIC, rc.PROTOCOL_QOS)
             self._done_cdr = cdr.StepDoneEncoder(self.get_fully_qualified_name(), self.run_id)
             self._taken.append((self.create_subscription(SimStep, rc.SIM_STEP_TOPIC, self._on_trigger_raw,
@@ -270,6 +272,11 @@ class SteppedNode(Node):
         # the runner writes the trigger to the channel before it publishes: read it now, then the
         # wire's copy must be one the channel sent (anything else is somebody else's)
         self._take_channel()
+        if msg.run_id == self.run_id and msg.step < self._latest_sent - MAX_LEAD_STEPS:
+            # the wire's copy lags the channel when the executor falls behind a fast run: too late to
+            # check (the triggers kept go back MAX_LEAD_STEPS), and nothing to act on either way
+            self.late_wire_triggers += 1
+            return
         if self._sent_triggers.get(msg.step) != msg.ordered or msg.run_id != self.run_id:
             # (no graph look to name the sender: a flood would pay one per message; the runner names
             # strangers on the protocol topics)
@@ -293,6 +300,7 @@ class SteppedNode(Node):
         """Triggers the runner sent on the private channel, taken in order."""
         for t in self.channel.triggers():
             self._sent_triggers[t.step] = t.ordered
+            self._latest_sent = max(self._latest_sent, t.step)
             # the wire's copy may come late (an executor sitting on it): kept as long as an input may lead
             for old in [s for s in self._sent_triggers if s < t.step - MAX_LEAD_STEPS]:
                 del self._sent_triggers[old]
