@@ -13,7 +13,8 @@ hull_interaction for finite depth):
 Far from the bank (2 d >> L, deep water) Y_bank -> 3 rho U^2 V^2 / (16 pi d^4), V the displaced
 volume: the suction falls off as the fourth power of the distance.
 
-Limits: a vertical bank (no slope: a sloping bank or a bank with a shallow berm is not a mirror);
+Limits: a vertical bank is a mirror, a sloping bank or a berm is not (they act here as the vertical
+wall of the same d2b, below: equivalent_wall_distance, loads_along's slope, loads_in_depth); a
 parallel course (the image of a ship at an angle to the bank is not parallel to it); potential
 flow at low Froude number. Wang's parabola is fore-and-aft symmetric, so N_bank is zero: the
 bow-away moment measured on real hulls (from the fuller stern and the propeller's suction, as in
@@ -22,7 +23,8 @@ repulsion measured in very shallow water (Lataire, Vantorre & Eloot 2009: below 
 clearance the ship is pushed away from the bank).
 
 The second part of this module is the bank geometry of that empirical model (Lataire, Vantorre &
-Eloot 2009, Eqs 1-22): d2b and m_eq of any bank cross-section (BankGeometry).
+Eloot 2009, Eqs 1-22): d2b and m_eq of any bank cross-section (BankGeometry), and through it a
+sloped bank or a depth field's banks as the vertical wall of the same d2b.
 """
 from __future__ import annotations
 
