@@ -224,6 +224,24 @@ def test_bank_run_loads_are_the_bank_model_at_the_recorded_positions(confined_ru
     assert ship[-1, 1] < ship[0, 1] - 0.5          # the free ship is drawn toward the bank
 
 
+def _bank_run_matches(path, out, bank_loads):
+    """Record 10 s of the ship-and-bank scenario at `path` in one process; every recorded load on
+    the ship is bank_loads(x, y, yaw, speed) (Y, N) at the recorded state of the step before,
+    carried on 1.5 steps (half a step for step 0), within 1e-6 of the peak. (ship states, loads)"""
+    record_scenario(path, out, "--duration", 10.0, layout="one_process", timeout=240)
+    msgs = decoded(out, BANK_TOPICS)
+    ship, loads = _states(msgs, "ship"), _loads(msgs, "/interactions/on_ship/wrench")
+    expected = []
+    for k in range(len(loads)):
+        x, y, yaw, vx, vy = ship[max(k - 1, 0)]
+        lead = (1.5 if k else 0.5) / RATE
+        expected.append([0.0, *bank_loads(x + vx * lead, y + vy * lead, yaw, math.cos(yaw) * vx + math.sin(yaw) * vy)])
+    expected = np.array(expected)
+    scale = np.abs(expected).max(axis=0) + 1.0
+    np.testing.assert_allclose(loads / scale, expected / scale, rtol=0, atol=1e-6)
+    return ship, loads
+
+
 @pytest.mark.timeout(300)
 def test_a_sloped_bank_in_a_run_is_its_equivalent_walls_suction(tmp_path, ros_domain):
     """The channel bank with a 1:3 underwater slope from its line (bank_slope 3): 10 s in one
@@ -237,20 +255,10 @@ def test_a_sloped_bank_in_a_run_is_its_equivalent_walls_suction(tmp_path, ros_do
     path = tmp_path / "sloped_bank.yaml"
     path.write_text(yaml.safe_dump(sc))
     out = tmp_path / "sloped.mcap"
-    record_scenario(path, out, "--duration", 10.0, layout="one_process", timeout=240)
-    msgs = decoded(out, BANK_TOPICS)
-    ship, loads = _states(msgs, "ship"), _loads(msgs, "/interactions/on_ship/wrench")
     effect = BankEffect(SectionalAreaCurve.from_ship_config(ship_config("s175_003.yaml")[1]))
     bank = BankPolyline(sc["interactions"][0]["bank"])
-    expected = []
-    for k in range(len(loads)):
-        x, y, yaw, vx, vy = ship[max(k - 1, 0)]
-        lead = (1.5 if k else 0.5) / RATE
-        speed = math.cos(yaw) * vx + math.sin(yaw) * vy
-        expected.append([0.0, *effect.loads_along(bank, x + vx * lead, y + vy * lead, yaw, speed, 12.75, 3.0)])
-    expected = np.array(expected)
-    scale = np.abs(expected).max(axis=0) + 1.0
-    np.testing.assert_allclose(loads / scale, expected / scale, rtol=0, atol=1e-6)
+    ship, loads = _bank_run_matches(path, out, lambda x, y, yaw, speed: effect.loads_along(
+        bank, x, y, yaw, speed, 12.75, 3.0))
     vertical = _bank_by_hand(ship[0], 0.5 / RATE)[0]
     assert loads[0, 1] < vertical < 0.0
 
@@ -274,20 +282,9 @@ def test_the_banks_of_a_depth_grid_in_a_run(tmp_path, ros_domain, run_in_process
     path = tmp_path / "quay_bank.yaml"
     path.write_text(yaml.safe_dump(sc))
     out = tmp_path / "quay.mcap"
-    record_scenario(path, out, "--duration", 10.0, layout="one_process", timeout=240)
-    msgs = decoded(out, BANK_TOPICS)
-    ship, loads = _states(msgs, "ship"), _loads(msgs, "/interactions/on_ship/wrench")
     effect = BankEffect(SectionalAreaCurve.from_ship_config(ship_config("s175_003.yaml")[1]))
     depth_at = DepthGrid.load(grid).depth_at
-    expected = []
-    for k in range(len(loads)):
-        x, y, yaw, vx, vy = ship[max(k - 1, 0)]
-        lead = (1.5 if k else 0.5) / RATE
-        speed = math.cos(yaw) * vx + math.sin(yaw) * vy
-        expected.append([0.0, *effect.loads_in_depth(depth_at, x + vx * lead, y + vy * lead, yaw, speed)])
-    expected = np.array(expected)
-    scale = np.abs(expected).max(axis=0) + 1.0
-    np.testing.assert_allclose(loads / scale, expected / scale, rtol=0, atol=1e-6)
+    _, loads = _bank_run_matches(path, out, lambda x, y, yaw, speed: effect.loads_in_depth(depth_at, x, y, yaw, speed))
     assert np.all(loads[:, 1] < 0.0)               # toward the quay, to starboard
     for edit, message in (({"environment": {"depth": 15.0}}, "'environment.depth' is not a grid"),
                           ({"interactions": [{"between": ["ship"], "bank": "depth", "bank_slope": 3.0}]},
