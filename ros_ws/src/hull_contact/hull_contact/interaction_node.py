@@ -1,6 +1,7 @@
 """The hull interaction node: every interaction of a run in one node, every step: Wang's (1975)
 passing-ship loads between the declared pairs, the bank suction on a vessel from a declared
-bank (vertical, or sloped: the vertical wall of the same d2b), and a declared source's propeller wash on a target's hull side
+bank (a vertical line; a sloped one, or the banks of a depth grid, as the vertical wall of the
+same d2b), and a declared source's propeller wash on a target's hull side
 (tug_dynamics.interaction_set).
 
     ros2 run hull_contact interaction_node --ros-args -r __ns:=/interactions \
@@ -100,8 +101,12 @@ def parse_banks(values: List[str]) -> List[BankEntry]:
         if len(parts) == 2 and parts[0] and parts[1] == "depth":
             out.append(BankEntry(name, parts[0], None))      # the depth grid's banks
             continue
-        vessel, slope_text, coords = (parts[0], "0", parts[1]) if len(parts) == 2 else (
-            parts if len(parts) == 3 else ("", "", ""))
+        if len(parts) == 2:            # the vertical form, "<vessel>:x0,y0,..."
+            vessel, slope_text, coords = parts[0], "0", parts[1]
+        elif len(parts) == 3:
+            vessel, slope_text, coords = parts
+        else:
+            vessel = slope_text = coords = ""
         try:
             flat = [float(c) for c in coords.split(",")]
             slope = float(slope_text)
