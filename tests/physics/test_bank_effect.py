@@ -136,6 +136,36 @@ def test_the_image_method_against_the_published_vertical_wall_test():
     assert effect.loads(3.5 + 1.965, 0.4578, 0.163)[0] < 0.02 * abs(y)
 
 
+# KVLCC2 model (1/75) along a vertical wall, bare hull: van Hoydonck et al. (2019), "Bank effects
+# for KVLCC2", J. Mar. Sci. Technol., model tests in Flanders Hydraulics' shallow-water tank; the
+# numbers as the public repository olelindberg/pi-BEM keeps them (docs/data/BankEffects_JMST_2019/):
+# L_pp 4.2667 m, B 0.7733 m, T 0.2776 m, h 0.3744 m (h/T 1.35, 35 % under-keel clearance), 0.356 m/s;
+# the wall at y = -2.7 m and the tank's far side at +3.5 m; the ship's centreline at y = -2.1825,
+# -2.1134 and -1.7269 m; the measured sway force Y / (rho/2 U^2 L T), its size.
+KVLCC2_WALL = [(-2.1825, 0.08023), (-2.1134, 0.06349), (-1.7269, 0.03042)]
+
+
+def test_the_image_method_against_the_kvlcc2_along_a_wall():
+    """The image method (the wall's and the far side's mirrors, the bottom images; KVLCC2's
+    C_B 0.8098) over-predicts the measured bare-hull sway force at this clearance: 1.46, 1.63 and
+    1.80 times it from 0.17 to 0.76 B between the ship's side and the wall (the sign is not
+    compared: the source gives the sizes). It is within a factor of two, the accuracy stated for
+    it in docs/confined-water.md, and falls off more slowly than the measurement (2.1 against 2.6
+    times over the three positions). Nothing was fitted."""
+    length, beam, draft, block, speed, depth = 4.2667, 0.7733, 0.2776, 0.8098, 0.356, 0.3744
+    hull = SectionalAreaCurve(length, 1.5 * block * length * beam * draft / length, beam, draft)
+    effect = BankEffect(hull, water_density=1000.0)
+    scale = 0.5 * 1000.0 * speed ** 2 * length * draft
+    predicted = []
+    for y_ship, measured in KVLCC2_WALL:
+        wall_y, _ = effect.loads(y_ship + 2.7, speed, depth, bank_to_port=False)
+        far_y, _ = effect.loads(3.5 - y_ship, speed, depth, bank_to_port=True)
+        assert abs(far_y) < 0.03 * abs(wall_y)                  # the far side barely counts
+        predicted.append(abs(wall_y + far_y) / scale)
+        assert 1.0 < predicted[-1] / measured < 2.0
+    assert predicted[0] / predicted[-1] < KVLCC2_WALL[0][1] / KVLCC2_WALL[-1][1]
+
+
 # ---- Lataire, Vantorre & Eloot (2009): the bank geometry (d2b, m_eq) -------------------------
 from tug_dynamics.bank_effect import (BankGeometry, SideProfile, critical_froude, propeller_wake_speed,  # noqa: E402
                                       rectangle_weight, side_weight, weight_factors)
