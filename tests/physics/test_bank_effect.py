@@ -29,6 +29,12 @@ def image_sway(curve, distance, speed):
     return RHO * speed ** 2 * eta / math.pi * value
 
 
+def tank_model(length, beam, draft, block):
+    """The bank effect on a towing-tank model in fresh water: Wang's parabola of its displacement."""
+    volume = block * length * beam * draft
+    return BankEffect(SectionalAreaCurve(length, 1.5 * volume / length, beam, draft), water_density=1000.0)
+
+
 @pytest.mark.parametrize("distance", [30.0, 60.0, 120.0])
 def test_bank_force_is_the_mirror_image_force(distance):
     y, n = BankEffect(S175).loads(distance, 4.0)
@@ -126,8 +132,7 @@ def test_the_image_method_against_the_published_vertical_wall_test():
     toward the wall, 0.63 of the measured force the other way, and no yaw moment: it does not hold
     at this clearance (docs/confined-water.md)."""
     length, beam, draft, block = 4.01, 0.530, 0.149, 0.65
-    volume = block * length * beam * draft
-    effect = BankEffect(SectionalAreaCurve(length, 1.5 * volume / length, beam), water_density=1000.0)
+    effect = tank_model(length, beam, draft, block)
     y, n = effect.loads(2.830 - 1.965, 0.4578, 0.163, bank_to_port=False)     # REP-103: y to port
     measured_y, measured_n = 2.545, 6.959            # REP-103 (y port, z up): to port, bow to port
     assert y / measured_y == pytest.approx(-0.63, abs=0.01)
@@ -153,8 +158,7 @@ def test_the_image_method_against_the_kvlcc2_along_a_wall():
     it in docs/confined-water.md, and falls off more slowly than the measurement (2.1 against 2.6
     times over the three positions). Nothing was fitted."""
     length, beam, draft, block, speed, depth = 4.2667, 0.7733, 0.2776, 0.8098, 0.356, 0.3744
-    hull = SectionalAreaCurve(length, 1.5 * block * length * beam * draft / length, beam, draft)
-    effect = BankEffect(hull, water_density=1000.0)
+    effect = tank_model(length, beam, draft, block)
     scale = 0.5 * 1000.0 * speed ** 2 * length * draft
     predicted = []
     for y_ship, measured in KVLCC2_WALL:
@@ -336,8 +340,7 @@ def test_the_image_method_at_the_equivalent_wall_against_a_published_sloped_bank
     length, beam, draft, block, speed, depth = 4.01, 0.530, 0.180, 0.66, 0.8012, 0.360
     wall = equivalent_wall_distance(sloped_bank(3.310 - 1.435, 3.0, depth, draft), beam, draft, speed, depth)
     assert 2.230 - 1.435 < wall < 3.310 - 1.435
-    hull = SectionalAreaCurve(length, 1.5 * block * length * beam * draft / length, beam, draft)
-    y, _ = BankEffect(hull, water_density=1000.0).loads(wall, speed, depth, bank_to_port=False)
+    y, _ = tank_model(length, beam, draft, block).loads(wall, speed, depth, bank_to_port=False)
     assert -y == pytest.approx(1.648, rel=0.10)
 
 
